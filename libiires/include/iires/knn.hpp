@@ -1,0 +1,44 @@
+#pragma once
+/// @file knn.hpp
+/// @brief k-nearest-neighbour and radius search over a fixed set of 3-D points (nanoflann behind a PImpl).
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+namespace iires {
+
+/// @brief A static k-d tree over points. The referenced vector must outlive the index and stay unchanged.
+/// @note Queries are const and thread-safe. Results are sorted by distance; ties keep a deterministic order.
+class KnnIndex {
+ public:
+  explicit KnnIndex(const std::vector<Eigen::Vector3d>& points);
+  ~KnnIndex();
+  KnnIndex(KnnIndex&&) noexcept;
+  KnnIndex& operator=(KnnIndex&&) noexcept;
+  KnnIndex(const KnnIndex&) = delete;
+  KnnIndex& operator=(const KnnIndex&) = delete;
+
+  /// @brief The @p k nearest points to @p query (fewer if the set is smaller).
+  /// @param[out] indices point indices, nearest first
+  /// @param[out] sqDists squared distances, same order
+  /// @return number of neighbours found
+  std::size_t knn(const Eigen::Vector3d& query, std::size_t k, std::vector<std::uint32_t>& indices,
+                  std::vector<double>& sqDists) const;
+
+  /// @brief All points within distance @p radius of @p query, nearest first.
+  std::size_t radius(const Eigen::Vector3d& query, double radius, std::vector<std::uint32_t>& indices,
+                     std::vector<double>& sqDists) const;
+
+  /// @brief Index of the nearest point (or -1 when the set is empty); @p sqDist receives its squared distance.
+  std::int64_t nearest(const Eigen::Vector3d& query, double* sqDist = nullptr) const;
+
+  std::size_t size() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace iires

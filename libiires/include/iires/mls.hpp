@@ -1,0 +1,54 @@
+#pragma once
+/// @file mls.hpp
+/// @brief The moving-least-squares surface of a dense cloud: the surface every resampled point lies on.
+
+#include <Eigen/Core>
+#include <memory>
+#include <vector>
+
+#include "iires/knn.hpp"
+
+namespace iires {
+
+struct MlsParams {
+  int k = 16;           ///< neighbours in each local fit (paper: 8 for the weights' kernel width)
+  int degree = 2;       ///< 1 = weighted tangent plane (paper eq. 1–3), 2 = plane + quadric height field
+  int iterations = 2;   ///< projection steps per query (each re-centres the fit on the last estimate)
+};
+
+/// @brief Projection onto the MLS surface of a cloud with oriented normals.
+/// The kernel is θ(d) = exp(−d²/h²) (paper eq. 2) with h per input point = its distance to its 8th
+/// neighbour, clamped to the 90th percentile so an outlier cannot inflate it (DESIGN §3.3).
+/// @note Holds a k-d tree over the input; the cloud must outlive the surface. project() is thread-safe.
+class MlsSurface {
+ public:
+  MlsSurface(const std::vector<Eigen::Vector3d>& points, const std::vector<Eigen::Vector3d>& normals,
+             const MlsParams& params = {});
+  ~MlsSurface();
+
+  /// @brief Project @p x onto the surface. @p normal (optional) receives the surface normal there,
+  /// oriented like the input normals. @p offSurface (optional) receives the distance from the projected
+  /// point to the nearest input point divided by that point's kernel width: about ≤ 0.5 on the surface,
+  /// growing past 1 where the point has left the cloud (across an open boundary).
+  Eigen::Vector3d project(const Eigen::Vector3d& x, Eigen::Vector3d* normal = nullptr,
+                          double* offSurface = nullptr) const;
+
+  const KnnIndex& index() const { return index_; }
+  /// @brief Mean distance from an input point to its nearest neighbour (the input spacing).
+  double meanSpacing() const { return meanSpacing_; }
+  /// @brief Estimated surface area: Σ over points of the area each represents (π r₈² / 8).
+  double area() const { return area_; }
+  /// @brief Kernel width h at input point i.
+  double kernelWidth(std::size_t i) const { return h_[i]; }
+
+ private:
+  const std::vector<Eigen::Vector3d>& points_;
+  const std::vector<Eigen::Vector3d>& normals_;
+  MlsParams params_;
+  KnnIndex index_;
+  std::vector<double> h_;
+  double meanSpacing_ = 0;
+  double area_ = 0;
+};
+
+}  // namespace iires

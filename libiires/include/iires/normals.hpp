@@ -1,0 +1,27 @@
+#pragma once
+/// @file normals.hpp
+/// @brief PCA normals with consistent orientation (DESIGN §3 step 4).
+
+#include <Eigen/Core>
+#include <vector>
+
+namespace iires {
+
+struct NormalParams {
+  int k = 12;        ///< neighbours for the PCA fit (Open3D/PCL habit: 10–30)
+  int threads = 0;   ///< 0 = all cores
+  bool orient = true;  ///< propagate a consistent orientation over a minimum spanning tree
+};
+
+/// @brief Estimate unit normals by PCA of the k nearest neighbours, then orient them consistently per
+/// connected component of the k-NN graph (minimum spanning tree on 1 − |nᵢ·nⱼ|, rooted at the point of
+/// largest x in each component, whose normal is made to point to +x — outwards for a closed surface).
+/// @note O(n k log n). Deterministic for any thread count.
+std::vector<Eigen::Vector3d> estimateNormals(const std::vector<Eigen::Vector3d>& points,
+                                             const NormalParams& params = {});
+
+/// @brief Orient given (unoriented) normals consistently, as estimateNormals does.
+void orientNormals(const std::vector<Eigen::Vector3d>& points, std::vector<Eigen::Vector3d>& normals,
+                   int k = 12);
+
+}  // namespace iires

@@ -1,0 +1,24 @@
+#pragma once
+/// @file parallel.hpp
+/// @brief Deterministic parallel loops: every iteration writes only its own slot, so results do not depend
+/// on the thread count.
+
+#include <omp.h>
+
+#include <cstddef>
+
+namespace iires {
+
+/// @brief Number of threads to use for a requested count (0 = all cores).
+inline int resolveThreads(int requested) { return requested > 0 ? requested : omp_get_max_threads(); }
+
+/// @brief Run fn(i) for i in [0, n) on @p threads threads (0 = all cores), dynamic chunks.
+/// @note fn must only write state owned by iteration i (or thread-local state it merges in a fixed order).
+template <typename Fn>
+void parallelFor(std::size_t n, int threads, Fn&& fn) {
+  const long long count = static_cast<long long>(n);
+#pragma omp parallel for schedule(dynamic, 256) num_threads(resolveThreads(threads))
+  for (long long i = 0; i < count; ++i) fn(static_cast<std::size_t>(i));
+}
+
+}  // namespace iires

@@ -1,0 +1,78 @@
+#pragma once
+/// @file resample.hpp
+/// @brief Isotropic resampling to exactly N points on the MLS surface of a cloud (paper §4.1, DESIGN §3).
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "iires/metrics.hpp"
+#include "iires/mls.hpp"
+#include "iires/neighbourhood.hpp"
+#include "iires/normals.hpp"
+#include "iires/types.hpp"
+
+namespace iires {
+
+/// @brief Parameters of resample(). Defaults in brackets are the paper's where it gives one.
+struct ResampleParams {
+  std::size_t targetCount = 10000;  ///< N, the exact number of output points (≥ 1)
+  int neighbours = 14;              ///< Euclidean candidates per sample for its 1-ring (≥ 6)
+  double splitRatio = 4.0 / 3.0;    ///< split edges longer than splitRatio·l [paper 1.6; Botsch–Kobbelt 4/3]
+  double collapseRatio = 0.8;       ///< collapse edges shorter than collapseRatio·l [0.8]
+  int countPasses = 8;              ///< split/collapse + relaxation passes that steer the count towards N
+  int maxRelaxIterations = 60;      ///< cap on the final Lloyd relaxation iterations
+  double relaxTolerance = 2e-4;     ///< stop relaxing when the spacing CV improves less than this per iteration
+  double candidateFactor = 3.0;     ///< density initialisation keeps ≈ this × N voxel cells, then eliminates to N
+  MlsParams mls;                    ///< the surface every sample is projected onto
+  NormalParams normals;             ///< used when the input has no normals
+  std::uint64_t seed = 0;           ///< tie-breaking in the initial sample elimination; same seed → same output
+  int threads = 0;                  ///< 0 = all cores; the output does not depend on it
+  /// Neighbour rule for 1-rings (nullptr = Euclidean). See neighbourhood.hpp.
+  std::shared_ptr<NeighbourRule> neighbourRule;
+  /// Samples that are kept exactly as given (never moved or removed) and count towards N (DESIGN §9).
+  std::vector<Eigen::Vector3d> fixedSamples;
+
+  /// @throws std::invalid_argument with a readable message when a field is out of range.
+  void validate() const;
+};
+
+/// @brief Wall time of one pipeline stage.
+struct StageTime {
+  std::string name;
+  double seconds = 0;
+};
+
+/// @brief What resample() produced, with diagnostics.
+struct ResampleResult {
+  PointCloud cloud;                  ///< exactly requestedPoints points, with unit normals
+  std::size_t inputPoints = 0;       ///< points read
+  std::size_t duplicatesMerged = 0;  ///< exact duplicates merged during validation
+  std::size_t requestedPoints = 0;   ///< N
+  std::size_t initialSamples = 0;    ///< samples after density initialisation
+  int passes = 0;                    ///< count-control passes run
+  int relaxIterations = 0;           ///< Lloyd relaxation iterations run in total
+  std::size_t splits = 0, collapses = 0;  ///< edge operations applied
+  double targetLength = 0;           ///< final target edge length l
+  SpacingStats spacing;              ///< nearest-neighbour spacing of the output
+  std::vector<StageTime> timings;    ///< per stage, in order; the last is "total"
+
+  /// @brief The report as a JSON object (input_points, output_points, passes, time_s, spacing, ...).
+  std::string toJson() const;
+};
+
+/// @brief Resample @p input to exactly params.targetCount points, uniformly spaced on its MLS surface.
+///
+/// Pipeline: validate (merge duplicates) → normals (PCA + MST orientation, unless given) → MLS surface →
+/// density initialisation (voxel cells, then weighted sample elimination down to N; or all points when
+/// upsampling) → passes of split/collapse on the tangent-plane Delaunay 1-ring edges with target length l
+/// (count control: l = mean edge · √(|S|/N)) and Lloyd relaxation in each sample's tangent-plane Voronoi cell,
+/// projecting onto the MLS surface after every move → exact-count finish → Lloyd relaxation to convergence.
+/// @throws InputError for an unusable cloud (empty, NaN, < 4 distinct points, collinear);
+/// std::invalid_argument for bad parameters.
+/// @note Deterministic: same input, params and seed give the same output for any thread count.
+/// Cost O(n log n) on the input plus O(N k) per pass.
+ResampleResult resample(const PointCloud& input, const ResampleParams& params);
+
+}  // namespace iires

@@ -1,0 +1,26 @@
+#pragma once
+/// @file validate.hpp
+/// @brief Input validation (DESIGN §3 step 1): the checks every algorithm runs before it starts.
+
+#include <cstddef>
+#include <string>
+
+#include "iires/types.hpp"
+
+namespace iires {
+
+/// @brief What validateCloud found and changed.
+struct ValidationReport {
+  std::size_t inputPoints = 0;       ///< points before validation
+  std::size_t duplicatesMerged = 0;  ///< exact duplicate positions removed
+  std::size_t outputPoints = 0;      ///< points after validation
+};
+
+/// @brief Check a cloud and merge exact duplicates (keeps the first occurrence; normals follow their points).
+/// @param minPoints fewest distinct points the caller's method needs (>= 1)
+/// @param what how to name the cloud in messages (usually the file path)
+/// @throws InputError when the cloud is empty, holds NaN/Inf coordinates (the first bad index is named),
+/// has fewer than @p minPoints distinct points, or all its points are collinear.
+ValidationReport validateCloud(PointCloud& cloud, std::size_t minPoints, const std::string& what = "input");
+
+}  // namespace iires

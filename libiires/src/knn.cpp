@@ -1,0 +1,78 @@
+#include "iires/knn.hpp"
+
+#include <nanoflann.hpp>
+
+namespace iires {
+namespace {
+
+struct Adaptor {
+  const std::vector<Eigen::Vector3d>& pts;
+  std::size_t kdtree_get_point_count() const { return pts.size(); }
+  double kdtree_get_pt(std::size_t i, std::size_t d) const { return pts[i][static_cast<Eigen::Index>(d)]; }
+  template <class Box>
+  bool kdtree_get_bbox(Box&) const {
+    return false;
+  }
+};
+
+using Tree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<double, Adaptor>, Adaptor, 3,
+                                                 std::uint32_t>;
+
+}  // namespace
+
+struct KnnIndex::Impl {
+  explicit Impl(const std::vector<Eigen::Vector3d>& p)
+      : adaptor{p}, tree(3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16)) {
+    if (!p.empty()) tree.buildIndex();
+  }
+  Adaptor adaptor;
+  Tree tree;
+};
+
+KnnIndex::KnnIndex(const std::vector<Eigen::Vector3d>& points) : impl_(std::make_unique<Impl>(points)) {}
+KnnIndex::~KnnIndex() = default;
+KnnIndex::KnnIndex(KnnIndex&&) noexcept = default;
+KnnIndex& KnnIndex::operator=(KnnIndex&&) noexcept = default;
+
+std::size_t KnnIndex::size() const { return impl_->adaptor.pts.size(); }
+
+std::size_t KnnIndex::knn(const Eigen::Vector3d& query, std::size_t k, std::vector<std::uint32_t>& indices,
+                          std::vector<double>& sqDists) const {
+  k = std::min(k, size());
+  indices.resize(k);
+  sqDists.resize(k);
+  if (k == 0) return 0;
+  const std::size_t found = impl_->tree.knnSearch(query.data(), k, indices.data(), sqDists.data());
+  indices.resize(found);
+  sqDists.resize(found);
+  return found;
+}
+
+std::size_t KnnIndex::radius(const Eigen::Vector3d& query, double radius, std::vector<std::uint32_t>& indices,
+                             std::vector<double>& sqDists) const {
+  indices.clear();
+  sqDists.clear();
+  if (size() == 0) return 0;
+  std::vector<std::pair<std::uint32_t, double>> matches;
+  nanoflann::SearchParams params;
+  params.sorted = true;
+  impl_->tree.radiusSearch(query.data(), radius * radius, matches, params);
+  indices.reserve(matches.size());
+  sqDists.reserve(matches.size());
+  for (const auto& [i, d] : matches) {
+    indices.push_back(i);
+    sqDists.push_back(d);
+  }
+  return matches.size();
+}
+
+std::int64_t KnnIndex::nearest(const Eigen::Vector3d& query, double* sqDist) const {
+  if (size() == 0) return -1;
+  std::uint32_t index = 0;
+  double d2 = 0;
+  impl_->tree.knnSearch(query.data(), 1, &index, &d2);
+  if (sqDist) *sqDist = d2;
+  return index;
+}
+
+}  // namespace iires

@@ -1,0 +1,111 @@
+#include "iires/mls.hpp"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+
+#include "iires/parallel.hpp"
+
+namespace iires {
+namespace {
+constexpr std::size_t kKernelNeighbour = 8;  // paper: h from the 8th neighbour
+}
+
+MlsSurface::MlsSurface(const std::vector<Eigen::Vector3d>& points, const std::vector<Eigen::Vector3d>& normals,
+                       const MlsParams& params)
+    : points_(points), normals_(normals), params_(params), index_(points) {
+  const std::size_t n = points.size();
+  h_.assign(n, 0.0);
+  std::vector<double> nearest(n, 0.0);
+  parallelFor(n, 0, [&](std::size_t i) {
+    std::vector<std::uint32_t> idx;
+    std::vector<double> d2;
+    const std::size_t found = index_.knn(points[i], kKernelNeighbour + 1, idx, d2);
+    if (found < 2) return;
+    h_[i] = std::sqrt(d2[found - 1]);
+    nearest[i] = std::sqrt(d2[1]);
+  });
+  // Robust kernel width: clamp to the 90th percentile so a lone outlier cannot inflate it (DESIGN §3.3).
+  std::vector<double> sorted = h_;
+  const std::size_t q = std::min(n - 1, static_cast<std::size_t>(0.9 * static_cast<double>(n)));
+  std::nth_element(sorted.begin(), sorted.begin() + static_cast<long>(q), sorted.end());
+  const double cap = sorted[q];
+  double area = 0, spacing = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    h_[i] = std::min(h_[i], cap);
+    area += M_PI * h_[i] * h_[i] / static_cast<double>(kKernelNeighbour);
+    spacing += nearest[i];
+  }
+  if (cap <= 0) std::fill(h_.begin(), h_.end(), 1.0);
+  area_ = area;
+  meanSpacing_ = n ? spacing / static_cast<double>(n) : 0.0;
+}
+
+MlsSurface::~MlsSurface() = default;
+
+Eigen::Vector3d MlsSurface::project(const Eigen::Vector3d& x0, Eigen::Vector3d* normalOut,
+                                    double* offSurface) const {
+  std::vector<std::uint32_t> idx;
+  std::vector<double> d2;
+  Eigen::Vector3d x = x0, normal = Eigen::Vector3d::UnitZ();
+  double off = 0;
+  for (int it = 0; it < std::max(1, params_.iterations); ++it) {
+    const std::size_t found = index_.knn(x, static_cast<std::size_t>(params_.k), idx, d2);
+    if (found == 0) break;
+    double h = 0;
+    for (std::size_t j = 0; j < found; ++j) h += h_[idx[j]];
+    h /= static_cast<double>(found);
+    const double inv = 1.0 / (h * h);
+    // eq. (2): Gaussian weights; eq. (1): weighted average a(x) and averaged oriented normal n_a.
+    double wsum = 0;
+    Eigen::Vector3d a = Eigen::Vector3d::Zero(), nsum = Eigen::Vector3d::Zero();
+    std::vector<double> w(found);
+    for (std::size_t j = 0; j < found; ++j) {
+      w[j] = std::exp(-d2[j] * inv) + 1e-12;
+      wsum += w[j];
+      a += w[j] * points_[idx[j]];
+      nsum += w[j] * normals_[idx[j]];
+    }
+    a /= wsum;
+    if (nsum.squaredNorm() < 1e-24) nsum = normals_[idx[0]];
+    normal = nsum.normalized();
+    Eigen::Vector3d next = x - normal * normal.dot(x - a);  // eq. (3): project onto the tangent plane at a
+    if (params_.degree >= 2 && found >= 8) {
+      // Quadric height field over the tangent plane: f(u,v) = c0 + c1 u + c2 v + c3 u² + c4 uv + c5 v².
+      const Eigen::Vector3d u = normal.unitOrthogonal(), v = normal.cross(u);
+      Eigen::Matrix<double, 6, 6> ata = Eigen::Matrix<double, 6, 6>::Zero();
+      Eigen::Matrix<double, 6, 1> atb = Eigen::Matrix<double, 6, 1>::Zero();
+      for (std::size_t j = 0; j < found; ++j) {
+        const Eigen::Vector3d d = (points_[idx[j]] - a) / h;
+        Eigen::Matrix<double, 6, 1> row;
+        const double pu = d.dot(u), pv = d.dot(v);
+        row << 1, pu, pv, pu * pu, pu * pv, pv * pv;
+        ata += w[j] * row * row.transpose();
+        atb += w[j] * row * d.dot(normal);
+      }
+      for (int r = 3; r < 6; ++r) ata(r, r) += 1e-3 * wsum;  // mild ridge: flat when under-determined
+      const Eigen::Matrix<double, 6, 1> c = ata.ldlt().solve(atb);
+      if (c.allFinite()) {
+        const Eigen::Vector3d d = (x - a) / h;
+        const double pu = d.dot(u), pv = d.dot(v);
+        const double f = c[0] + c[1] * pu + c[2] * pv + c[3] * pu * pu + c[4] * pu * pv + c[5] * pv * pv;
+        next = a + h * (pu * u + pv * v + f * normal);
+        const double fu = c[1] + 2 * c[3] * pu + c[4] * pv, fv = c[2] + c[4] * pu + 2 * c[5] * pv;
+        normal = (normal - fu * u - fv * v).normalized();
+      }
+    }
+    x = next;
+    double best = std::numeric_limits<double>::max();
+    std::size_t bestJ = 0;
+    for (std::size_t j = 0; j < found; ++j) {
+      const double dd = (points_[idx[j]] - x).squaredNorm();
+      if (dd < best) best = dd, bestJ = j;
+    }
+    off = std::sqrt(best) / h_[idx[bestJ]];
+  }
+  if (normalOut) *normalOut = normal;
+  if (offSurface) *offSurface = off;
+  return x;
+}
+
+}  // namespace iires

@@ -1,0 +1,516 @@
+#include "iires/resample.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <numeric>
+#include <queue>
+#include <sstream>
+#include <stdexcept>
+#include <tuple>
+#include <unordered_map>
+
+#include "iires/knn.hpp"
+#include "iires/parallel.hpp"
+#include "iires/validate.hpp"
+
+namespace iires {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double secondsSince(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+constexpr std::uint32_t kNone = 0xffffffffu;
+constexpr double kOffSurfaceLimit = 1.0;  // MlsSurface::project's offSurface beyond which a move left the cloud
+
+/// The working sample set S.
+struct Samples {
+  std::vector<Eigen::Vector3d> pos, nrm;
+  std::vector<char> fixed;
+  std::size_t size() const { return pos.size(); }
+  void add(const Eigen::Vector3d& p, const Eigen::Vector3d& n, bool isFixed) {
+    pos.push_back(p);
+    nrm.push_back(n);
+    fixed.push_back(isFixed ? 1 : 0);
+  }
+};
+
+/// Per sample: its 1-ring (tangent-plane Delaunay neighbours) and the centroid of its tangent-plane Voronoi cell.
+struct Rings {
+  int stride = 0;
+  std::vector<std::uint32_t> ring;  // stride entries per sample, kNone-padded
+  std::vector<Eigen::Vector3d> centroid;
+  std::vector<double> nearest;  // distance to the nearest accepted neighbour
+};
+
+struct Edge {
+  double length;
+  std::uint32_t a, b;
+};
+
+/// Clip a convex polygon (edge e runs from v[e] to v[e+1] and carries label lab[e]) by {x : x·q ≤ |q|²/2}.
+void clipByBisector(std::vector<Eigen::Vector2d>& v, std::vector<std::uint32_t>& lab, const Eigen::Vector2d& q,
+                    std::uint32_t label, std::vector<Eigen::Vector2d>& outV, std::vector<std::uint32_t>& outL) {
+  const double c = 0.5 * q.squaredNorm();
+  outV.clear();
+  outL.clear();
+  const std::size_t m = v.size();
+  for (std::size_t e = 0; e < m; ++e) {
+    const Eigen::Vector2d& a = v[e];
+    const Eigen::Vector2d& b = v[(e + 1) % m];
+    const double sa = a.dot(q) - c, sb = b.dot(q) - c;
+    if (sa <= 0) {
+      outV.push_back(a);
+      outL.push_back(lab[e]);
+      if (sb > 0) {
+        outV.push_back(a + (b - a) * (sa / (sa - sb)));
+        outL.push_back(label);
+      }
+    } else if (sb <= 0) {
+      outV.push_back(a + (b - a) * (sa / (sa - sb)));
+      outL.push_back(lab[e]);
+    }
+  }
+  v.swap(outV);
+  lab.swap(outL);
+}
+
+Eigen::Vector2d polygonCentroid(const std::vector<Eigen::Vector2d>& v) {
+  double area = 0;
+  Eigen::Vector2d c = Eigen::Vector2d::Zero();
+  for (std::size_t e = 0; e < v.size(); ++e) {
+    const Eigen::Vector2d& a = v[e];
+    const Eigen::Vector2d& b = v[(e + 1) % v.size()];
+    const double cross = a.x() * b.y() - a.y() * b.x();
+    area += cross;
+    c += cross * (a + b);
+  }
+  return std::abs(area) < 1e-300 ? Eigen::Vector2d::Zero() : Eigen::Vector2d(c / (3.0 * area));
+}
+
+class Resampler {
+ public:
+  Resampler(const std::vector<Eigen::Vector3d>& pts, const MlsSurface& surface, const ResampleParams& params,
+            NeighbourRule& rule)
+      : pts_(pts), surface_(surface), params_(params), rule_(rule) {}
+
+  Samples initialise(ResampleResult& result);
+  void run(Samples& s, ResampleResult& result);
+
+ private:
+  Rings computeRings(const Samples& s, double cellRadius) const;
+  std::vector<Edge> edges(const Samples& s, const Rings& r) const;
+  double relax(Samples& s, double l, int iterations);
+  std::size_t collapse(Samples& s, const std::vector<Edge>& sorted, std::size_t limit, double maxLength);
+  std::size_t split(Samples& s, const std::vector<Edge>& sortedDesc, std::size_t limit, double minLength);
+  void eliminate(Samples& s, std::size_t count);
+  std::vector<std::uint32_t> voxelCandidates(std::size_t target) const;
+
+  const std::vector<Eigen::Vector3d>& pts_;
+  const MlsSurface& surface_;
+  const ResampleParams& params_;
+  NeighbourRule& rule_;
+};
+
+Rings Resampler::computeRings(const Samples& s, double cellRadius) const {
+  rule_.update(s.pos, s.nrm);
+  const int k = params_.neighbours;
+  Rings r;
+  r.stride = k;
+  r.ring.assign(s.size() * static_cast<std::size_t>(k), kNone);
+  r.centroid.resize(s.size());
+  r.nearest.assign(s.size(), 0.0);
+  KnnIndex index(s.pos);
+  parallelFor(s.size(), params_.threads, [&](std::size_t i) {
+    std::vector<std::uint32_t> idx;
+    std::vector<double> d2;
+    index.knn(s.pos[i], static_cast<std::size_t>(k) + 1, idx, d2);
+    const Eigen::Vector3d& n = s.nrm[i];
+    const Eigen::Vector3d u = n.unitOrthogonal(), v = n.cross(u);
+    // Start from a 16-gon enclosing the disc of radius cellRadius; clip by each accepted neighbour's bisector.
+    std::vector<Eigen::Vector2d> poly, tmpV;
+    std::vector<std::uint32_t> lab, tmpL;
+    const double rad = cellRadius / std::cos(M_PI / 16);
+    for (int e = 0; e < 16; ++e)
+      poly.emplace_back(rad * std::cos(2 * M_PI * e / 16), rad * std::sin(2 * M_PI * e / 16)), lab.push_back(kNone);
+    double nearest = std::numeric_limits<double>::max();
+    for (std::size_t c = 0; c < idx.size(); ++c) {
+      const std::uint32_t j = idx[c];
+      if (j == i || d2[c] > 4.0 * cellRadius * cellRadius * 4.0 || !rule_.accept(i, j)) continue;
+      const Eigen::Vector3d d = s.pos[j] - s.pos[i];
+      const Eigen::Vector2d q(d.dot(u), d.dot(v));
+      if (q.squaredNorm() < 1e-30) continue;
+      nearest = std::min(nearest, std::sqrt(d2[c]));
+      clipByBisector(poly, lab, q, j, tmpV, tmpL);
+      if (poly.size() < 3) break;
+    }
+    const Eigen::Vector2d c2 = poly.size() >= 3 ? polygonCentroid(poly) : Eigen::Vector2d::Zero();
+    r.centroid[i] = s.pos[i] + c2.x() * u + c2.y() * v;
+    r.nearest[i] = nearest == std::numeric_limits<double>::max() ? 0.0 : nearest;
+    std::sort(lab.begin(), lab.end());
+    lab.erase(std::unique(lab.begin(), lab.end()), lab.end());
+    int w = 0;
+    for (std::uint32_t j : lab)
+      if (j != kNone && w < k) r.ring[i * static_cast<std::size_t>(k) + static_cast<std::size_t>(w++)] = j;
+  });
+  return r;
+}
+
+/// Edges present in both endpoints' 1-rings, each once (a < b), in a deterministic order.
+std::vector<Edge> Resampler::edges(const Samples& s, const Rings& r) const {
+  std::vector<Edge> out;
+  const std::size_t k = static_cast<std::size_t>(r.stride);
+  for (std::size_t a = 0; a < s.size(); ++a)
+    for (std::size_t x = 0; x < k; ++x) {
+      const std::uint32_t b = r.ring[a * k + x];
+      if (b == kNone || b <= a) continue;
+      const auto* rb = &r.ring[b * k];
+      if (std::find(rb, rb + k, static_cast<std::uint32_t>(a)) == rb + k) continue;
+      out.push_back({(s.pos[a] - s.pos[b]).norm(), static_cast<std::uint32_t>(a), b});
+    }
+  return out;
+}
+
+/// Lloyd relaxation: move each free sample to the centroid of its tangent-plane Voronoi cell, projected onto
+/// the MLS surface (halving the step if the move would leave the cloud). Returns the spacing CV after the last
+/// iteration (from the 1-rings, so it costs nothing extra).
+double Resampler::relax(Samples& s, double l, int iterations) {
+  double cv = 0;
+  for (int it = 0; it < iterations; ++it) {
+    const Rings r = computeRings(s, l);
+    std::vector<Eigen::Vector3d> pos(s.pos), nrm(s.nrm);
+    parallelFor(s.size(), params_.threads, [&](std::size_t i) {
+      if (s.fixed[i]) return;
+      Eigen::Vector3d target = r.centroid[i];
+      for (int attempt = 0; attempt < 3; ++attempt) {
+        Eigen::Vector3d n;
+        double off = 0;
+        const Eigen::Vector3d p = surface_.project(target, &n, &off);
+        if (off <= kOffSurfaceLimit) {
+          pos[i] = p;
+          nrm[i] = n;
+          return;
+        }
+        target = 0.5 * (target + s.pos[i]);
+      }
+    });
+    s.pos.swap(pos);
+    s.nrm.swap(nrm);
+    double sum = 0, sq = 0;
+    for (double d : r.nearest) sum += d, sq += d * d;
+    const double mean = sum / static_cast<double>(r.nearest.size());
+    cv = mean > 0 ? std::sqrt(std::max(0.0, sq / static_cast<double>(r.nearest.size()) - mean * mean)) / mean : 0;
+  }
+  return cv;
+}
+
+/// Collapse the shortest edges (ascending input) shorter than @p maxLength, at most @p limit, each sample in at
+/// most one collapse: both ends are replaced by their midpoint on the surface (a fixed end stays put).
+std::size_t Resampler::collapse(Samples& s, const std::vector<Edge>& sorted, std::size_t limit, double maxLength) {
+  std::vector<char> touched(s.size(), 0), removed(s.size(), 0);
+  std::size_t done = 0;
+  for (const Edge& e : sorted) {
+    if (done >= limit || e.length >= maxLength) break;
+    if (touched[e.a] || touched[e.b] || (s.fixed[e.a] && s.fixed[e.b])) continue;
+    touched[e.a] = touched[e.b] = 1;
+    std::uint32_t keep = e.a, drop = e.b;
+    if (s.fixed[drop]) std::swap(keep, drop);
+    if (!s.fixed[keep]) s.pos[keep] = surface_.project(0.5 * (s.pos[e.a] + s.pos[e.b]), &s.nrm[keep]);
+    removed[drop] = 1;
+    ++done;
+  }
+  Samples kept;
+  for (std::size_t i = 0; i < s.size(); ++i)
+    if (!removed[i]) kept.add(s.pos[i], s.nrm[i], s.fixed[i]);
+  s = std::move(kept);
+  return done;
+}
+
+/// Split the longest edges (descending input) longer than @p minLength, at most @p limit: insert the edge
+/// midpoint projected onto the surface. A point cloud has no connectivity to keep, so a sample may take part in
+/// several splits.
+std::size_t Resampler::split(Samples& s, const std::vector<Edge>& sortedDesc, std::size_t limit, double minLength) {
+  std::vector<const Edge*> chosen;
+  for (const Edge& e : sortedDesc) {
+    if (chosen.size() >= limit || e.length <= minLength) break;
+    chosen.push_back(&e);
+  }
+  std::vector<Eigen::Vector3d> pos(chosen.size()), nrm(chosen.size());
+  parallelFor(chosen.size(), params_.threads, [&](std::size_t c) {
+    pos[c] = surface_.project(0.5 * (s.pos[chosen[c]->a] + s.pos[chosen[c]->b]), &nrm[c]);
+  });
+  for (std::size_t c = 0; c < chosen.size(); ++c) s.add(pos[c], nrm[c], false);
+  return chosen.size();
+}
+
+/// Voxel density initialisation (DESIGN §3.5): cells sized so that about @p target are occupied, one input
+/// point per cell — the one nearest the cell centre.
+std::vector<std::uint32_t> Resampler::voxelCandidates(std::size_t target) const {
+  Eigen::Vector3d lo = pts_[0];
+  for (const auto& p : pts_) lo = lo.cwiseMin(p);
+  auto occupancy = [&](double cell, std::vector<std::uint32_t>* chosen) {
+    std::unordered_map<std::uint64_t, std::uint32_t> best;
+    best.reserve(std::min(pts_.size(), target * 4));
+    auto key = [&](const Eigen::Vector3d& p, Eigen::Vector3d& centre) {
+      const Eigen::Vector3d q = (p - lo) / cell;
+      const auto ix = static_cast<std::uint64_t>(q.x()), iy = static_cast<std::uint64_t>(q.y()),
+                 iz = static_cast<std::uint64_t>(q.z());
+      centre = lo + cell * Eigen::Vector3d(ix + 0.5, iy + 0.5, iz + 0.5);
+      return (ix << 42) ^ (iy << 21) ^ iz;
+    };
+    Eigen::Vector3d centre;
+    for (std::uint32_t i = 0; i < pts_.size(); ++i) {
+      const std::uint64_t h = key(pts_[i], centre);
+      auto [it, inserted] = best.emplace(h, i);
+      if (!inserted && chosen) {
+        if ((pts_[i] - centre).squaredNorm() < (pts_[it->second] - centre).squaredNorm()) it->second = i;
+      }
+    }
+    if (chosen) {
+      chosen->clear();
+      for (const auto& [h, i] : best) chosen->push_back(i);
+      std::sort(chosen->begin(), chosen->end());
+    }
+    return best.size();
+  };
+  // Secant steps on log(cell) against log(count): occupied cells scale like cell⁻² on a surface.
+  double cell = std::sqrt(surface_.area() / static_cast<double>(target));
+  for (int step = 0; step < 8; ++step) {
+    const double count = static_cast<double>(occupancy(cell, nullptr));
+    const double ratio = count / static_cast<double>(target);
+    if (ratio > 0.85 && ratio < 1.2) break;
+    cell *= std::sqrt(std::clamp(ratio, 0.25, 4.0));
+  }
+  std::vector<std::uint32_t> chosen;
+  occupancy(cell, &chosen);
+  return chosen;
+}
+
+/// Weighted sample elimination (Yuksel 2015) of free samples down to @p count: repeatedly drop the sample whose
+/// neighbours within 2·r_max crowd it most. Gives a Poisson-disk-like set whatever the input density.
+void Resampler::eliminate(Samples& s, std::size_t count) {
+  if (s.size() <= count) return;
+  const double rmax = std::sqrt(surface_.area() / (2.0 * std::sqrt(3.0) * static_cast<double>(count)));
+  const double ratio = static_cast<double>(count) / static_cast<double>(s.size());
+  const double rmin = rmax * (1.0 - 0.65 * std::pow(ratio, 1.5));
+  const double radius = 2.0 * rmax;
+  KnnIndex index(s.pos);
+  std::vector<std::vector<std::pair<std::uint32_t, double>>> nb(s.size());
+  parallelFor(s.size(), params_.threads, [&](std::size_t i) {
+    std::vector<std::uint32_t> idx;
+    std::vector<double> d2;
+    index.radius(s.pos[i], radius, idx, d2);
+    for (std::size_t c = 0; c < idx.size(); ++c) {
+      if (idx[c] == i) continue;
+      const double d = std::max(std::sqrt(d2[c]), 2.0 * rmin);
+      nb[i].emplace_back(idx[c], std::pow(1.0 - d / radius, 8.0));
+    }
+  });
+  std::vector<double> weight(s.size(), 0.0);
+  for (std::size_t i = 0; i < s.size(); ++i)
+    for (const auto& [j, w] : nb[i]) weight[i] += w;
+  // Ties broken by a seeded hash of the index, so equal weights do not always favour low indices.
+  auto tie = [&](std::uint32_t i) {
+    std::uint64_t z = params_.seed + 0x9e3779b97f4a7c15ull * (i + 1);
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+    return z ^ (z >> 27);
+  };
+  using Item = std::tuple<double, std::uint64_t, std::uint32_t>;
+  std::priority_queue<Item> heap;
+  for (std::uint32_t i = 0; i < s.size(); ++i)
+    if (!s.fixed[i]) heap.emplace(weight[i], tie(i), i);
+  std::vector<char> removed(s.size(), 0);
+  std::size_t alive = s.size();
+  while (alive > count && !heap.empty()) {
+    const auto [w, t, i] = heap.top();
+    heap.pop();
+    if (removed[i] || w != weight[i]) continue;
+    removed[i] = 1;
+    --alive;
+    for (const auto& [j, wj] : nb[i]) {
+      if (removed[j]) continue;
+      weight[j] -= wj;
+      if (!s.fixed[j]) heap.emplace(weight[j], tie(j), j);
+    }
+  }
+  Samples kept;
+  for (std::size_t i = 0; i < s.size(); ++i)
+    if (!removed[i]) kept.add(s.pos[i], s.nrm[i], s.fixed[i]);
+  s = std::move(kept);
+}
+
+Samples Resampler::initialise(ResampleResult& result) {
+  const std::size_t n = params_.targetCount;
+  Samples s;
+  for (const auto& p : params_.fixedSamples) {
+    Eigen::Vector3d nrm;
+    surface_.project(p, &nrm);
+    s.add(p, nrm, true);
+  }
+  std::vector<std::uint32_t> chosen;
+  const std::size_t candidates = static_cast<std::size_t>(params_.candidateFactor * static_cast<double>(n));
+  if (pts_.size() <= candidates) {
+    chosen.resize(pts_.size());
+    std::iota(chosen.begin(), chosen.end(), 0u);
+  } else {
+    chosen = voxelCandidates(candidates);
+  }
+  std::vector<Eigen::Vector3d> pos(chosen.size()), nrm(chosen.size());
+  parallelFor(chosen.size(), params_.threads, [&](std::size_t c) { pos[c] = surface_.project(pts_[chosen[c]], &nrm[c]); });
+  for (std::size_t c = 0; c < chosen.size(); ++c) s.add(pos[c], nrm[c], false);
+  eliminate(s, n);
+  result.initialSamples = s.size();
+  return s;
+}
+
+void Resampler::run(Samples& s, ResampleResult& result) {
+  const std::size_t n = params_.targetCount;
+  const double countD = static_cast<double>(n);
+  auto targetLength = [&](const std::vector<Edge>& e) {
+    double mean = 0;
+    for (const Edge& x : e) mean += x.length;
+    mean = e.empty() ? std::sqrt(surface_.area() / countD) : mean / static_cast<double>(e.size());
+    return mean * std::sqrt(static_cast<double>(s.size()) / countD);
+  };
+  double l = std::sqrt(2.0 * surface_.area() / (std::sqrt(3.0) * countD));
+  // Count control: split/collapse against l, each pass moving |S| monotonically towards N, then relax.
+  for (int pass = 0; pass < params_.countPasses; ++pass) {
+    const Rings r = computeRings(s, 1.5 * l);
+    std::vector<Edge> e = edges(s, r);
+    l = targetLength(e);
+    ++result.passes;
+    std::sort(e.begin(), e.end(), [](const Edge& a, const Edge& b) {
+      return std::tie(a.length, a.a, a.b) < std::tie(b.length, b.a, b.b);
+    });
+    const std::size_t longCount = static_cast<std::size_t>(
+        std::count_if(e.begin(), e.end(), [&](const Edge& x) { return x.length > params_.splitRatio * l; }));
+    const std::size_t shortCount = static_cast<std::size_t>(
+        std::count_if(e.begin(), e.end(), [&](const Edge& x) { return x.length < params_.collapseRatio * l; }));
+    if (longCount == 0 && shortCount == 0 && s.size() == n) break;
+    // Net change bounded so the count never overshoots N: splits ≤ collapses + (N − |S|) and vice versa.
+    std::size_t splits = longCount, collapses = shortCount;
+    const std::size_t excess = s.size() > n ? s.size() - n : 0, deficit = n > s.size() ? n - s.size() : 0;
+    collapses = std::min(collapses, splits + excess);
+    splits = std::min(splits, collapses + deficit);
+    std::vector<Edge> desc(e.rbegin(), e.rend());
+    result.collapses += collapse(s, e, collapses, params_.collapseRatio * l);
+    result.splits += split(s, desc, splits, params_.splitRatio * l);
+    relax(s, l, 2);
+    result.relaxIterations += 2;
+  }
+  // Exact-count finish: collapse the shortest or split the longest edges until |S| == N.
+  for (int guard = 0; s.size() != n && guard < 64; ++guard) {
+    const Rings r = computeRings(s, 1.5 * l);
+    std::vector<Edge> e = edges(s, r);
+    std::sort(e.begin(), e.end(), [](const Edge& a, const Edge& b) {
+      return std::tie(a.length, a.a, a.b) < std::tie(b.length, b.a, b.b);
+    });
+    if (s.size() > n) {
+      result.collapses += collapse(s, e, s.size() - n, std::numeric_limits<double>::max());
+    } else {
+      std::vector<Edge> desc(e.rbegin(), e.rend());
+      result.splits += split(s, desc, n - s.size(), 0.0);
+    }
+    l = targetLength(e);
+    relax(s, l, 1);
+    result.relaxIterations += 1;
+  }
+  if (s.size() != n) throw std::runtime_error("resample: could not reach the requested count");
+  // Lloyd relaxation until the spacing stops improving.
+  double previous = std::numeric_limits<double>::max();
+  for (int it = 0; it < params_.maxRelaxIterations; ++it) {
+    const double cv = relax(s, l, 1);
+    ++result.relaxIterations;
+    if (previous - cv < params_.relaxTolerance && it >= 5) break;
+    previous = std::min(previous, cv);
+  }
+  result.targetLength = l;
+}
+
+std::string jsonNumber(double x) {
+  if (!std::isfinite(x)) return "null";
+  std::ostringstream os;
+  os.precision(10);
+  os << x;
+  return os.str();
+}
+
+}  // namespace
+
+void ResampleParams::validate() const {
+  if (targetCount < 1) throw std::invalid_argument("the requested point count N must be at least 1");
+  if (neighbours < 6 || neighbours > 64) throw std::invalid_argument("neighbours must be in [6, 64]");
+  if (!(splitRatio > 1.0)) throw std::invalid_argument("splitRatio must be > 1");
+  if (!(collapseRatio > 0.0 && collapseRatio < 1.0)) throw std::invalid_argument("collapseRatio must be in (0, 1)");
+  if (countPasses < 0 || maxRelaxIterations < 0) throw std::invalid_argument("pass counts must be >= 0");
+  if (!(candidateFactor >= 1.0)) throw std::invalid_argument("candidateFactor must be >= 1");
+  if (mls.k < 3) throw std::invalid_argument("mls.k must be >= 3");
+  if (threads < 0) throw std::invalid_argument("threads must be >= 0 (0 = all cores)");
+  if (fixedSamples.size() > targetCount)
+    throw std::invalid_argument("more fixed samples than the requested point count");
+}
+
+std::string ResampleResult::toJson() const {
+  std::ostringstream os;
+  os << "{\n  \"input_points\": " << inputPoints << ",\n  \"duplicates_merged\": " << duplicatesMerged
+     << ",\n  \"requested_points\": " << requestedPoints << ",\n  \"output_points\": " << cloud.size()
+     << ",\n  \"initial_samples\": " << initialSamples << ",\n  \"passes\": " << passes
+     << ",\n  \"relax_iterations\": " << relaxIterations << ",\n  \"splits\": " << splits
+     << ",\n  \"collapses\": " << collapses << ",\n  \"target_length\": " << jsonNumber(targetLength)
+     << ",\n  \"spacing\": {\"mean\": " << jsonNumber(spacing.mean) << ", \"min\": " << jsonNumber(spacing.min)
+     << ", \"max\": " << jsonNumber(spacing.max) << ", \"cv\": " << jsonNumber(spacing.cv) << "},\n  \"time_s\": {";
+  for (std::size_t i = 0; i < timings.size(); ++i)
+    os << (i ? ", " : "") << "\"" << timings[i].name << "\": " << jsonNumber(timings[i].seconds);
+  os << "}\n}\n";
+  return os.str();
+}
+
+ResampleResult resample(const PointCloud& input, const ResampleParams& params) {
+  params.validate();
+  const auto start = Clock::now();
+  ResampleResult result;
+  result.requestedPoints = params.targetCount;
+  result.inputPoints = input.size();
+  auto stage = [&](const char* name, Clock::time_point t) { result.timings.push_back({name, secondsSince(t)}); };
+
+  auto t = Clock::now();
+  PointCloud cloud = input;
+  const ValidationReport report = validateCloud(cloud, 4, "input");
+  result.duplicatesMerged = report.duplicatesMerged;
+  stage("validate", t);
+
+  t = Clock::now();
+  if (!cloud.hasNormals()) {
+    NormalParams np = params.normals;
+    np.threads = params.threads;
+    cloud.normals = estimateNormals(cloud.points, np);
+  } else {
+    for (auto& nrm : cloud.normals) nrm.normalize();
+  }
+  stage("normals", t);
+
+  t = Clock::now();
+  const MlsSurface surface(cloud.points, cloud.normals, params.mls);
+  stage("surface", t);
+
+  EuclideanRule euclidean;
+  NeighbourRule& rule = params.neighbourRule ? *params.neighbourRule : euclidean;
+  Resampler resampler(cloud.points, surface, params, rule);
+  t = Clock::now();
+  Samples s = resampler.initialise(result);
+  stage("initialise", t);
+
+  t = Clock::now();
+  resampler.run(s, result);
+  stage("resample", t);
+
+  result.cloud.points = std::move(s.pos);
+  result.cloud.normals = std::move(s.nrm);
+  t = Clock::now();
+  result.spacing = spacingStats(result.cloud.points, params.threads);
+  stage("report", t);
+  stage("total", start);
+  return result;
+}
+
+}  // namespace iires

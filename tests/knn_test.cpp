@@ -1,0 +1,56 @@
+#include "iires/knn.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <random>
+
+namespace {
+
+std::vector<Eigen::Vector3d> randomPoints(std::size_t n, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::vector<Eigen::Vector3d> p(n);
+  for (auto& x : p) x = Eigen::Vector3d(u(rng), u(rng), u(rng));
+  return p;
+}
+
+TEST(KnnIndex, MatchesBruteForce) {
+  const auto pts = randomPoints(2000, 7);
+  iires::KnnIndex index(pts);
+  const auto queries = randomPoints(50, 8);
+  std::vector<std::uint32_t> idx;
+  std::vector<double> d2;
+  for (const auto& q : queries) {
+    std::vector<std::pair<double, std::uint32_t>> all;
+    for (std::uint32_t i = 0; i < pts.size(); ++i) all.emplace_back((pts[i] - q).squaredNorm(), i);
+    std::sort(all.begin(), all.end());
+    ASSERT_EQ(index.knn(q, 10, idx, d2), 10u);
+    for (int j = 0; j < 10; ++j) {
+      EXPECT_EQ(idx[j], all[j].second);
+      EXPECT_NEAR(d2[j], all[j].first, 1e-12);
+    }
+    const double r = std::sqrt(all[30].first) - 1e-9;
+    index.radius(q, r, idx, d2);
+    EXPECT_EQ(idx.size(), 30u);
+    for (std::size_t j = 0; j < idx.size(); ++j) EXPECT_EQ(idx[j], all[j].second);
+    double nd2 = 0;
+    EXPECT_EQ(index.nearest(q, &nd2), all[0].second);
+    EXPECT_NEAR(nd2, all[0].first, 1e-12);
+  }
+}
+
+TEST(KnnIndex, SmallAndEmptySets) {
+  std::vector<Eigen::Vector3d> none;
+  iires::KnnIndex empty(none);
+  std::vector<std::uint32_t> idx;
+  std::vector<double> d2;
+  EXPECT_EQ(empty.knn(Eigen::Vector3d::Zero(), 5, idx, d2), 0u);
+  EXPECT_EQ(empty.nearest(Eigen::Vector3d::Zero()), -1);
+  std::vector<Eigen::Vector3d> two{{0, 0, 0}, {1, 0, 0}};
+  iires::KnnIndex small(two);
+  EXPECT_EQ(small.knn(Eigen::Vector3d(0.9, 0, 0), 5, idx, d2), 2u);
+  EXPECT_EQ(idx[0], 1u);
+}
+
+}  // namespace

@@ -1,0 +1,49 @@
+#include "iires/mls.hpp"
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "shapes.hpp"
+
+namespace {
+
+TEST(MlsSurface, ProjectsOntoSphere) {
+  const auto cloud = iires::test::sphereCloud(20000, 1.0, 11);
+  for (int degree : {1, 2}) {
+    iires::MlsParams p;
+    p.degree = degree;
+    iires::MlsSurface surface(cloud.points, cloud.normals, p);
+    std::mt19937_64 rng(3);
+    std::normal_distribution<double> g(0.0, 1.0);
+    double worst = 0;
+    for (int i = 0; i < 200; ++i) {
+      Eigen::Vector3d d(g(rng), g(rng), g(rng));
+      d.normalize();
+      const Eigen::Vector3d x = d * (1.0 + 0.01 * g(rng));  // a little off the surface
+      Eigen::Vector3d n;
+      double off = 0;
+      const Eigen::Vector3d y = surface.project(x, &n, &off);
+      worst = std::max(worst, std::abs(y.norm() - 1.0));
+      EXPECT_GT(n.dot(y.normalized()), 0.99);
+      EXPECT_LT(off, 1.0);
+    }
+    // Input spacing is ~0.013; the quadric fit is far more accurate than the plane fit.
+    EXPECT_LT(worst, degree == 2 ? 2e-4 : 2e-3) << "degree " << degree;
+  }
+}
+
+TEST(MlsSurface, FlagsPointsBeyondAnOpenBoundary) {
+  auto cloud = iires::test::planeCloud(20000);
+  cloud.normals.assign(cloud.size(), Eigen::Vector3d::UnitZ());
+  iires::MlsSurface surface(cloud.points, cloud.normals);
+  double inside = 0, outside = 0;
+  const Eigen::Vector3d p = surface.project(Eigen::Vector3d(0.5, 0.5, 0.05), nullptr, &inside);
+  EXPECT_NEAR(p.z(), 0.0, 1e-9);
+  surface.project(Eigen::Vector3d(1.2, 0.5, 0.0), nullptr, &outside);
+  EXPECT_LT(inside, 1.0);
+  EXPECT_GT(outside, 1.0);
+  EXPECT_NEAR(surface.area(), 1.0, 0.35);  // a density estimate: right to within tens of per cent
+}
+
+}  // namespace

@@ -1,0 +1,115 @@
+#include "iires/resample.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "shapes.hpp"
+
+namespace {
+
+iires::ResampleParams paramsFor(std::size_t n, int threads = 0) {
+  iires::ResampleParams p;
+  p.targetCount = n;
+  p.threads = threads;
+  return p;
+}
+
+double maxRadiusError(const iires::PointCloud& c) {
+  double worst = 0;
+  for (const auto& p : c.points) worst = std::max(worst, std::abs(p.norm() - 1.0));
+  return worst;
+}
+
+TEST(Resample, ExactCountOnSphereForManyN) {
+  const auto cloud = iires::test::sphereCloud(20000, 1.0, 21);
+  for (std::size_t n : {1u, 4u, 37u, 1000u, 4999u}) {
+    const auto r = iires::resample(cloud, paramsFor(n));
+    EXPECT_EQ(r.cloud.size(), n);
+    EXPECT_EQ(r.cloud.normals.size(), n);
+    EXPECT_LT(maxRadiusError(r.cloud), 1e-3) << "N = " << n;
+  }
+}
+
+TEST(Resample, UniformOnSphereAndOnTheSurface) {
+  const auto cloud = iires::test::sphereCloud(30000, 1.0, 22);
+  const auto r = iires::resample(cloud, paramsFor(3000));
+  ASSERT_EQ(r.cloud.size(), 3000u);
+  EXPECT_LT(r.spacing.cv, 0.08);
+  EXPECT_LT(maxRadiusError(r.cloud), 2e-4);
+  for (std::size_t i = 0; i < r.cloud.size(); ++i)
+    EXPECT_GT(r.cloud.normals[i].dot(r.cloud.points[i]), 0.99);
+  // Hexagonal packing of N points on area 4π: spacing sqrt(2A / (√3 N)).
+  const double ideal = std::sqrt(2.0 * 4.0 * M_PI / (std::sqrt(3.0) * 3000.0));
+  EXPECT_NEAR(r.spacing.mean, ideal, 0.08 * ideal);
+}
+
+TEST(Resample, NonUniformOpenPlaneBecomesUniform) {
+  const auto cloud = iires::test::planeCloud(40000, 1.0, 6.0);
+  const auto r = iires::resample(cloud, paramsFor(2000));
+  ASSERT_EQ(r.cloud.size(), 2000u);
+  EXPECT_LT(r.spacing.cv, 0.08);
+  // Equal shares left and right of x = 0.5 although the input density differs ~4× between the halves.
+  std::size_t left = 0;
+  for (const auto& p : r.cloud.points) {
+    EXPECT_NEAR(p.z(), 0.0, 1e-9);
+    EXPECT_GT(p.x(), -0.02);
+    EXPECT_LT(p.x(), 1.02);
+    left += p.x() < 0.5;
+  }
+  EXPECT_NEAR(static_cast<double>(left) / 2000.0, 0.5, 0.03);
+}
+
+TEST(Resample, UpsamplesToExactCount) {
+  const auto cloud = iires::test::sphereCloud(600, 1.0, 23);
+  const auto r = iires::resample(cloud, paramsFor(5000));
+  ASSERT_EQ(r.cloud.size(), 5000u);
+  EXPECT_LT(r.spacing.cv, 0.08);
+  EXPECT_LT(maxRadiusError(r.cloud), 5e-3);
+}
+
+TEST(Resample, SameOutputForAnyThreadCountAndSeedMatters) {
+  const auto cloud = iires::test::planeCloud(20000, 1.0, 3.0);
+  const auto a = iires::resample(cloud, paramsFor(1500, 1));
+  const auto b = iires::resample(cloud, paramsFor(1500, 2));
+  EXPECT_EQ(a.cloud.points, b.cloud.points);
+  EXPECT_EQ(a.cloud.normals, b.cloud.normals);
+  auto p = paramsFor(1500, 2);
+  p.seed = 99;
+  EXPECT_NE(iires::resample(cloud, p).cloud.points, a.cloud.points);
+}
+
+TEST(Resample, FixedSamplesStayPut) {
+  const auto cloud = iires::test::sphereCloud(20000, 1.0, 24);
+  auto p = paramsFor(800);
+  p.fixedSamples = {Eigen::Vector3d(1, 0, 0), Eigen::Vector3d(0, 0, -1)};
+  const auto r = iires::resample(cloud, p);
+  ASSERT_EQ(r.cloud.size(), 800u);
+  for (const auto& f : p.fixedSamples)
+    EXPECT_NE(std::find(r.cloud.points.begin(), r.cloud.points.end(), f), r.cloud.points.end());
+}
+
+TEST(Resample, RejectsBadInputAndParameters) {
+  iires::PointCloud empty;
+  EXPECT_THROW(iires::resample(empty, paramsFor(10)), iires::InputError);
+  auto cloud = iires::test::sphereCloud(100);
+  EXPECT_THROW(iires::resample(cloud, paramsFor(0)), std::invalid_argument);
+  cloud.points[3].x() = std::nan("");
+  EXPECT_THROW(iires::resample(cloud, paramsFor(10)), iires::InputError);
+  iires::PointCloud three;
+  three.points = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  EXPECT_THROW(iires::resample(three, paramsFor(10)), iires::InputError);
+  auto bad = paramsFor(10);
+  bad.collapseRatio = 1.5;
+  EXPECT_THROW(iires::resample(iires::test::sphereCloud(100), bad), std::invalid_argument);
+}
+
+TEST(Resample, ReportIsJsonWithTheFieldsUsersRead) {
+  const auto r = iires::resample(iires::test::sphereCloud(3000), paramsFor(300));
+  const std::string json = r.toJson();
+  for (const char* key : {"\"input_points\": 3000", "\"output_points\": 300", "\"passes\"", "\"time_s\"",
+                          "\"spacing\"", "\"cv\"", "\"total\""})
+    EXPECT_NE(json.find(key), std::string::npos) << key << " missing in " << json;
+}
+
+}  // namespace

@@ -1,0 +1,53 @@
+#pragma once
+// Synthetic shapes with known answers for the tests.
+#include <Eigen/Core>
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include "iires/types.hpp"
+
+namespace iires::test {
+
+/// Random points on a sphere (uniform by area), outward normals.
+inline PointCloud sphereCloud(std::size_t n, double radius = 1.0, std::uint64_t seed = 1,
+                              const Eigen::Vector3d& centre = Eigen::Vector3d::Zero()) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> g(0.0, 1.0);
+  PointCloud c;
+  for (std::size_t i = 0; i < n; ++i) {
+    Eigen::Vector3d d(g(rng), g(rng), g(rng));
+    d.normalize();
+    c.points.push_back(centre + radius * d);
+    c.normals.push_back(d);
+  }
+  return c;
+}
+
+/// Random points on the square [0,size]² in the z = 0 plane; density grows by @p ratio along x.
+inline PointCloud planeCloud(std::size_t n, double size = 1.0, double ratio = 1.0, std::uint64_t seed = 2) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  PointCloud c;
+  while (c.points.size() < n) {
+    const double x = u(rng), y = u(rng);
+    if (u(rng) * ratio > 1.0 + (ratio - 1.0) * x) continue;  // accept with weight 1 + (ratio − 1) x
+    c.points.emplace_back(size * x, size * y, 0.0);
+  }
+  return c;
+}
+
+/// A regular grid on the unit sphere's octahedral parameterisation is overkill; a Fibonacci sphere is
+/// near-uniform and deterministic.
+inline std::vector<Eigen::Vector3d> fibonacciSphere(std::size_t n, double radius = 1.0) {
+  std::vector<Eigen::Vector3d> p;
+  const double golden = M_PI * (3.0 - std::sqrt(5.0));
+  for (std::size_t i = 0; i < n; ++i) {
+    const double z = 1.0 - 2.0 * (static_cast<double>(i) + 0.5) / static_cast<double>(n);
+    const double r = std::sqrt(1.0 - z * z), t = golden * static_cast<double>(i);
+    p.emplace_back(radius * r * std::cos(t), radius * r * std::sin(t), radius * z);
+  }
+  return p;
+}
+
+}  // namespace iires::test
