@@ -12,20 +12,28 @@ namespace iires {
 /// .xyzn, .pts for clouds; the vertices of .obj, .off, .stl meshes (and of a .ply with faces).
 /// @throws InputError naming the file when it is missing, a directory, unreadable, of unknown extension,
 /// truncated, has a corrupted header, or holds no points.
-/// @note Non-finite coordinates are *not* rejected here (see validate.hpp); normals are kept when present.
+/// @note Non-finite coordinates are *not* rejected here (see validate.hpp); normals are kept when present
+/// (PLY nx ny nz, PCD normal_x.., NOFF, .xyzn, and a .xyz with 6 columns: x y z nx ny nz as CGAL writes).
+/// A .pts may start with a point count; columns after x y z are ignored. Readers are strict: a malformed
+/// line, a count that does not match the data, a truncated binary body or trailing data is an error.
+/// Messages read "<path>: <problem>", with "line N: " where a line is to blame.
 PointCloud readPointCloud(const std::string& path);
 
 /// @brief Read a triangle mesh (.ply, .obj, .off, .stl).
-/// @throws InputError as readPointCloud, and when the file has no triangles.
+/// @throws InputError as readPointCloud, and when the file has no triangles or a face index is out of range.
+/// @note Polygons are fan-triangulated; STL corners at identical positions become one vertex.
 TriangleMesh readMesh(const std::string& path);
 
 /// @brief Write a point cloud: .ply (binary little-endian unless @p ascii, with normals when present),
 /// .xyz (positions) or .xyzn (positions + normals).
 /// @note Atomic: written to a temporary file in the same directory, then renamed over @p path; on any
-/// failure no file is left behind. @throws InputError for an unknown extension or a missing directory.
+/// failure no file is left behind. @throws InputError for an unknown extension, a missing directory, or
+/// .xyzn for a cloud without normals; messages read "cannot write <path>: <problem>".
+/// @note PLY properties are doubles; text formats use the shortest decimal form that reads back exactly.
 void writePointCloud(const std::string& path, const PointCloud& cloud, bool ascii = false);
 
 /// @brief Write a triangle mesh: .ply (binary), .obj or .off, atomically as writePointCloud.
+/// @throws InputError as writePointCloud, and when a triangle refers to a vertex the mesh does not have.
 void writeMesh(const std::string& path, const TriangleMesh& mesh);
 
 /// @brief Write a text file (reports, transforms) atomically, as writePointCloud.

@@ -20,7 +20,10 @@ struct ValidationReport {
 /// @param minPoints fewest distinct points the caller's method needs (>= 1)
 /// @param what how to name the cloud in messages (usually the file path)
 /// @throws InputError when the cloud is empty, holds NaN/Inf coordinates (the first bad index is named),
-/// has fewer than @p minPoints distinct points, or all its points are collinear.
+/// has fewer than @p minPoints distinct points, or all its points are collinear (the second eigenvalue of
+/// the covariance is at most 1e-12 times the first; one or two distinct points are collinear too).
+/// @note Normals holding NaN/Inf, or not one per point, are dropped (cleared) rather than rejected.
+/// O(n log n): duplicates are found by sorting. The order of the kept points is unchanged.
 ValidationReport validateCloud(PointCloud& cloud, std::size_t minPoints, const std::string& what = "input");
 
 }  // namespace iires

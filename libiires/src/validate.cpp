@@ -1,0 +1,79 @@
+#include "iires/validate.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <numeric>
+#include <tuple>
+#include <vector>
+
+namespace iires {
+namespace {
+
+using Eigen::Vector3d;
+
+bool lexicographicLess(const Vector3d& a, const Vector3d& b) {
+  return std::tie(a.x(), a.y(), a.z()) < std::tie(b.x(), b.y(), b.z());
+}
+
+/// Removes exact duplicate positions, keeping the first occurrence and the normals of the kept points.
+/// @return the number of points removed. O(n log n): duplicates are adjacent after a stable sort.
+std::size_t mergeDuplicates(PointCloud& cloud) {
+  const std::size_t n = cloud.size();
+  std::vector<std::size_t> order(n);
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    return lexicographicLess(cloud.points[a], cloud.points[b]);
+  });
+  std::vector<bool> keep(n, true);
+  for (std::size_t k = 1; k < n; ++k)
+    if (cloud.points[order[k]] == cloud.points[order[k - 1]]) keep[order[k]] = false;
+
+  std::size_t kept = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!keep[i]) continue;
+    cloud.points[kept] = cloud.points[i];
+    if (cloud.hasNormals()) cloud.normals[kept] = cloud.normals[i];
+    ++kept;
+  }
+  cloud.points.resize(kept);
+  if (!cloud.normals.empty()) cloud.normals.resize(kept);
+  return n - kept;
+}
+
+/// True when the points span no more than a line: the second-largest eigenvalue of their covariance is
+/// negligible against the largest (or all points coincide).
+bool collinear(const std::vector<Vector3d>& points) {
+  Vector3d centroid = Vector3d::Zero();
+  for (const Vector3d& p : points) centroid += p;
+  centroid /= static_cast<double>(points.size());
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
+  for (const Vector3d& p : points) covariance += (p - centroid) * (p - centroid).transpose();
+  const Vector3d eigenvalues = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(covariance).eigenvalues();
+  return eigenvalues[2] <= 0 || eigenvalues[1] <= 1e-12 * eigenvalues[2];
+}
+
+}  // namespace
+
+ValidationReport validateCloud(PointCloud& cloud, std::size_t minPoints, const std::string& what) {
+  ValidationReport report;
+  report.inputPoints = cloud.size();
+  if (cloud.empty()) throw InputError(what + ": the cloud is empty");
+  for (std::size_t i = 0; i < cloud.size(); ++i)
+    if (!cloud.points[i].allFinite())
+      throw InputError(what + ": point " + std::to_string(i) + " has a non-finite coordinate (NaN or Inf)");
+  const bool normalsUsable =
+      cloud.hasNormals() && std::all_of(cloud.normals.begin(), cloud.normals.end(),
+                                        [](const Vector3d& n) { return n.allFinite(); });
+  if (!normalsUsable) cloud.normals.clear();
+
+  report.duplicatesMerged = mergeDuplicates(cloud);
+  report.outputPoints = cloud.size();
+  if (cloud.size() < minPoints)
+    throw InputError(what + ": needs at least " + std::to_string(minPoints) +
+                     " distinct points, the cloud has " + std::to_string(cloud.size()));
+  if (cloud.size() == 1) throw InputError(what + ": all points are collinear (they all coincide)");
+  if (collinear(cloud.points)) throw InputError(what + ": all points are collinear");
+  return report;
+}
+
+}  // namespace iires

@@ -1,0 +1,146 @@
+#include "iires/validate.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <random>
+#include <string>
+#include <tuple>
+#include <vector>
+
+namespace iires {
+namespace {
+
+using Eigen::Vector3d;
+
+/// The message of the InputError that validateCloud throws; a test failure and "" when it throws none.
+std::string validationError(PointCloud cloud, std::size_t minPoints = 1) {
+  try {
+    validateCloud(cloud, minPoints, "scan.ply");
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  ADD_FAILURE() << "no InputError thrown";
+  return "";
+}
+
+::testing::AssertionResult contains(const std::string& text, const std::string& part) {
+  if (text.find(part) != std::string::npos) return ::testing::AssertionSuccess();
+  return ::testing::AssertionFailure() << "\"" << text << "\" does not contain \"" << part << "\"";
+}
+
+PointCloud tetrahedron() {
+  PointCloud cloud;
+  cloud.points = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  cloud.normals = {{-1, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  return cloud;
+}
+
+TEST(Validate, AcceptsAGoodCloudUnchanged) {
+  PointCloud cloud = tetrahedron();
+  const ValidationReport report = validateCloud(cloud, 4);
+  EXPECT_EQ(report.inputPoints, 4u);
+  EXPECT_EQ(report.duplicatesMerged, 0u);
+  EXPECT_EQ(report.outputPoints, 4u);
+  EXPECT_EQ(cloud.points, tetrahedron().points);
+  EXPECT_EQ(cloud.normals, tetrahedron().normals);
+}
+
+TEST(Validate, EmptyCloud) { EXPECT_EQ(validationError(PointCloud{}), "scan.ply: the cloud is empty"); }
+
+TEST(Validate, NonFiniteCoordinatesNameTheFirstBadPoint) {
+  for (const double bad : {std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity(),
+                           -std::numeric_limits<double>::infinity()}) {
+    PointCloud cloud = tetrahedron();
+    cloud.points.push_back({0.5, 0.5, 0.5});
+    cloud.points[3].y() = bad;
+    cloud.points[4].x() = bad;
+    cloud.normals.push_back({1, 0, 0});
+    const std::string message = validationError(cloud);
+    EXPECT_TRUE(contains(message, "scan.ply"));
+    EXPECT_TRUE(contains(message, "point 3 "));
+  }
+}
+
+TEST(Validate, MergesExactDuplicatesKeepingFirstOccurrenceAndItsNormal) {
+  PointCloud cloud = tetrahedron();
+  cloud.points.insert(cloud.points.begin(), Vector3d(0, 0, 1));  // duplicate of the (later) last point
+  cloud.normals.insert(cloud.normals.begin(), Vector3d(0, 0, -1));
+  cloud.points.push_back({1, 0, 0});
+  cloud.normals.push_back({0, 1, 0});
+  cloud.points.push_back({1, 0, 1e-300});  // close but not equal: kept
+  cloud.normals.push_back({0, 0, 1});
+  const ValidationReport report = validateCloud(cloud, 1);
+  EXPECT_EQ(report.inputPoints, 7u);
+  EXPECT_EQ(report.duplicatesMerged, 2u);
+  EXPECT_EQ(report.outputPoints, 5u);
+  EXPECT_EQ(cloud.points,
+            (std::vector<Vector3d>{{0, 0, 1}, {0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 0, 1e-300}}));
+  EXPECT_EQ(cloud.normals, (std::vector<Vector3d>{{0, 0, -1}, {-1, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}}));
+}
+
+TEST(Validate, MinPointsCountsDistinctPoints) {
+  PointCloud cloud = tetrahedron();
+  cloud.points.push_back(cloud.points[0]);
+  const std::string message = validationError(cloud, 5);
+  EXPECT_TRUE(contains(message, "scan.ply"));
+  EXPECT_TRUE(contains(message, "at least 5 distinct points"));
+  EXPECT_NO_THROW(validateCloud(cloud, 4));
+}
+
+TEST(Validate, CollinearSinglePointAndIdenticalPoints) {
+  PointCloud line;
+  for (int i = 0; i < 50; ++i) line.points.push_back(Vector3d(0.1, 0.3, 0.7) * i + Vector3d(1e3, -2e3, 5));
+  EXPECT_TRUE(contains(validationError(line), "scan.ply: all points are collinear"));
+
+  PointCloud two;
+  two.points = {{0, 0, 0}, {1, 1, 1}};
+  EXPECT_TRUE(contains(validationError(two), "all points are collinear"));
+
+  PointCloud single;
+  single.points = {{1, 2, 3}};
+  EXPECT_TRUE(contains(validationError(single), "all points are collinear"));
+
+  PointCloud identical;
+  identical.points.assign(10, Vector3d(1, 2, 3));
+  EXPECT_TRUE(contains(validationError(identical), "all points are collinear"));
+  EXPECT_TRUE(contains(validationError(identical, 3), "at least 3 distinct points, the cloud has 1"));
+}
+
+TEST(Validate, ThinButPlanarCloudIsAccepted) {
+  PointCloud strip;
+  for (int i = 0; i < 100; ++i) strip.points.push_back({i * 1.0, (i % 2) * 1e-4, 0});
+  EXPECT_NO_THROW(validateCloud(strip, 3));
+}
+
+TEST(Validate, NonFiniteNormalsAreDropped) {
+  PointCloud cloud = tetrahedron();
+  cloud.normals[2].z() = std::numeric_limits<double>::quiet_NaN();
+  validateCloud(cloud, 4);
+  EXPECT_EQ(cloud.size(), 4u);
+  EXPECT_TRUE(cloud.normals.empty());
+}
+
+TEST(Validate, MergesManyDuplicatesQuickly) {
+  std::mt19937 rng(7);
+  std::uniform_int_distribution<int> cell(0, 199);
+  PointCloud cloud;
+  for (int i = 0; i < 400000; ++i) cloud.points.push_back(Vector3d(cell(rng), cell(rng), cell(rng)) * 0.01);
+  const auto start = std::chrono::steady_clock::now();
+  const ValidationReport report = validateCloud(cloud, 3);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  EXPECT_EQ(report.outputPoints + report.duplicatesMerged, 400000u);
+  EXPECT_GT(report.duplicatesMerged, 0u);
+  EXPECT_LT(seconds, 5.0);  // O(n log n); a quadratic scan would take minutes
+  std::vector<Vector3d> sorted = cloud.points;
+  std::sort(sorted.begin(), sorted.end(), [](const Vector3d& a, const Vector3d& b) {
+    return std::tie(a.x(), a.y(), a.z()) < std::tie(b.x(), b.y(), b.z());
+  });
+  EXPECT_EQ(std::adjacent_find(sorted.begin(), sorted.end()), sorted.end());
+}
+
+}  // namespace
+}  // namespace iires
