@@ -10,6 +10,8 @@
 #include <tuple>
 #include <unordered_map>
 
+#include <Eigen/Geometry>
+
 #include "iires/knn.hpp"
 #include "iires/parallel.hpp"
 #include "iires/validate.hpp"
@@ -101,8 +103,8 @@ class Resampler {
   Rings computeRings(const Samples& s, double cellRadius) const;
   std::vector<Edge> edges(const Samples& s, const Rings& r) const;
   double relax(Samples& s, double l, int iterations);
-  std::size_t collapse(Samples& s, const std::vector<Edge>& sorted, std::size_t limit, double maxLength);
-  std::size_t split(Samples& s, const std::vector<Edge>& sortedDesc, std::size_t limit, double minLength);
+  void splitAndCollapse(Samples& s, const std::vector<Edge>& sorted, std::size_t splits, double minSplit,
+                        std::size_t collapses, double maxCollapse, ResampleResult& result);
   void eliminate(Samples& s, std::size_t count);
   std::vector<std::uint32_t> voxelCandidates(std::size_t target) const;
 
@@ -137,9 +139,13 @@ Rings Resampler::computeRings(const Samples& s, double cellRadius) const {
     for (std::size_t c = 0; c < idx.size(); ++c) {
       const std::uint32_t j = idx[c];
       if (j == i || d2[c] > 4.0 * cellRadius * cellRadius * 4.0 || !rule_.accept(i, j)) continue;
+      // Log-map approximation: the tangent direction of the neighbour with its true 3-D distance, so that on
+      // curved patches Lloyd equalises real spacings rather than their (shorter) tangent-plane projections.
       const Eigen::Vector3d d = s.pos[j] - s.pos[i];
-      const Eigen::Vector2d q(d.dot(u), d.dot(v));
-      if (q.squaredNorm() < 1e-30) continue;
+      Eigen::Vector2d q(d.dot(u), d.dot(v));
+      const double qn = q.norm();
+      if (qn < 1e-12 * std::sqrt(d2[c])) continue;
+      q *= std::sqrt(d2[c]) / qn;
       nearest = std::min(nearest, std::sqrt(d2[c]));
       clipByBisector(poly, lab, q, j, tmpV, tmpL);
       if (poly.size() < 3) break;
@@ -181,7 +187,7 @@ double Resampler::relax(Samples& s, double l, int iterations) {
     std::vector<Eigen::Vector3d> pos(s.pos), nrm(s.nrm);
     parallelFor(s.size(), params_.threads, [&](std::size_t i) {
       if (s.fixed[i]) return;
-      Eigen::Vector3d target = r.centroid[i];
+      Eigen::Vector3d target = s.pos[i] + params_.overRelaxation * (r.centroid[i] - s.pos[i]);
       for (int attempt = 0; attempt < 3; ++attempt) {
         Eigen::Vector3d n;
         double off = 0;
@@ -204,43 +210,40 @@ double Resampler::relax(Samples& s, double l, int iterations) {
   return cv;
 }
 
-/// Collapse the shortest edges (ascending input) shorter than @p maxLength, at most @p limit, each sample in at
-/// most one collapse: both ends are replaced by their midpoint on the surface (a fixed end stays put).
-std::size_t Resampler::collapse(Samples& s, const std::vector<Edge>& sorted, std::size_t limit, double maxLength) {
+/// One round of edge operations on the 1-ring edges (@p sorted ascending by length):
+/// - split the longest edges longer than @p minSplit, at most @p splits: insert the edge midpoint projected onto
+///   the surface (a point cloud has no connectivity to keep, so a sample may take part in several splits);
+/// - collapse the shortest edges shorter than @p maxCollapse, at most @p collapses, each sample in at most one
+///   collapse: both ends are replaced by their midpoint on the surface (a fixed end stays put).
+void Resampler::splitAndCollapse(Samples& s, const std::vector<Edge>& sorted, std::size_t splits,
+                                 double minSplit, std::size_t collapses, double maxCollapse,
+                                 ResampleResult& result) {
+  std::vector<const Edge*> chosen;
+  for (auto e = sorted.rbegin(); e != sorted.rend() && chosen.size() < splits && e->length > minSplit; ++e)
+    chosen.push_back(&*e);
+  std::vector<Eigen::Vector3d> newPos(chosen.size()), newNrm(chosen.size());
+  parallelFor(chosen.size(), params_.threads, [&](std::size_t c) {
+    newPos[c] = surface_.project(0.5 * (s.pos[chosen[c]->a] + s.pos[chosen[c]->b]), &newNrm[c]);
+  });
   std::vector<char> touched(s.size(), 0), removed(s.size(), 0);
-  std::size_t done = 0;
+  std::size_t collapsed = 0;
   for (const Edge& e : sorted) {
-    if (done >= limit || e.length >= maxLength) break;
+    if (collapsed >= collapses || e.length >= maxCollapse) break;
     if (touched[e.a] || touched[e.b] || (s.fixed[e.a] && s.fixed[e.b])) continue;
     touched[e.a] = touched[e.b] = 1;
     std::uint32_t keep = e.a, drop = e.b;
     if (s.fixed[drop]) std::swap(keep, drop);
     if (!s.fixed[keep]) s.pos[keep] = surface_.project(0.5 * (s.pos[e.a] + s.pos[e.b]), &s.nrm[keep]);
     removed[drop] = 1;
-    ++done;
+    ++collapsed;
   }
-  Samples kept;
+  Samples next;
   for (std::size_t i = 0; i < s.size(); ++i)
-    if (!removed[i]) kept.add(s.pos[i], s.nrm[i], s.fixed[i]);
-  s = std::move(kept);
-  return done;
-}
-
-/// Split the longest edges (descending input) longer than @p minLength, at most @p limit: insert the edge
-/// midpoint projected onto the surface. A point cloud has no connectivity to keep, so a sample may take part in
-/// several splits.
-std::size_t Resampler::split(Samples& s, const std::vector<Edge>& sortedDesc, std::size_t limit, double minLength) {
-  std::vector<const Edge*> chosen;
-  for (const Edge& e : sortedDesc) {
-    if (chosen.size() >= limit || e.length <= minLength) break;
-    chosen.push_back(&e);
-  }
-  std::vector<Eigen::Vector3d> pos(chosen.size()), nrm(chosen.size());
-  parallelFor(chosen.size(), params_.threads, [&](std::size_t c) {
-    pos[c] = surface_.project(0.5 * (s.pos[chosen[c]->a] + s.pos[chosen[c]->b]), &nrm[c]);
-  });
-  for (std::size_t c = 0; c < chosen.size(); ++c) s.add(pos[c], nrm[c], false);
-  return chosen.size();
+    if (!removed[i]) next.add(s.pos[i], s.nrm[i], s.fixed[i]);
+  for (std::size_t c = 0; c < chosen.size(); ++c) next.add(newPos[c], newNrm[c], false);
+  s = std::move(next);
+  result.splits += chosen.size();
+  result.collapses += collapsed;
 }
 
 /// Voxel density initialisation (DESIGN §3.5): cells sized so that about @p target are occupied, one input
@@ -366,6 +369,14 @@ Samples Resampler::initialise(ResampleResult& result) {
 void Resampler::run(Samples& s, ResampleResult& result) {
   const std::size_t n = params_.targetCount;
   const double countD = static_cast<double>(n);
+  auto sortedEdges = [&](const Rings& r) {
+    std::vector<Edge> e = edges(s, r);
+    std::sort(e.begin(), e.end(), [](const Edge& a, const Edge& b) {
+      return std::tie(a.length, a.a, a.b) < std::tie(b.length, b.a, b.b);
+    });
+    return e;
+  };
+  // Count control: l = mean 1-ring edge · √(|S|/N), the length at which N samples would cover the surface.
   auto targetLength = [&](const std::vector<Edge>& e) {
     double mean = 0;
     for (const Edge& x : e) mean += x.length;
@@ -373,56 +384,51 @@ void Resampler::run(Samples& s, ResampleResult& result) {
     return mean * std::sqrt(static_cast<double>(s.size()) / countD);
   };
   double l = std::sqrt(2.0 * surface_.area() / (std::sqrt(3.0) * countD));
-  // Count control: split/collapse against l, each pass moving |S| monotonically towards N, then relax.
-  for (int pass = 0; pass < params_.countPasses; ++pass) {
-    const Rings r = computeRings(s, 1.5 * l);
-    std::vector<Edge> e = edges(s, r);
+  // Passes: split edges > splitRatio·l, collapse edges < collapseRatio·l, then relax. Away from N the net
+  // change always moves |S| towards N without overshooting; at N every collapse is paired with a split of
+  // one of the longest edges, so close pairs and holes that Lloyd alone cannot undo are replaced.
+  for (int pass = 0; pass < params_.maxPasses; ++pass) {
+    const std::vector<Edge> e = sortedEdges(computeRings(s, 1.5 * l));
     l = targetLength(e);
     ++result.passes;
-    std::sort(e.begin(), e.end(), [](const Edge& a, const Edge& b) {
-      return std::tie(a.length, a.a, a.b) < std::tie(b.length, b.a, b.b);
-    });
-    const std::size_t longCount = static_cast<std::size_t>(
+    const auto longCount = static_cast<std::size_t>(
         std::count_if(e.begin(), e.end(), [&](const Edge& x) { return x.length > params_.splitRatio * l; }));
-    const std::size_t shortCount = static_cast<std::size_t>(
+    const auto shortCount = static_cast<std::size_t>(
         std::count_if(e.begin(), e.end(), [&](const Edge& x) { return x.length < params_.collapseRatio * l; }));
-    if (longCount == 0 && shortCount == 0 && s.size() == n) break;
-    // Net change bounded so the count never overshoots N: splits ≤ collapses + (N − |S|) and vice versa.
     std::size_t splits = longCount, collapses = shortCount;
-    const std::size_t excess = s.size() > n ? s.size() - n : 0, deficit = n > s.size() ? n - s.size() : 0;
-    collapses = std::min(collapses, splits + excess);
-    splits = std::min(splits, collapses + deficit);
-    std::vector<Edge> desc(e.rbegin(), e.rend());
-    result.collapses += collapse(s, e, collapses, params_.collapseRatio * l);
-    result.splits += split(s, desc, splits, params_.splitRatio * l);
-    relax(s, l, 2);
-    result.relaxIterations += 2;
+    double minSplit = params_.splitRatio * l, maxCollapse = params_.collapseRatio * l;
+    if (s.size() == n) {
+      if (longCount == 0 && shortCount == 0) break;
+      splits = collapses = std::min(std::max(longCount, shortCount),
+                                    static_cast<std::size_t>(params_.maxEditShare * countD) + 1);
+      minSplit = 0;
+      maxCollapse = std::numeric_limits<double>::max();
+    } else {
+      const std::size_t excess = s.size() > n ? s.size() - n : 0, deficit = n > s.size() ? n - s.size() : 0;
+      collapses = std::min(collapses, splits + excess);
+      splits = std::min(splits, collapses + deficit);
+    }
+    splitAndCollapse(s, e, splits, minSplit, collapses, maxCollapse, result);
+    relax(s, l, params_.relaxPerPass);
+    result.relaxIterations += params_.relaxPerPass;
   }
   // Exact-count finish: collapse the shortest or split the longest edges until |S| == N.
   for (int guard = 0; s.size() != n && guard < 64; ++guard) {
-    const Rings r = computeRings(s, 1.5 * l);
-    std::vector<Edge> e = edges(s, r);
-    std::sort(e.begin(), e.end(), [](const Edge& a, const Edge& b) {
-      return std::tie(a.length, a.a, a.b) < std::tie(b.length, b.a, b.b);
-    });
-    if (s.size() > n) {
-      result.collapses += collapse(s, e, s.size() - n, std::numeric_limits<double>::max());
-    } else {
-      std::vector<Edge> desc(e.rbegin(), e.rend());
-      result.splits += split(s, desc, n - s.size(), 0.0);
-    }
+    const std::vector<Edge> e = sortedEdges(computeRings(s, 1.5 * l));
+    const std::size_t excess = s.size() > n ? s.size() - n : 0, deficit = n > s.size() ? n - s.size() : 0;
+    splitAndCollapse(s, e, deficit, 0.0, excess, std::numeric_limits<double>::max(), result);
     l = targetLength(e);
     relax(s, l, 1);
-    result.relaxIterations += 1;
+    ++result.relaxIterations;
   }
   if (s.size() != n) throw std::runtime_error("resample: could not reach the requested count");
-  // Lloyd relaxation until the spacing stops improving.
-  double previous = std::numeric_limits<double>::max();
-  for (int it = 0; it < params_.maxRelaxIterations; ++it) {
+  // Lloyd relaxation until the spacing CV has not improved for relaxPatience iterations.
+  double best = std::numeric_limits<double>::max();
+  for (int it = 0, stale = 0; it < params_.maxRelaxIterations && stale < params_.relaxPatience; ++it) {
     const double cv = relax(s, l, 1);
     ++result.relaxIterations;
-    if (previous - cv < params_.relaxTolerance && it >= 5) break;
-    previous = std::min(previous, cv);
+    stale = cv < best - 1e-5 ? 0 : stale + 1;
+    best = std::min(best, cv);
   }
   result.targetLength = l;
 }
@@ -442,7 +448,10 @@ void ResampleParams::validate() const {
   if (neighbours < 6 || neighbours > 64) throw std::invalid_argument("neighbours must be in [6, 64]");
   if (!(splitRatio > 1.0)) throw std::invalid_argument("splitRatio must be > 1");
   if (!(collapseRatio > 0.0 && collapseRatio < 1.0)) throw std::invalid_argument("collapseRatio must be in (0, 1)");
-  if (countPasses < 0 || maxRelaxIterations < 0) throw std::invalid_argument("pass counts must be >= 0");
+  if (maxPasses < 0 || relaxPerPass < 0 || maxRelaxIterations < 0 || relaxPatience < 1)
+    throw std::invalid_argument("pass and iteration counts must be >= 0 (patience >= 1)");
+  if (!(overRelaxation >= 1.0 && overRelaxation < 2.0)) throw std::invalid_argument("overRelaxation must be in [1, 2)");
+  if (!(maxEditShare >= 0.0 && maxEditShare <= 0.5)) throw std::invalid_argument("maxEditShare must be in [0, 0.5]");
   if (!(candidateFactor >= 1.0)) throw std::invalid_argument("candidateFactor must be >= 1");
   if (mls.k < 3) throw std::invalid_argument("mls.k must be >= 3");
   if (threads < 0) throw std::invalid_argument("threads must be >= 0 (0 = all cores)");

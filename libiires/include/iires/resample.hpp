@@ -19,11 +19,14 @@ namespace iires {
 struct ResampleParams {
   std::size_t targetCount = 10000;  ///< N, the exact number of output points (≥ 1)
   int neighbours = 14;              ///< Euclidean candidates per sample for its 1-ring (≥ 6)
-  double splitRatio = 4.0 / 3.0;    ///< split edges longer than splitRatio·l [paper 1.6; Botsch–Kobbelt 4/3]
+  double splitRatio = 1.6;          ///< split edges longer than splitRatio·l [paper 1.6; Botsch–Kobbelt 4/3]
   double collapseRatio = 0.8;       ///< collapse edges shorter than collapseRatio·l [0.8]
-  int countPasses = 8;              ///< split/collapse + relaxation passes that steer the count towards N
-  int maxRelaxIterations = 60;      ///< cap on the final Lloyd relaxation iterations
-  double relaxTolerance = 2e-4;     ///< stop relaxing when the spacing CV improves less than this per iteration
+  int maxPasses = 16;               ///< split/collapse + relaxation passes (count control, then clean-up at N)
+  int relaxPerPass = 3;             ///< Lloyd iterations after each pass's edge operations
+  double maxEditShare = 0.02;       ///< at N, a pass replaces at most this share of samples (collapse + split)
+  int maxRelaxIterations = 40;      ///< cap on the final Lloyd relaxation iterations
+  int relaxPatience = 4;            ///< stop the final relaxation after this many iterations without a better CV
+  double overRelaxation = 1.5;      ///< Lloyd step factor ω: move to p + ω(c − p); 1 = plain Lloyd, < 2
   double candidateFactor = 3.0;     ///< density initialisation keeps ≈ this × N voxel cells, then eliminates to N
   MlsParams mls;                    ///< the surface every sample is projected onto
   NormalParams normals;             ///< used when the input has no normals
