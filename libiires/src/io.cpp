@@ -1,5 +1,7 @@
 #include "iires/io.hpp"
 
+#include <Eigen/Geometry>
+
 #include <unistd.h>
 
 #include <algorithm>
@@ -993,6 +995,22 @@ PointCloud readPointCloud(const std::string& path) {
   PointCloud cloud;
   cloud.points = std::move(geometry.points);
   cloud.normals = std::move(geometry.normals);
+  if (cloud.normals.empty() && !geometry.triangles.empty()) {
+    // Mesh vertices: area-weighted face normals, oriented by the winding (exact where PCA would guess).
+    std::vector<Vector3d> normals(cloud.size(), Vector3d::Zero());
+    for (const Eigen::Vector3i& t : geometry.triangles) {
+      const Vector3d& a = cloud.points[t[0]];
+      const Vector3d n = (cloud.points[t[1]] - a).cross(cloud.points[t[2]] - a);
+      for (int k = 0; k < 3; ++k) normals[t[k]] += n;
+    }
+    const bool complete = std::all_of(normals.begin(), normals.end(), [](const Vector3d& n) {
+      return n.squaredNorm() > 0 && n.allFinite();
+    });
+    if (complete) {
+      for (Vector3d& n : normals) n.normalize();
+      cloud.normals = std::move(normals);
+    }
+  }
   return cloud;
 }
 

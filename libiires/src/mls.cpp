@@ -1,6 +1,7 @@
 #include "iires/mls.hpp"
 
 #include <Eigen/Dense>
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 
@@ -43,8 +44,8 @@ MlsSurface::MlsSurface(const std::vector<Eigen::Vector3d>& points, const std::ve
 
 MlsSurface::~MlsSurface() = default;
 
-Eigen::Vector3d MlsSurface::project(const Eigen::Vector3d& x0, Eigen::Vector3d* normalOut,
-                                    double* offSurface) const {
+Eigen::Vector3d MlsSurface::project(const Eigen::Vector3d& x0, Eigen::Vector3d* normalOut, double* offSurface,
+                                    const Eigen::Vector3d* hint) const {
   std::vector<std::uint32_t> idx;
   std::vector<double> d2;
   Eigen::Vector3d x = x0, normal = Eigen::Vector3d::UnitZ();
@@ -52,6 +53,10 @@ Eigen::Vector3d MlsSurface::project(const Eigen::Vector3d& x0, Eigen::Vector3d* 
   for (int it = 0; it < std::max(1, params_.iterations); ++it) {
     const std::size_t found = index_.knn(x, static_cast<std::size_t>(params_.k), idx, d2);
     if (found == 0) break;
+    // Only the sheet the query belongs to: neighbours whose normals face away from the reference get no weight.
+    Eigen::Vector3d reference = it > 0 ? normal : hint ? *hint : normals_[idx[0]];
+    if (std::none_of(idx.begin(), idx.end(), [&](std::uint32_t j) { return normals_[j].dot(reference) > 0; }))
+      reference = normals_[idx[0]];
     double h = 0;
     for (std::size_t j = 0; j < found; ++j) h += h_[idx[j]];
     h /= static_cast<double>(found);
@@ -61,7 +66,7 @@ Eigen::Vector3d MlsSurface::project(const Eigen::Vector3d& x0, Eigen::Vector3d* 
     Eigen::Vector3d a = Eigen::Vector3d::Zero(), nsum = Eigen::Vector3d::Zero();
     std::vector<double> w(found);
     for (std::size_t j = 0; j < found; ++j) {
-      w[j] = std::exp(-d2[j] * inv) + 1e-12;
+      w[j] = normals_[idx[j]].dot(reference) > 0.0 ? std::exp(-d2[j] * inv) + 1e-12 : 0.0;
       wsum += w[j];
       a += w[j] * points_[idx[j]];
       nsum += w[j] * normals_[idx[j]];
@@ -98,6 +103,7 @@ Eigen::Vector3d MlsSurface::project(const Eigen::Vector3d& x0, Eigen::Vector3d* 
     double best = std::numeric_limits<double>::max();
     std::size_t bestJ = 0;
     for (std::size_t j = 0; j < found; ++j) {
+      if (w[j] == 0.0) continue;
       const double dd = (points_[idx[j]] - x).squaredNorm();
       if (dd < best) best = dd, bestJ = j;
     }

@@ -43,6 +43,7 @@ struct Rings {
   std::vector<std::uint32_t> ring;  // stride entries per sample, kNone-padded
   std::vector<Eigen::Vector3d> centroid;
   std::vector<double> nearest;  // distance to the nearest accepted neighbour
+  std::vector<Eigen::Vector3d> outward;  // unit tangent pointing off the surface at boundary samples, else 0
 };
 
 struct Edge {
@@ -122,6 +123,7 @@ Rings Resampler::computeRings(const Samples& s, double cellRadius) const {
   r.ring.assign(s.size() * static_cast<std::size_t>(k), kNone);
   r.centroid.resize(s.size());
   r.nearest.assign(s.size(), 0.0);
+  r.outward.assign(s.size(), Eigen::Vector3d::Zero());
   KnnIndex index(s.pos);
   parallelFor(s.size(), params_.threads, [&](std::size_t i) {
     std::vector<std::uint32_t> idx;
@@ -129,35 +131,57 @@ Rings Resampler::computeRings(const Samples& s, double cellRadius) const {
     index.knn(s.pos[i], static_cast<std::size_t>(k) + 1, idx, d2);
     const Eigen::Vector3d& n = s.nrm[i];
     const Eigen::Vector3d u = n.unitOrthogonal(), v = n.cross(u);
-    // Start from a 16-gon enclosing the disc of radius cellRadius; clip by each accepted neighbour's bisector.
-    std::vector<Eigen::Vector2d> poly, tmpV;
-    std::vector<std::uint32_t> lab, tmpL;
-    const double rad = cellRadius / std::cos(M_PI / 16);
-    for (int e = 0; e < 16; ++e)
-      poly.emplace_back(rad * std::cos(2 * M_PI * e / 16), rad * std::sin(2 * M_PI * e / 16)), lab.push_back(kNone);
-    double nearest = std::numeric_limits<double>::max();
+    // Accepted neighbours in tangent coordinates. Log-map approximation: the tangent direction of the neighbour
+    // with its true 3-D distance, so that on curved patches Lloyd equalises real spacings rather than their
+    // (shorter) tangent-plane projections.
+    std::vector<std::pair<std::uint32_t, Eigen::Vector2d>> nb;
     for (std::size_t c = 0; c < idx.size(); ++c) {
       const std::uint32_t j = idx[c];
-      if (j == i || d2[c] > 4.0 * cellRadius * cellRadius * 4.0 || !rule_.accept(i, j)) continue;
-      // Log-map approximation: the tangent direction of the neighbour with its true 3-D distance, so that on
-      // curved patches Lloyd equalises real spacings rather than their (shorter) tangent-plane projections.
+      if (j == i || !rule_.accept(i, j)) continue;
       const Eigen::Vector3d d = s.pos[j] - s.pos[i];
       Eigen::Vector2d q(d.dot(u), d.dot(v));
-      const double qn = q.norm();
-      if (qn < 1e-12 * std::sqrt(d2[c])) continue;
-      q *= std::sqrt(d2[c]) / qn;
-      nearest = std::min(nearest, std::sqrt(d2[c]));
+      const double qn = q.norm(), dist = std::sqrt(d2[c]);
+      if (qn < 1e-12 * dist || qn == 0.0) continue;
+      nb.emplace_back(j, q * (dist / qn));
+    }
+    // The cell is bounded by a disc of radius R (for open boundaries); R follows the local spacing where the
+    // samples are sparser than l (upsampling), so rings never depend on how far the count still is from N.
+    const double nearest = nb.empty() ? 0.0 : nb.front().second.norm();
+    const double radius = std::max(cellRadius, nearest);
+    std::vector<Eigen::Vector2d> poly, tmpV;
+    std::vector<std::uint32_t> lab, tmpL;
+    const double rad = radius / std::cos(M_PI / 16);
+    for (int e = 0; e < 16; ++e) {
+      poly.emplace_back(rad * std::cos(2 * M_PI * e / 16), rad * std::sin(2 * M_PI * e / 16));
+      lab.push_back(kNone);
+    }
+    for (const auto& [j, q] : nb) {
+      if (q.norm() > 4.0 * radius) break;  // sorted by distance: the rest cannot touch the cell
       clipByBisector(poly, lab, q, j, tmpV, tmpL);
       if (poly.size() < 3) break;
     }
     const Eigen::Vector2d c2 = poly.size() >= 3 ? polygonCentroid(poly) : Eigen::Vector2d::Zero();
     r.centroid[i] = s.pos[i] + c2.x() * u + c2.y() * v;
-    r.nearest[i] = nearest == std::numeric_limits<double>::max() ? 0.0 : nearest;
+    r.nearest[i] = nearest;
     std::sort(lab.begin(), lab.end());
     lab.erase(std::unique(lab.begin(), lab.end()), lab.end());
     int w = 0;
-    for (std::uint32_t j : lab)
-      if (j != kNone && w < k) r.ring[i * static_cast<std::size_t>(k) + static_cast<std::size_t>(w++)] = j;
+    std::vector<double> angles;
+    for (std::uint32_t j : lab) {
+      if (j == kNone || w >= k) continue;
+      r.ring[i * static_cast<std::size_t>(k) + static_cast<std::size_t>(w++)] = j;
+      const auto it = std::find_if(nb.begin(), nb.end(), [&](const auto& x) { return x.first == j; });
+      angles.push_back(std::atan2(it->second.y(), it->second.x()));
+    }
+    // Open boundary: the 1-ring leaves an angular gap wider than 135°; the gap's bisector points off the surface.
+    std::sort(angles.begin(), angles.end());
+    for (std::size_t a = 0; a < angles.size(); ++a) {
+      const double from = angles[a], to = a + 1 < angles.size() ? angles[a + 1] : angles[0] + 2 * M_PI;
+      if (to - from > 0.75 * M_PI) {
+        const double mid = 0.5 * (from + to);
+        r.outward[i] = std::cos(mid) * u + std::sin(mid) * v;
+      }
+    }
   });
   return r;
 }
@@ -187,11 +211,14 @@ double Resampler::relax(Samples& s, double l, int iterations) {
     std::vector<Eigen::Vector3d> pos(s.pos), nrm(s.nrm);
     parallelFor(s.size(), params_.threads, [&](std::size_t i) {
       if (s.fixed[i]) return;
-      Eigen::Vector3d target = s.pos[i] + params_.overRelaxation * (r.centroid[i] - s.pos[i]);
+      Eigen::Vector3d step = params_.overRelaxation * (r.centroid[i] - s.pos[i]);
+      // Boundary samples may slide along the boundary or move inwards, never off the surface.
+      step -= std::max(0.0, step.dot(r.outward[i])) * r.outward[i];
+      Eigen::Vector3d target = s.pos[i] + step;
       for (int attempt = 0; attempt < 3; ++attempt) {
         Eigen::Vector3d n;
         double off = 0;
-        const Eigen::Vector3d p = surface_.project(target, &n, &off);
+        const Eigen::Vector3d p = surface_.project(target, &n, &off, &s.nrm[i]);
         if (off <= kOffSurfaceLimit) {
           pos[i] = p;
           nrm[i] = n;
@@ -223,7 +250,8 @@ void Resampler::splitAndCollapse(Samples& s, const std::vector<Edge>& sorted, st
     chosen.push_back(&*e);
   std::vector<Eigen::Vector3d> newPos(chosen.size()), newNrm(chosen.size());
   parallelFor(chosen.size(), params_.threads, [&](std::size_t c) {
-    newPos[c] = surface_.project(0.5 * (s.pos[chosen[c]->a] + s.pos[chosen[c]->b]), &newNrm[c]);
+    const Edge& e = *chosen[c];
+    newPos[c] = surface_.project(0.5 * (s.pos[e.a] + s.pos[e.b]), &newNrm[c], nullptr, &s.nrm[e.a]);
   });
   std::vector<char> touched(s.size(), 0), removed(s.size(), 0);
   std::size_t collapsed = 0;
@@ -233,7 +261,8 @@ void Resampler::splitAndCollapse(Samples& s, const std::vector<Edge>& sorted, st
     touched[e.a] = touched[e.b] = 1;
     std::uint32_t keep = e.a, drop = e.b;
     if (s.fixed[drop]) std::swap(keep, drop);
-    if (!s.fixed[keep]) s.pos[keep] = surface_.project(0.5 * (s.pos[e.a] + s.pos[e.b]), &s.nrm[keep]);
+    if (!s.fixed[keep])
+      s.pos[keep] = surface_.project(0.5 * (s.pos[e.a] + s.pos[e.b]), &s.nrm[keep], nullptr, &s.nrm[keep]);
     removed[drop] = 1;
     ++collapsed;
   }
@@ -431,6 +460,7 @@ void Resampler::run(Samples& s, ResampleResult& result) {
     best = std::min(best, cv);
   }
   result.targetLength = l;
+  for (const Edge& e : edges(s, computeRings(s, l))) result.ringEdges.push_back({e.a, e.b});
 }
 
 std::string jsonNumber(double x) {

@@ -30,8 +30,11 @@ class MlsSurface {
   /// oriented like the input normals. @p offSurface (optional) receives the distance from the projected
   /// point to the nearest input point divided by that point's kernel width: about ≤ 0.5 on the surface,
   /// growing past 1 where the point has left the cloud (across an open boundary).
-  Eigen::Vector3d project(const Eigen::Vector3d& x, Eigen::Vector3d* normal = nullptr,
-                          double* offSurface = nullptr) const;
+  /// @p hint (optional) is the normal the caller expects there (e.g. the sample's normal before a small move):
+  /// input points whose normals face away from it (another sheet: across a thin gap, between fingers) get no
+  /// weight. Without a hint the nearest input point's normal is used.
+  Eigen::Vector3d project(const Eigen::Vector3d& x, Eigen::Vector3d* normal = nullptr, double* offSurface = nullptr,
+                          const Eigen::Vector3d* hint = nullptr) const;
 
   const KnnIndex& index() const { return index_; }
   /// @brief Mean distance from an input point to its nearest neighbour (the input spacing).

@@ -2,6 +2,7 @@
 /// @file resample.hpp
 /// @brief Isotropic resampling to exactly N points on the MLS surface of a cloud (paper §4.1, DESIGN §3).
 
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -59,6 +60,8 @@ struct ResampleResult {
   std::size_t splits = 0, collapses = 0;  ///< edge operations applied
   double targetLength = 0;           ///< final target edge length l
   SpacingStats spacing;              ///< nearest-neighbour spacing of the output
+  /// Edges present in both endpoints' tangent-plane Delaunay 1-rings of the output (indices into cloud, a < b).
+  std::vector<std::array<std::uint32_t, 2>> ringEdges;
   std::vector<StageTime> timings;    ///< per stage, in order; the last is "total"
 
   /// @brief The report as a JSON object (input_points, output_points, passes, time_s, spacing, ...).

@@ -1,0 +1,7 @@
+#!/usr/bin/env bash
+# Set everything up, fetch the real test data, build the tests and run the whole suite.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+bash scripts/setup.sh -DIIRES_BUILD_TESTS=ON
+bash datasets/fetch.sh
+ctest --test-dir build --output-on-failure --timeout 900
