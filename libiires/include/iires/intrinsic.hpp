@@ -1,0 +1,77 @@
+#pragma once
+/// @file intrinsic.hpp
+/// @brief The intrinsic neighbour rule (paper §3.2; DESIGN §3 step 6): two samples may be neighbours only
+/// when they lie on the same connected component of the cloud and their geodesic coordinates are consistent
+/// with their Euclidean distance. Used by the resampler (ResampleParams::neighbourRule) and, later, by the
+/// reconstruction's 1-rings.
+///
+/// Why the test works: |gₛ(p) − gₛ(q)| ≤ d_geo(p, q) for every satellite s (triangle inequality), and for
+/// true neighbours d_geo ≈ |p − q|. A pair that is close in space but far along the surface (across a thin
+/// gap or a fold) shows a jump max_s |gₛ(p) − gₛ(q)| ≫ |p − q| for at least one satellite, unless all three
+/// satellites happen to be equidistant from both — the limitation the paper accepts. Mirror points (equal G,
+/// far apart in space, e.g. on a sphere) are rejected by the Euclidean bound.
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "iires/geodesic.hpp"
+#include "iires/neighbourhood.hpp"
+
+namespace iires {
+
+/// @brief Parameters of IntrinsicRule.
+struct IntrinsicParams {
+  /// c: reject a pair when max_s |gₛ(p) − gₛ(q)| > c·|p − q| + tolerance (≥ 1; 1.5 leaves room for the
+  /// graph distances' error and curvature between neighbours).
+  double slope = 1.5;
+  /// The tolerance in units of the dense cloud's spacing (median nearest-neighbour distance): covers mapping
+  /// each sample to its nearest dense point and the graph's discretisation (≥ 0).
+  double toleranceSpacings = 4.0;
+  /// Euclidean bound: reject pairs farther apart than this many *sample* spacings (estimated from the dense
+  /// spacing and the sample count), so the rule is safe on its own against mirror points. 0 = no bound.
+  double maxDistanceSpacings = 6.0;
+  int threads = 0;  ///< for update(); 0 = all cores
+
+  /// @throws std::invalid_argument with a readable message when a field is out of range.
+  void validate() const;
+};
+
+/// @brief Neighbour rule: same component and consistent geodesic coordinates (and within the Euclidean bound).
+/// @note update() maps each sample to its nearest dense point (O(N log n)); accept() is O(1), symmetric and
+/// thread-safe (read-only). Deterministic for any thread count.
+class IntrinsicRule final : public NeighbourRule {
+ public:
+  /// @param geo geodesic coordinates of the dense cloud the samples live on (shared, must not be null)
+  explicit IntrinsicRule(std::shared_ptr<const GeodesicCoordinates> geo, const IntrinsicParams& params = {});
+
+  void update(const std::vector<Eigen::Vector3d>& samples, const std::vector<Eigen::Vector3d>& normals) override;
+  /// @brief Whether samples @p i and @p j (of the last update()) may be neighbours.
+  bool accept(std::size_t i, std::size_t j) const override;
+
+  /// @brief The same test for two arbitrary points (each mapped to its nearest dense point), independent of
+  /// update(); uses the Euclidean bound of the last update() (none before the first).
+  bool acceptPoints(const Eigen::Vector3d& p, const Eigen::Vector3d& q) const;
+
+  /// @brief Component of sample @p i (its nearest dense point's component) after update().
+  std::uint32_t component(std::size_t i) const { return comp_[i]; }
+  /// @brief Nearest dense point of sample @p i after update().
+  std::uint32_t densePoint(std::size_t i) const { return dense_[i]; }
+  /// @brief Tolerance (absolute units) and Euclidean bound (absolute, 0 = none) in use.
+  double tolerance() const { return tolerance_; }
+  double maxDistance() const { return maxDistance_; }
+  const GeodesicCoordinates& geodesic() const { return *geo_; }
+
+ private:
+  bool consistent(std::uint32_t a, std::uint32_t b, double d) const;
+
+  std::shared_ptr<const GeodesicCoordinates> geo_;
+  IntrinsicParams params_;
+  double tolerance_ = 0;
+  double maxDistance_ = 0;
+  std::vector<Eigen::Vector3d> pos_;
+  std::vector<std::uint32_t> dense_, comp_;
+};
+
+}  // namespace iires
