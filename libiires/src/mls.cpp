@@ -50,8 +50,17 @@ Eigen::Vector3d MlsSurface::project(const Eigen::Vector3d& x0, Eigen::Vector3d* 
   std::vector<double> d2;
   Eigen::Vector3d x = x0, normal = Eigen::Vector3d::UnitZ();
   double off = 0;
+  Eigen::Vector3d queried = x;
+  double lastH = 0;
   for (int it = 0; it < std::max(1, params_.iterations); ++it) {
-    const std::size_t found = index_.knn(x, static_cast<std::size_t>(params_.k), idx, d2);
+    // Re-centre the neighbourhood only when the estimate moved by more than a quarter kernel width.
+    if (it == 0 || (x - queried).squaredNorm() > 0.0625 * lastH * lastH) {
+      index_.knn(x, static_cast<std::size_t>(params_.k), idx, d2);
+      queried = x;
+    } else {
+      for (std::size_t j = 0; j < idx.size(); ++j) d2[j] = (points_[idx[j]] - x).squaredNorm();
+    }
+    const std::size_t found = idx.size();
     if (found == 0) break;
     // Only the sheet the query belongs to: neighbours whose normals face away from the reference get no weight.
     Eigen::Vector3d reference = it > 0 ? normal : hint ? *hint : normals_[idx[0]];
@@ -60,6 +69,7 @@ Eigen::Vector3d MlsSurface::project(const Eigen::Vector3d& x0, Eigen::Vector3d* 
     double h = 0;
     for (std::size_t j = 0; j < found; ++j) h += h_[idx[j]];
     h /= static_cast<double>(found);
+    lastH = h;
     const double inv = 1.0 / (h * h);
     // eq. (2): Gaussian weights; eq. (1): weighted average a(x) and averaged oriented normal n_a.
     double wsum = 0;

@@ -22,9 +22,9 @@ struct ResampleParams {
   int neighbours = 14;              ///< Euclidean candidates per sample for its 1-ring (≥ 6)
   double splitRatio = 1.6;          ///< split edges longer than splitRatio·l [paper 1.6; Botsch–Kobbelt 4/3]
   double collapseRatio = 0.8;       ///< collapse edges shorter than collapseRatio·l [0.8]
-  int maxPasses = 16;               ///< split/collapse + relaxation passes (count control, then clean-up at N)
-  int relaxPerPass = 3;             ///< Lloyd iterations after each pass's edge operations
-  double maxEditShare = 0.02;       ///< at N, a pass replaces at most this share of samples (collapse + split)
+  int maxPasses = 8;                ///< split/collapse + relaxation passes (count control, then clean-up at N)
+  int relaxPerPass = 2;             ///< Lloyd iterations after each pass's edge operations
+  double maxEditShare = 0.005;      ///< at N, a pass replaces at most this share of samples (collapse + split)
   int maxRelaxIterations = 40;      ///< cap on the final Lloyd relaxation iterations
   int relaxPatience = 4;            ///< stop the final relaxation after this many iterations without a better CV
   double overRelaxation = 1.5;      ///< Lloyd step factor ω: move to p + ω(c − p); 1 = plain Lloyd, < 2
