@@ -4,6 +4,7 @@
 #include <iostream>
 
 #include "common.hpp"
+#include "iires/geodesic.hpp"
 #include "iires/io.hpp"
 #include "iires/resample.hpp"
 
@@ -13,7 +14,8 @@ int main(int argc, char** argv) {
     std::string input, output, reportPath;
     long long count = 0;
     iires::ResampleParams params;
-    bool quiet = false;
+    bool quiet = false, noIntrinsic = false;
+    std::string geodesicPath;
     app.add_option("INPUT", input, "input cloud (.ply .pcd .xyz .xyzn .pts, or mesh vertices .obj .off .stl)")
         ->required();
     app.add_option("OUTPUT", output, "output cloud (.ply binary with normals, .xyz, .xyzn)")->required();
@@ -21,6 +23,10 @@ int main(int argc, char** argv) {
     app.add_option("--seed", params.seed, "seed for tie-breaking; same seed -> same output");
     app.add_option("--threads", params.threads, "threads (0 = all cores); the output does not depend on it");
     app.add_option("--report", reportPath, "write the report as JSON to this file");
+    app.add_flag("--no-intrinsic", noIntrinsic,
+                 "Euclidean neighbours only (default: intrinsic control, never across thin gaps or objects)");
+    app.add_option("--export-geodesic", geodesicPath,
+                   "write the input with geodesic coordinates g1 g2 g3 and component id (.ply)");
     app.add_flag("-q,--quiet", quiet, "print nothing on success");
     app.set_version_flag("--version", iires::tools::versionString());
     try {
@@ -33,6 +39,11 @@ int main(int argc, char** argv) {
     }
     if (count < 1) throw iires::InputError("-n must be at least 1 (got " + std::to_string(count) + ")");
     params.targetCount = static_cast<std::size_t>(count);
+    params.intrinsic = !noIntrinsic;
+    if (!geodesicPath.empty() && noIntrinsic)
+      throw iires::InputError("--export-geodesic needs intrinsic control (drop --no-intrinsic)");
+    if (!geodesicPath.empty() && iires::extensionOf(geodesicPath) != ".ply")
+      throw iires::InputError(geodesicPath + ": --export-geodesic writes .ply only");
     const iires::PointCloud cloud = iires::readPointCloud(input);
     iires::ResampleResult result;
     try {
@@ -41,6 +52,7 @@ int main(int argc, char** argv) {
       throw iires::InputError(input + ": " + e.what());
     }
     iires::writePointCloud(output, result.cloud);
+    if (!geodesicPath.empty()) iires::writeGeodesicPly(geodesicPath, *result.geodesic);
     if (!reportPath.empty()) iires::writeTextFile(reportPath, result.toJson());
     if (!quiet) std::cout << result.toJson();
     return iires::tools::kOk;

@@ -23,7 +23,7 @@ using Clock = std::chrono::steady_clock;
 double secondsSince(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
 constexpr std::uint32_t kNone = 0xffffffffu;
-constexpr double kOffSurfaceLimit = 1.0;  // MlsSurface::project's offSurface beyond which a move left the cloud
+constexpr double kOffSurfaceLimit = 0.6;  // MlsSurface::project's offSurface beyond which a move left the cloud
 
 /// The working sample set S.
 struct Samples {
@@ -93,9 +93,9 @@ Eigen::Vector2d polygonCentroid(const std::vector<Eigen::Vector2d>& v) {
 
 class Resampler {
  public:
-  Resampler(const std::vector<Eigen::Vector3d>& pts, const MlsSurface& surface, const ResampleParams& params,
-            NeighbourRule& rule)
-      : pts_(pts), surface_(surface), params_(params), rule_(rule) {}
+  Resampler(const std::vector<Eigen::Vector3d>& pts, const std::vector<Eigen::Vector3d>& normals,
+            const MlsSurface& surface, const ResampleParams& params, NeighbourRule& rule)
+      : pts_(pts), normals_(normals), surface_(surface), params_(params), rule_(rule) {}
 
   Samples initialise(ResampleResult& result);
   void run(Samples& s, ResampleResult& result);
@@ -110,6 +110,7 @@ class Resampler {
   std::vector<std::uint32_t> voxelCandidates(std::size_t target) const;
 
   const std::vector<Eigen::Vector3d>& pts_;
+  const std::vector<Eigen::Vector3d>& normals_;
   const MlsSurface& surface_;
   const ResampleParams& params_;
   NeighbourRule& rule_;
@@ -173,14 +174,18 @@ Rings Resampler::computeRings(const Samples& s, double cellRadius) const {
       const auto it = std::find_if(nb.begin(), nb.end(), [&](const auto& x) { return x.first == j; });
       angles.push_back(std::atan2(it->second.y(), it->second.x()));
     }
-    // Open boundary: the 1-ring leaves an angular gap wider than 135°; the gap's bisector points off the surface.
+    // Open boundary: the 1-ring leaves an angular gap wider than 135° and the surface does not continue into
+    // it (a probe half a cell into the gap leaves the cloud); the gap's bisector then points off the surface.
+    // A gap with surface behind it is merely a sparse region (e.g. while upsampling) and stays open to moves.
     std::sort(angles.begin(), angles.end());
     for (std::size_t a = 0; a < angles.size(); ++a) {
       const double from = angles[a], to = a + 1 < angles.size() ? angles[a + 1] : angles[0] + 2 * M_PI;
-      if (to - from > 0.75 * M_PI) {
-        const double mid = 0.5 * (from + to);
-        r.outward[i] = std::cos(mid) * u + std::sin(mid) * v;
-      }
+      if (to - from <= 0.75 * M_PI) continue;
+      const double mid = 0.5 * (from + to);
+      const Eigen::Vector3d dir = std::cos(mid) * u + std::sin(mid) * v;
+      double off = 0;
+      surface_.project(s.pos[i] + 0.5 * radius * dir, nullptr, &off, &s.nrm[i]);
+      if (off > kOffSurfaceLimit) r.outward[i] = dir;
     }
   });
   return r;
@@ -245,14 +250,25 @@ double Resampler::relax(Samples& s, double l, int iterations) {
 void Resampler::splitAndCollapse(Samples& s, const std::vector<Edge>& sorted, std::size_t splits,
                                  double minSplit, std::size_t collapses, double maxCollapse,
                                  ResampleResult& result) {
-  std::vector<const Edge*> chosen;
-  for (auto e = sorted.rbegin(); e != sorted.rend() && chosen.size() < splits && e->length > minSplit; ++e)
-    chosen.push_back(&*e);
-  std::vector<Eigen::Vector3d> newPos(chosen.size()), newNrm(chosen.size());
-  parallelFor(chosen.size(), params_.threads, [&](std::size_t c) {
-    const Edge& e = *chosen[c];
-    newPos[c] = surface_.project(0.5 * (s.pos[e.a] + s.pos[e.b]), &newNrm[c], nullptr, &s.nrm[e.a]);
-  });
+  // Longest first; midpoints are projected in parallel batches and an edge spanning a hole of the cloud (its
+  // midpoint leaves the surface) is not split.
+  std::vector<Eigen::Vector3d> newPos, newNrm;
+  std::vector<const Edge*> batch;
+  auto next = sorted.rbegin();
+  while (newPos.size() < splits && next != sorted.rend() && next->length > minSplit) {
+    batch.clear();
+    for (; next != sorted.rend() && next->length > minSplit && batch.size() < 2 * (splits - newPos.size()) + 16;
+         ++next)
+      batch.push_back(&*next);
+    std::vector<Eigen::Vector3d> pos(batch.size()), nrm(batch.size());
+    std::vector<double> off(batch.size());
+    parallelFor(batch.size(), params_.threads, [&](std::size_t c) {
+      const Edge& e = *batch[c];
+      pos[c] = surface_.project(0.5 * (s.pos[e.a] + s.pos[e.b]), &nrm[c], &off[c], &s.nrm[e.a]);
+    });
+    for (std::size_t c = 0; c < batch.size() && newPos.size() < splits; ++c)
+      if (off[c] <= kOffSurfaceLimit) newPos.push_back(pos[c]), newNrm.push_back(nrm[c]);
+  }
   std::vector<char> touched(s.size(), 0), removed(s.size(), 0);
   std::size_t collapsed = 0;
   for (const Edge& e : sorted) {
@@ -266,12 +282,12 @@ void Resampler::splitAndCollapse(Samples& s, const std::vector<Edge>& sorted, st
     removed[drop] = 1;
     ++collapsed;
   }
-  Samples next;
+  Samples kept;
   for (std::size_t i = 0; i < s.size(); ++i)
-    if (!removed[i]) next.add(s.pos[i], s.nrm[i], s.fixed[i]);
-  for (std::size_t c = 0; c < chosen.size(); ++c) next.add(newPos[c], newNrm[c], false);
-  s = std::move(next);
-  result.splits += chosen.size();
+    if (!removed[i]) kept.add(s.pos[i], s.nrm[i], s.fixed[i]);
+  for (std::size_t c = 0; c < newPos.size(); ++c) kept.add(newPos[c], newNrm[c], false);
+  s = std::move(kept);
+  result.splits += newPos.size();
   result.collapses += collapsed;
 }
 
@@ -290,9 +306,16 @@ std::vector<std::uint32_t> Resampler::voxelCandidates(std::size_t target) const 
       centre = lo + cell * Eigen::Vector3d(ix + 0.5, iy + 0.5, iz + 0.5);
       return (ix << 42) ^ (iy << 21) ^ iz;
     };
+    // The normal's dominant signed axis is part of the key, so facing sheets of a thin part that share a cell
+    // (a gap narrower than the cell) each keep a candidate.
+    auto normalClass = [&](std::uint32_t i) {
+      Eigen::Index axis;
+      normals_[i].cwiseAbs().maxCoeff(&axis);
+      return static_cast<std::uint64_t>(2 * axis + (normals_[i][axis] < 0 ? 1 : 0));
+    };
     Eigen::Vector3d centre;
     for (std::uint32_t i = 0; i < pts_.size(); ++i) {
-      const std::uint64_t h = key(pts_[i], centre);
+      const std::uint64_t h = key(pts_[i], centre) * 8 + normalClass(i);
       auto [it, inserted] = best.emplace(h, i);
       if (!inserted && chosen) {
         if ((pts_[i] - centre).squaredNorm() < (pts_[it->second] - centre).squaredNorm()) it->second = i;
@@ -327,13 +350,14 @@ void Resampler::eliminate(Samples& s, std::size_t count) {
   const double rmin = rmax * (1.0 - 0.65 * std::pow(ratio, 1.5));
   const double radius = 2.0 * rmax;
   KnnIndex index(s.pos);
+  rule_.update(s.pos, s.nrm);  // only neighbours by the rule crowd each other (not across a thin gap)
   std::vector<std::vector<std::pair<std::uint32_t, double>>> nb(s.size());
   parallelFor(s.size(), params_.threads, [&](std::size_t i) {
     std::vector<std::uint32_t> idx;
     std::vector<double> d2;
     index.radius(s.pos[i], radius, idx, d2);
     for (std::size_t c = 0; c < idx.size(); ++c) {
-      if (idx[c] == i) continue;
+      if (idx[c] == i || !rule_.accept(i, idx[c])) continue;
       const double d = std::max(std::sqrt(d2[c]), 2.0 * rmin);
       nb[i].emplace_back(idx[c], std::pow(1.0 - d / radius, 8.0));
     }
@@ -496,6 +520,7 @@ std::string ResampleResult::toJson() const {
      << ",\n  \"initial_samples\": " << initialSamples << ",\n  \"passes\": " << passes
      << ",\n  \"relax_iterations\": " << relaxIterations << ",\n  \"splits\": " << splits
      << ",\n  \"collapses\": " << collapses << ",\n  \"target_length\": " << jsonNumber(targetLength)
+     << ",\n  \"components\": " << components << ",\n  \"satellites\": " << satellites
      << ",\n  \"spacing\": {\"mean\": " << jsonNumber(spacing.mean) << ", \"min\": " << jsonNumber(spacing.min)
      << ", \"max\": " << jsonNumber(spacing.max) << ", \"cv\": " << jsonNumber(spacing.cv) << "},\n  \"time_s\": {";
   for (std::size_t i = 0; i < timings.size(); ++i)
@@ -532,9 +557,20 @@ ResampleResult resample(const PointCloud& input, const ResampleParams& params) {
   const MlsSurface surface(cloud.points, cloud.normals, params.mls);
   stage("surface", t);
 
-  EuclideanRule euclidean;
-  NeighbourRule& rule = params.neighbourRule ? *params.neighbourRule : euclidean;
-  Resampler resampler(cloud.points, surface, params, rule);
+  std::shared_ptr<NeighbourRule> rule = params.neighbourRule;
+  if (!rule && params.intrinsic) {
+    t = Clock::now();
+    GeodesicParams gp = params.geodesic;
+    IntrinsicParams ip = params.intrinsicRule;
+    gp.threads = ip.threads = params.threads;
+    result.geodesic = std::make_shared<const GeodesicCoordinates>(cloud, gp);
+    rule = std::make_shared<IntrinsicRule>(result.geodesic, ip);
+    result.components = result.geodesic->components();
+    result.satellites = result.components * static_cast<std::size_t>(gp.satellites);
+    stage("geodesic", t);
+  }
+  if (!rule) rule = std::make_shared<EuclideanRule>();
+  Resampler resampler(cloud.points, cloud.normals, surface, params, *rule);
   t = Clock::now();
   Samples s = resampler.initialise(result);
   stage("initialise", t);

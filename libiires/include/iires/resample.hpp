@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include "iires/geodesic.hpp"
+#include "iires/intrinsic.hpp"
 #include "iires/metrics.hpp"
 #include "iires/mls.hpp"
 #include "iires/neighbourhood.hpp"
@@ -33,7 +35,12 @@ struct ResampleParams {
   NormalParams normals;             ///< used when the input has no normals
   std::uint64_t seed = 0;           ///< tie-breaking in the initial sample elimination; same seed → same output
   int threads = 0;                  ///< 0 = all cores; the output does not depend on it
-  /// Neighbour rule for 1-rings (nullptr = Euclidean). See neighbourhood.hpp.
+  /// Intrinsic control (paper §3.2): neighbours must also be consistent in geodesic coordinates and lie on
+  /// the same component, so samples never link across a thin gap or between objects. false = Euclidean.
+  bool intrinsic = true;
+  GeodesicParams geodesic;          ///< graph and satellites of the geodesic coordinates (built on the input)
+  IntrinsicParams intrinsicRule;    ///< tolerances of the intrinsic neighbour test
+  /// A custom neighbour rule for 1-rings; overrides `intrinsic` when set. See neighbourhood.hpp.
   std::shared_ptr<NeighbourRule> neighbourRule;
   /// Samples that are kept exactly as given (never moved or removed) and count towards N (DESIGN §9).
   std::vector<Eigen::Vector3d> fixedSamples;
@@ -62,6 +69,10 @@ struct ResampleResult {
   SpacingStats spacing;              ///< nearest-neighbour spacing of the output
   /// Edges present in both endpoints' tangent-plane Delaunay 1-rings of the output (indices into cloud, a < b).
   std::vector<std::array<std::uint32_t, 2>> ringEdges;
+  std::size_t components = 0;        ///< connected components of the input (intrinsic control), else 0
+  std::size_t satellites = 0;        ///< geodesic satellites in all (3 per component)
+  /// The geodesic coordinates of the input (intrinsic control), e.g. for writeGeodesicPly; else null.
+  std::shared_ptr<const GeodesicCoordinates> geodesic;
   std::vector<StageTime> timings;    ///< per stage, in order; the last is "total"
 
   /// @brief The report as a JSON object (input_points, output_points, passes, time_s, spacing, ...).
@@ -71,7 +82,7 @@ struct ResampleResult {
 /// @brief Resample @p input to exactly params.targetCount points, uniformly spaced on its MLS surface.
 ///
 /// Pipeline: validate (merge duplicates) → normals (PCA + MST orientation, unless given) → MLS surface →
-/// density initialisation (voxel cells, then weighted sample elimination down to N; or all points when
+/// geodesic coordinates and the intrinsic neighbour rule (unless switched off) → density initialisation (voxel cells, then weighted sample elimination down to N; or all points when
 /// upsampling) → passes of split/collapse on the tangent-plane Delaunay 1-ring edges with target length l
 /// (count control: l = mean edge · √(|S|/N)) and Lloyd relaxation in each sample's tangent-plane Voronoi cell,
 /// projecting onto the MLS surface after every move → exact-count finish → Lloyd relaxation to convergence.
