@@ -1,0 +1,104 @@
+// Resampling benchmark: iires vs Open3D farthest-point and voxel down-sampling on the same non-uniform dense
+// sampling of a CGAL model, in one run. Prints one key=value line per (model, input, N, method).
+// Usage: resample_bench MESH INPUT_COUNT N [N ...] [--density-ratio R] [--fps-limit X] [--threads T]
+#include <open3d/geometry/PointCloud.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <string>
+#include <vector>
+
+#include "iires/io.hpp"
+#include "iires/metrics.hpp"
+#include "iires/resample.hpp"
+#include "iires/sampling.hpp"
+
+namespace {
+
+double now() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
+
+void report(const std::string& prefix, const std::string& method, const std::vector<Eigen::Vector3d>& pts,
+            double seconds, const iires::MeshDistance& mesh, const std::vector<Eigen::Vector3d>& reference) {
+  const auto spacing = iires::spacingStats(pts);
+  const auto err = mesh.distances(pts);
+  const auto cover = iires::coverage(reference, pts);
+  std::printf(
+      "%s method=%s points=%zu time_s=%.3f cv=%.4f err_mean_pct=%.4f err_max_pct=%.4f cov99_per_spacing=%.3f\n",
+      prefix.c_str(), method.c_str(), pts.size(), seconds, spacing.cv, 100 * err.mean / mesh.diagonal(),
+      100 * err.max / mesh.diagonal(), cover.p99 / spacing.mean);
+  std::fflush(stdout);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 4) {
+    std::cerr << "usage: resample_bench MESH INPUT_COUNT N [N ...] [--density-ratio R] [--fps-limit X] "
+                 "[--threads T]\n";
+    return 2;
+  }
+  const std::string meshPath = argv[1];
+  const std::size_t inputCount = std::stoul(argv[2]);
+  std::vector<std::size_t> counts;
+  double ratio = 5.0, fpsLimit = 2e10;
+  int threads = 0;
+  for (int a = 3; a < argc; ++a) {
+    const std::string arg = argv[a];
+    if (arg == "--density-ratio" && a + 1 < argc) {
+      ratio = std::stod(argv[++a]);
+    } else if (arg == "--fps-limit" && a + 1 < argc) {
+      fpsLimit = std::stod(argv[++a]);
+    } else if (arg == "--threads" && a + 1 < argc) {
+      threads = std::stoi(argv[++a]);
+    } else {
+      counts.push_back(std::stoul(arg));
+    }
+  }
+  const iires::TriangleMesh mesh = iires::readMesh(meshPath);
+  iires::MeshSamplingParams sp;
+  sp.count = inputCount;
+  sp.densityRatio = ratio;
+  sp.seed = 1;
+  iires::PointCloud cloud = iires::sampleMesh(mesh, sp);
+  cloud.normals.clear();  // like a raw scan: every method gets positions only
+  iires::MeshSamplingParams rp;
+  rp.count = 300000;
+  rp.seed = 2;
+  const auto reference = iires::sampleMesh(mesh, rp).points;
+  const iires::MeshDistance distance(mesh);
+  const std::string name = meshPath.substr(meshPath.find_last_of('/') + 1);
+
+  open3d::geometry::PointCloud o3d;
+  o3d.points_ = cloud.points;
+  for (std::size_t n : counts) {
+    const std::string prefix = "model=" + name + " input=" + std::to_string(inputCount) + " N=" + std::to_string(n);
+    iires::ResampleParams p;
+    p.targetCount = n;
+    p.threads = threads;
+    double t = now();
+    const auto r = iires::resample(cloud, p);
+    report(prefix, "iires", r.cloud.points, now() - t, distance, reference);
+    if (static_cast<double>(n) * static_cast<double>(inputCount) <= fpsLimit) {
+      t = now();
+      const auto fps = o3d.FarthestPointDownSample(n);
+      report(prefix, "open3d_fps", fps->points_, now() - t, distance, reference);
+    } else {
+      std::printf("%s method=open3d_fps skipped=n*N>%.0g\n", prefix.c_str(), fpsLimit);
+    }
+    // Voxel down-sampling cannot hit N exactly: bisect the voxel size until the count is within 2 % of N.
+    double lo = 1e-6 * distance.diagonal(), hi = 0.5 * distance.diagonal();
+    std::shared_ptr<open3d::geometry::PointCloud> voxel;
+    t = now();
+    for (int it = 0; it < 40; ++it) {
+      const double mid = std::sqrt(lo * hi);
+      voxel = o3d.VoxelDownSample(mid);
+      const double got = static_cast<double>(voxel->points_.size());
+      if (std::abs(got - static_cast<double>(n)) <= 0.02 * static_cast<double>(n)) break;
+      (got > static_cast<double>(n) ? lo : hi) = mid;
+    }
+    report(prefix, "open3d_voxel", voxel->points_, now() - t, distance, reference);
+  }
+  return 0;
+}

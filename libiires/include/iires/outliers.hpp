@@ -1,0 +1,75 @@
+#pragma once
+/// @file outliers.hpp
+/// @brief Outlier detection from non-mutual k-NN relations and pull-back onto the MLS surface
+/// (paper §3.1, eq. 4–5; DESIGN §3 step 2).
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "iires/types.hpp"
+
+namespace iires {
+
+/// @brief What to do with the detected outliers.
+enum class OutlierMode {
+  kPull,    ///< project each outlier onto the MLS plane of its nearest non-outlier's neighbourhood (eq. 5)
+  kRemove,  ///< drop them
+  kKeep,    ///< detect and report only
+};
+
+/// @brief Parse "pull" | "remove" | "keep". @throws std::invalid_argument otherwise.
+OutlierMode parseOutlierMode(const std::string& name);
+/// @brief "pull" | "remove" | "keep".
+std::string toString(OutlierMode mode);
+
+/// @brief Parameters of processOutliers(). Defaults in brackets are the paper's where it gives one.
+struct OutlierParams {
+  OutlierMode mode = OutlierMode::kPull;  ///< pull | remove | keep
+  int k = 8;                              ///< the k-NN relation of eq. 4 [8]
+  /// A point is *suspect* when it appears in fewer than this many of its k neighbours' k-NN lists
+  /// (eq. 4 taken literally would be k: any non-mutual neighbour).
+  int minMutual = 5;
+  int planeNeighbours = 16;  ///< neighbours whose local plane the suspect's offset is measured against
+  /// A suspect is an outlier when its distance to that plane exceeds this many local spacings
+  /// (spacing = median over the plane's points of their mean distance to their 6 nearest neighbours).
+  double planeThreshold = 2.0;
+  int threads = 0;  ///< 0 = all cores; the output does not depend on it
+
+  /// @throws std::invalid_argument with a readable message when a field is out of range.
+  void validate() const;
+};
+
+/// @brief What processOutliers() found and did.
+struct OutlierResult {
+  PointCloud cloud;  ///< pull/keep: same size and order as the input; remove: outliers gone
+  std::vector<std::uint32_t> outliers;  ///< indices (into the input) of the detected outliers, ascending
+  std::size_t found = 0;                ///< outliers detected
+  std::size_t pulled = 0;               ///< outliers projected back (pull)
+  std::size_t removed = 0;              ///< outliers dropped (remove)
+  double seconds = 0;                   ///< wall time
+};
+
+/// @brief Detect outliers and pull them back, remove them or keep them.
+///
+/// The rule (eq. 4 plus a geometric check): point p is *suspect* when it is in fewer than minMutual of the
+/// k-NN lists of its own k nearest neighbours (a non-mutual relation). A suspect is an *outlier* when it
+/// also lies off the surface: its distance to the least-squares plane of its planeNeighbours nearest
+/// *trusted* (non-suspect) points exceeds planeThreshold local spacings; any point beyond twice that is an
+/// outlier too (a small cluster of outliers can be mutual among itself). The literal eq. 4 (any non-mutual
+/// neighbour) flags ordinary points where the density changes — those points are non-mutual too but lie on
+/// their neighbours' plane, so the second test clears them; an outlier moved 3–6 spacings off the surface
+/// is non-mutual (the surface points' own neighbours are all closer) and far from the plane.
+///
+/// Pull (eq. 5): an outlier o is moved to o + n_a n_aᵀ (a(q) − o), where q is its nearest trusted point
+/// (mutual and within planeThreshold of its plane; any non-outlier when fewer than planeNeighbours exist) and
+/// (a(q), n_a) the θ-weighted plane (eq. 1–2) of q and its planeNeighbours nearest trusted points (h = the
+/// distance to the farthest of them, so the plane is stable under noise); its normal becomes n_a, oriented
+/// like q's normal when the input has normals.
+/// @throws InputError when the cloud is empty, holds NaN/Inf, or has fewer than planeNeighbours + 1
+/// points; std::invalid_argument for bad parameters.
+/// @note O(n k log n). Deterministic for any thread count.
+OutlierResult processOutliers(const PointCloud& input, const OutlierParams& params = {});
+
+}  // namespace iires

@@ -1,0 +1,43 @@
+#pragma once
+/// @file preprocess.hpp
+/// @brief The paper's pre-processing in one call (§3.1): outliers (eq. 4–5), then MLS denoising (eq. 1–3).
+
+#include <string>
+
+#include "iires/denoise.hpp"
+#include "iires/outliers.hpp"
+#include "iires/types.hpp"
+
+namespace iires {
+
+/// @brief Parameters of preprocess().
+struct PreprocessParams {
+  OutlierParams outliers;  ///< mode pull | remove | keep (`--outliers`)
+  DenoiseParams denoise;   ///< MLS projection sweeps
+  bool runDenoise = true;  ///< false: outliers only (`--no-denoise`)
+  int threads = 0;         ///< overrides outliers.threads and denoise.threads when > 0
+
+  /// @throws std::invalid_argument with a readable message when a field is out of range.
+  void validate() const;
+};
+
+/// @brief The cleaned cloud and what each stage did.
+struct PreprocessResult {
+  PointCloud cloud;             ///< pull/keep: input size and order; remove: outliers dropped
+  std::size_t inputPoints = 0;  ///< points given
+  std::size_t outliersFound = 0, outliersPulled = 0, outliersRemoved = 0;
+  int denoiseIterations = 0;    ///< 0 when denoising was skipped
+  double meanDisplacement = 0;  ///< mean move of the denoising sweeps, input units
+  double outlierSeconds = 0, denoiseSeconds = 0, seconds = 0;  ///< wall times
+
+  /// @brief The report as a one-line JSON object (keys as the fields, snake_case).
+  std::string toJson() const;
+};
+
+/// @brief processOutliers() then (unless runDenoise is false) denoise() on its output.
+/// @throws InputError for an unusable cloud (empty, NaN/Inf, fewer points than the stages need);
+/// std::invalid_argument for bad parameters.
+/// @note O(n k log n). Deterministic for any thread count.
+PreprocessResult preprocess(const PointCloud& input, const PreprocessParams& params = {});
+
+}  // namespace iires

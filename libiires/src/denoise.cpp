@@ -1,0 +1,210 @@
+#include "iires/denoise.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "iires/knn.hpp"
+#include "iires/normals.hpp"
+#include "iires/parallel.hpp"
+
+namespace iires {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+void checkCloud(const PointCloud& cloud, std::size_t minPoints) {
+  if (cloud.empty()) throw InputError("denoise: the cloud is empty");
+  for (std::size_t i = 0; i < cloud.size(); ++i)
+    if (!cloud.points[i].allFinite())
+      throw InputError("denoise: point " + std::to_string(i) + " has a NaN/Inf coordinate");
+  if (cloud.size() < minPoints)
+    throw InputError("denoise: " + std::to_string(cloud.size()) + " points, need at least " +
+                     std::to_string(minPoints));
+}
+
+/// q-quantile of @p values (copied; nth_element).
+double quantile(std::vector<double> values, double q) {
+  if (values.empty()) return 0.0;
+  const auto at =
+      std::min(values.size() - 1, static_cast<std::size_t>(q * static_cast<double>(values.size())));
+  std::nth_element(values.begin(), values.begin() + static_cast<long>(at), values.end());
+  return values[at];
+}
+
+/// Degree-2 correction: θ-weighted least squares height field f(u,v) = c0 + c1 u + c2 v + c3 u² + c4 uv + c5
+/// v² over the plane (a, n); p moves along n onto it. Returns false (keep the plane) when under-determined.
+bool projectOntoQuadric(const Eigen::Vector3d& p, const std::vector<Eigen::Vector3d>& points,
+                        const std::uint32_t* nbr, std::size_t count, double h, const MlsPlane& plane,
+                        Eigen::Vector3d& out, Eigen::Vector3d& normal) {
+  if (count < 6) return false;
+  const Eigen::Vector3d& n = plane.normal;
+  const Eigen::Vector3d u = n.unitOrthogonal(), v = n.cross(u);
+  const double invH2 = 1.0 / (h * h);
+  Eigen::Matrix<double, 6, 6> ata = Eigen::Matrix<double, 6, 6>::Zero();
+  Eigen::Matrix<double, 6, 1> atb = Eigen::Matrix<double, 6, 1>::Zero();
+  double wsum = 0;
+  for (std::size_t j = 0; j < count; ++j) {
+    const Eigen::Vector3d& q = points[nbr[j]];
+    const double w = std::exp(-(q - p).squaredNorm() * invH2);  // eq. (2)
+    const Eigen::Vector3d d = (q - plane.centre) / h;           // scaled, for conditioning
+    const double pu = d.dot(u), pv = d.dot(v);
+    Eigen::Matrix<double, 6, 1> row;
+    row << 1, pu, pv, pu * pu, pu * pv, pv * pv;
+    ata.noalias() += w * row * row.transpose();
+    atb.noalias() += (w * d.dot(n)) * row;
+    wsum += w;
+  }
+  for (int r = 3; r < 6; ++r) ata(r, r) += 1e-2 * wsum;  // ridge on the curvature terms: flat if unsure
+  const Eigen::Matrix<double, 6, 1> c = ata.ldlt().solve(atb);
+  if (!c.allFinite()) return false;
+  const Eigen::Vector3d d = (p - plane.centre) / h;
+  const double pu = d.dot(u), pv = d.dot(v);
+  const double f = c[0] + c[1] * pu + c[2] * pv + c[3] * pu * pu + c[4] * pu * pv + c[5] * pv * pv;
+  out = p + h * (f - d.dot(n)) * n;  // along n only, as eq. (3)
+  const double fu = c[1] + 2 * c[3] * pu + c[4] * pv, fv = c[2] + c[4] * pu + 2 * c[5] * pv;
+  normal = (n - fu * u - fv * v).normalized();
+  return normal.allFinite();
+}
+
+}  // namespace
+
+void DenoiseParams::validate() const {
+  auto fail = [](const std::string& what) { throw std::invalid_argument("DenoiseParams: " + what); };
+  if (neighbours < 3) fail("neighbours must be at least 3 (a plane needs 3 points)");
+  if (kernelNeighbour < 1) fail("kernelNeighbour must be at least 1");
+  if (!(kernelQuantile > 0.0 && kernelQuantile <= 1.0)) fail("kernelQuantile must lie in (0, 1]");
+  if (iterations < 0) fail("iterations must be >= 0");
+  if (degree != 1 && degree != 2) fail("degree must be 1 (plane) or 2 (quadric)");
+  if (neighbours > 128) fail("neighbours must be at most 128");
+  if (!(sharpnessAngle >= 0.0 && sharpnessAngle <= 90.0)) fail("sharpnessAngle must lie in [0, 90] degrees");
+  if (threads < 0) fail("threads must be >= 0 (0 = all cores)");
+}
+
+MlsPlane fitMlsPlane(const Eigen::Vector3d& p, const std::vector<Eigen::Vector3d>& points,
+                     const std::uint32_t* neighbours, std::size_t count, double h,
+                     const std::vector<Eigen::Vector3d>* normals, const Eigen::Vector3d& pointNormal,
+                     double sharpness, double normalH) {
+  MlsPlane plane;
+  if (count == 0 || !(h > 0)) return plane;
+  const bool bilateral = normals && sharpness > 0 && pointNormal.squaredNorm() > 0;
+  const double invH2 = 1.0 / (h * h), invS2 = bilateral ? 1.0 / (sharpness * sharpness) : 0.0;
+  // eq. (2): θ_j = exp(−|p_j − p|²/h²), optionally times the bilateral normal term; eq. (1): a = Σθp / Σθ.
+  double wsum = 0;
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  constexpr std::size_t kStack = 64;
+  double wStack[kStack];
+  std::vector<double> wHeap;
+  double* w = wStack;
+  if (count > kStack) {
+    wHeap.resize(count);
+    w = wHeap.data();
+  }
+  for (std::size_t j = 0; j < count; ++j) {
+    const Eigen::Vector3d& q = points[neighbours[j]];
+    double wj = std::exp(-(q - p).squaredNorm() * invH2);
+    if (bilateral) {
+      const double c = 1.0 - std::abs((*normals)[neighbours[j]].dot(pointNormal));
+      wj *= std::exp(-c * c * invS2);
+    }
+    wj += 1e-300;
+    w[j] = wj;
+    wsum += wj;
+    sum += wj * q;
+  }
+  plane.centre = sum / wsum;
+  plane.weightSum = wsum;
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  const double invN2 = normalH > 0 ? 1.0 / (normalH * normalH) : invH2;
+  for (std::size_t j = 0; j < count; ++j) {
+    const Eigen::Vector3d d = points[neighbours[j]] - plane.centre;
+    const double wn = normalH > 0 ? std::exp(-(points[neighbours[j]] - p).squaredNorm() * invN2) : w[j];
+    cov.noalias() += wn * d * d.transpose();
+  }
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
+  eig.computeDirect(cov);
+  Eigen::Vector3d n = eig.eigenvectors().col(0);
+  if (!n.allFinite() || n.squaredNorm() < 1e-24)
+    n = pointNormal.squaredNorm() > 0 ? pointNormal : plane.normal;
+  n.normalize();
+  if (pointNormal.squaredNorm() > 0 && n.dot(pointNormal) < 0) n = -n;
+  plane.normal = n;
+  return plane;
+}
+
+DenoiseResult denoise(const PointCloud& input, const DenoiseParams& params) {
+  params.validate();
+  const auto start = Clock::now();
+  const std::size_t k = static_cast<std::size_t>(params.neighbours);
+  checkCloud(input, k + 1);
+  const std::size_t n = input.size();
+  const std::size_t kernelK = static_cast<std::size_t>(params.kernelNeighbour);
+  const std::size_t K = std::max(k, kernelK + 1);  // neighbours per query, the point itself included
+
+  // Neighbour lists, found once on the input: each sweep moves points by a fraction of the spacing only.
+  std::vector<std::uint32_t> nbr(n * K);
+  std::vector<std::uint32_t> found(n);
+  std::vector<double> h(n, 0.0);
+  {
+    KnnIndex index(input.points);
+    parallelFor(n, params.threads, [&](std::size_t i) {
+      std::vector<std::uint32_t> idx;
+      std::vector<double> d2;
+      const std::size_t f = index.knn(input.points[i], K, idx, d2);
+      std::copy(idx.begin(), idx.begin() + static_cast<long>(f), nbr.begin() + static_cast<long>(i * K));
+      found[i] = static_cast<std::uint32_t>(std::min(f, k));
+      h[i] = std::sqrt(d2[std::min(f - 1, kernelK)]);
+    });
+  }
+  // Robust kernel width (DESIGN §3.3): clamp h to a quantile, so one outlier's huge h_i stays local; a
+  // point whose own h is 0 (duplicates) gets the median.
+  const double cap = quantile(h, params.kernelQuantile), median = quantile(h, 0.5);
+  for (double& hi : h) hi = hi > 0 ? std::min(hi, cap) : (median > 0 ? median : 1.0);
+
+  const bool given = input.hasNormals();
+  std::vector<Eigen::Vector3d> cur = input.points, next(n);
+  std::vector<Eigen::Vector3d> normals =
+      given ? input.normals : std::vector<Eigen::Vector3d>(n, Eigen::Vector3d::Zero());
+  std::vector<Eigen::Vector3d> nextNormals(n);
+  const double sharp = params.sharpnessAngle > 0 ? 1.0 - std::cos(params.sharpnessAngle * M_PI / 180.0) : 0.0;
+  const int sweeps = std::max(1, params.iterations);  // at least one fit, for the normals
+  for (int it = 0; it < sweeps; ++it) {
+    const bool useBilateral = sharp > 0 && (given || it > 0);
+    parallelFor(n, params.threads, [&](std::size_t i) {
+      const MlsPlane plane = fitMlsPlane(cur[i], cur, nbr.data() + i * K, found[i], h[i], &normals,
+                                         normals[i], useBilateral ? sharp : 0.0, 2.0 * h[i]);
+      Eigen::Vector3d moved = projectOntoPlane(cur[i], plane), normal = plane.normal;  // eq. (3)
+      if (params.degree == 2)
+        projectOntoQuadric(cur[i], cur, nbr.data() + i * K, found[i], h[i], plane, moved, normal);
+      next[i] = params.iterations > 0 ? moved : cur[i];
+      nextNormals[i] = normal;
+    });
+    std::swap(cur, next);
+    normals.swap(nextNormals);
+    // Without given normals the first sweep's normals are unoriented; the bilateral term uses |n_j·n_p|,
+    // and later sweeps orient each fit like the point's previous normal, so the sign only needs fixing
+    // once at the end.
+  }
+
+  DenoiseResult result;
+  result.iterations = params.iterations;
+  if (!given && params.orientNormals) orientNormals(cur, normals, 12);
+  double sum = 0, worst = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double d = (cur[i] - input.points[i]).norm();
+    sum += d;
+    worst = std::max(worst, d);
+  }
+  result.meanDisplacement = sum / static_cast<double>(n);
+  result.maxDisplacement = worst;
+  result.kernelWidth = median;
+  result.cloud.points = std::move(cur);
+  result.cloud.normals = std::move(normals);
+  result.seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  return result;
+}
+
+}  // namespace iires

@@ -1,0 +1,215 @@
+#include "iires/outliers.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <stdexcept>
+
+#include "iires/denoise.hpp"
+#include "iires/knn.hpp"
+#include "iires/parallel.hpp"
+
+namespace iires {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+constexpr std::size_t kSpacingNeighbours = 6;  // l = mean distance to the 6 nearest neighbours (paper §6.1)
+
+void checkCloud(const PointCloud& cloud, std::size_t minPoints) {
+  if (cloud.empty()) throw InputError("processOutliers: the cloud is empty");
+  for (std::size_t i = 0; i < cloud.size(); ++i)
+    if (!cloud.points[i].allFinite())
+      throw InputError("processOutliers: point " + std::to_string(i) + " has a NaN/Inf coordinate");
+  if (cloud.size() < minPoints)
+    throw InputError("processOutliers: " + std::to_string(cloud.size()) + " points, need at least " +
+                     std::to_string(minPoints));
+}
+
+/// Unweighted least-squares plane through points[idx]: |distance| of @p p to it.
+double planeDistance(const Eigen::Vector3d& p, const std::vector<Eigen::Vector3d>& points,
+                     const std::vector<std::uint32_t>& idx) {
+  Eigen::Vector3d c = Eigen::Vector3d::Zero();
+  for (std::uint32_t j : idx) c += points[j];
+  c /= static_cast<double>(idx.size());
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  for (std::uint32_t j : idx) {
+    const Eigen::Vector3d d = points[j] - c;
+    cov.noalias() += d * d.transpose();
+  }
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
+  eig.computeDirect(cov);
+  const Eigen::Vector3d n = eig.eigenvectors().col(0);
+  return std::abs(n.dot(p - c));
+}
+
+double median(std::vector<double>& v) {
+  const auto mid = v.begin() + static_cast<long>(v.size() / 2);
+  std::nth_element(v.begin(), mid, v.end());
+  return *mid;
+}
+
+}  // namespace
+
+OutlierMode parseOutlierMode(const std::string& name) {
+  if (name == "pull") return OutlierMode::kPull;
+  if (name == "remove") return OutlierMode::kRemove;
+  if (name == "keep") return OutlierMode::kKeep;
+  throw std::invalid_argument("unknown outlier mode '" + name + "' (expected pull, remove or keep)");
+}
+
+std::string toString(OutlierMode mode) {
+  switch (mode) {
+    case OutlierMode::kPull:
+      return "pull";
+    case OutlierMode::kRemove:
+      return "remove";
+    case OutlierMode::kKeep:
+      return "keep";
+  }
+  return "?";
+}
+
+void OutlierParams::validate() const {
+  auto fail = [](const std::string& what) { throw std::invalid_argument("OutlierParams: " + what); };
+  if (k < 2) fail("k must be at least 2");
+  if (minMutual < 1 || minMutual > k) fail("minMutual must lie in [1, k]");
+  if (planeNeighbours < 3) fail("planeNeighbours must be at least 3");
+  if (!(planeThreshold > 0) || !std::isfinite(planeThreshold))
+    fail("planeThreshold must be a finite value > 0");
+  if (threads < 0) fail("threads must be >= 0 (0 = all cores)");
+}
+
+OutlierResult processOutliers(const PointCloud& input, const OutlierParams& params) {
+  params.validate();
+  const auto start = Clock::now();
+  const std::size_t k = static_cast<std::size_t>(params.k);
+  const std::size_t planeK = static_cast<std::size_t>(params.planeNeighbours);
+  checkCloud(input, std::max(planeK, k) + 1);
+  const std::size_t n = input.size();
+  const auto& P = input.points;
+  // Neighbours per point, itself first (index 0).
+  const std::size_t K = std::max({k, planeK, kSpacingNeighbours}) + 1;
+
+  std::vector<std::uint32_t> nbr(n * K);
+  std::vector<std::uint32_t> count(n);
+  std::vector<double> spacing(n);
+  {
+    KnnIndex index(P);
+    parallelFor(n, params.threads, [&](std::size_t i) {
+      std::vector<std::uint32_t> idx;
+      std::vector<double> d2;
+      const std::size_t f = index.knn(P[i], K, idx, d2);
+      // Put i itself first even when exact duplicates tie with it.
+      const auto self =
+          std::find(idx.begin(), idx.begin() + static_cast<long>(f), static_cast<std::uint32_t>(i));
+      if (self != idx.begin() + static_cast<long>(f)) std::rotate(idx.begin(), self, self + 1);
+      std::copy(idx.begin(), idx.begin() + static_cast<long>(f), nbr.begin() + static_cast<long>(i * K));
+      count[i] = static_cast<std::uint32_t>(f);
+      double s = 0;
+      const std::size_t m = std::min(f - 1, kSpacingNeighbours);
+      for (std::size_t j = 1; j <= m; ++j) s += std::sqrt(d2[j]);
+      spacing[i] = m > 0 ? s / static_cast<double>(m) : 0.0;
+    });
+  }
+  auto row = [&](std::size_t i) { return nbr.data() + i * K; };
+
+  // eq. (4): the k-NN relation i → j is mutual when i is also among j's k nearest. Suspects are in fewer
+  // than minMutual of their neighbours' lists.
+  std::vector<std::uint8_t> suspect(n, 0);  // written once per point below
+  parallelFor(n, params.threads, [&](std::size_t i) {
+    const std::uint32_t* ri = row(i);
+    const std::size_t ki = std::min<std::size_t>(k + 1, count[i]);
+    int mutual = 0;
+    for (std::size_t a = 1; a < ki; ++a) {
+      const std::uint32_t* rj = row(ri[a]);
+      const std::size_t kj = std::min<std::size_t>(k + 1, count[ri[a]]);
+      for (std::size_t b = 1; b < kj; ++b)
+        if (rj[b] == i) {
+          ++mutual;
+          break;
+        }
+    }
+    suspect[i] = mutual < params.minMutual ? 1 : 0;
+  });
+
+  // Geometric test: distance to the plane of the trusted (non-suspect) points among the planeNeighbours
+  // nearest, in local spacings. A suspect beyond planeThreshold is an outlier; so is any point beyond twice
+  // that (a small cluster of outliers can be mutual among itself). Trusted = mutual and near its plane.
+  std::vector<std::uint8_t> outlier(n, 0), trusted(n, 0);
+  parallelFor(n, params.threads, [&](std::size_t i) {
+    const std::uint32_t* ri = row(i);
+    const std::size_t ki = std::min<std::size_t>(planeK + 1, count[i]);
+    std::vector<std::uint32_t> used;
+    used.reserve(ki);
+    for (std::size_t a = 1; a < ki; ++a)
+      if (!suspect[ri[a]]) used.push_back(ri[a]);
+    if (used.size() < 3) used.assign(ri + 1, ri + ki);  // no trusted neighbourhood: use every neighbour
+    std::vector<double> s;
+    s.reserve(used.size());
+    for (std::uint32_t j : used) s.push_back(spacing[j]);
+    const double ratio = planeDistance(P[i], P, used) / std::max(median(s), 1e-300);
+    outlier[i] = (suspect[i] && ratio > params.planeThreshold) || ratio > 2 * params.planeThreshold;
+    trusted[i] = !suspect[i] && ratio <= params.planeThreshold;
+  });
+
+  OutlierResult result;
+  for (std::size_t i = 0; i < n; ++i)
+    if (outlier[i]) result.outliers.push_back(static_cast<std::uint32_t>(i));
+  result.found = result.outliers.size();
+
+  if (params.mode == OutlierMode::kRemove) {
+    result.cloud.points.reserve(n - result.found);
+    const bool normals = input.hasNormals();
+    for (std::size_t i = 0; i < n; ++i) {
+      if (outlier[i]) continue;
+      result.cloud.points.push_back(P[i]);
+      if (normals) result.cloud.normals.push_back(input.normals[i]);
+    }
+    result.removed = result.found;
+  } else {
+    result.cloud = input;
+    // Pull targets are *trusted* points (mutual, not outliers): an undetected outlier never serves as q.
+    std::size_t trustedCount = 0;
+    for (std::size_t i = 0; i < n; ++i) trustedCount += trusted[i];
+    const bool useTrusted = trustedCount >= std::max(planeK, k) + 1;
+    auto target = [&](std::size_t i) { return useTrusted ? trusted[i] != 0 : !outlier[i]; };
+    const std::size_t clean = useTrusted ? trustedCount : n - result.found;
+    // The pull fit uses q's planeNeighbours nearest non-outliers with h = the distance to the farthest of
+    // them, so all of them count: a stable plane under noise (eq. 5's MLS plane at a(q)).
+    const std::size_t fitK = std::max(planeK, k) + 1;
+    if (params.mode == OutlierMode::kPull && result.found > 0 && clean >= 3) {
+      // eq. (5): project each outlier onto the MLS plane of its nearest non-outlier's neighbourhood.
+      std::vector<Eigen::Vector3d> cleanPoints;
+      std::vector<Eigen::Vector3d> cleanNormals;
+      cleanPoints.reserve(clean);
+      const bool normals = input.hasNormals();
+      for (std::size_t i = 0; i < n; ++i) {
+        if (!target(i)) continue;
+        cleanPoints.push_back(P[i]);
+        if (normals) cleanNormals.push_back(input.normals[i]);
+      }
+      if (!normals) result.cloud.normals.clear();
+      const KnnIndex cleanTree(cleanPoints);
+      parallelFor(result.found, params.threads, [&](std::size_t a) {
+        const std::uint32_t o = result.outliers[a];
+        const std::int64_t q = cleanTree.nearest(P[o]);
+        std::vector<std::uint32_t> idx;
+        std::vector<double> d2;
+        const std::size_t f = cleanTree.knn(cleanPoints[static_cast<std::size_t>(q)], fitK, idx, d2);
+        const double h = std::sqrt(d2[f - 1]);
+        const Eigen::Vector3d qn =
+            normals ? cleanNormals[static_cast<std::size_t>(q)] : Eigen::Vector3d(Eigen::Vector3d::Zero());
+        const MlsPlane plane = fitMlsPlane(cleanPoints[static_cast<std::size_t>(q)], cleanPoints, idx.data(),
+                                           f, h > 0 ? h : 1.0, nullptr, qn);
+        result.cloud.points[o] = projectOntoPlane(P[o], plane);
+        if (normals) result.cloud.normals[o] = plane.normal;
+      });
+      result.pulled = result.found;
+    }
+  }
+  result.seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  return result;
+}
+
+}  // namespace iires

@@ -1,0 +1,79 @@
+#pragma once
+/// @file mesh_repair.hpp
+/// @brief Post-processing shared by the reconstruction methods: closing small holes, Delaunay edge flips,
+/// consistent orientation, dropping unused vertices.
+
+#include <Eigen/Core>
+#include <cstddef>
+#include <vector>
+
+#include "iires/types.hpp"
+
+namespace iires {
+
+/// @brief Which boundary loops fillSmallHoles() closes. A loop is closed only when it is short in both senses,
+/// so the real boundary of an open surface (long loops) is kept.
+struct HoleFillingParams {
+  std::size_t maxEdges = 16;   ///< loops of at most this many edges (≥ 3)
+  double maxPerimeter = 20.0;  ///< ... and a perimeter of at most this × the mesh's mean edge length (> 0)
+  double minQuality = 0.4;     ///< a fan around a new centroid vertex replaces a triangulation of the loop's own
+                               ///< vertices whose worst Q is below this, when the fan's worst Q is better (0–1)
+
+  /// @throws std::invalid_argument when a field is out of range.
+  void validate() const;
+};
+
+/// @brief What fillSmallHoles() did.
+struct HoleFillingReport {
+  std::size_t loops = 0;       ///< boundary loops found
+  std::size_t filled = 0;      ///< loops closed
+  std::size_t kept = 0;        ///< loops left open (too long, not simple, or no valid triangulation)
+  std::size_t facesAdded = 0;  ///< triangles added
+  std::size_t verticesAdded = 0;  ///< centroid vertices added (loops whose every diagonal already existed)
+};
+
+/// @brief Close the small boundary loops of @p mesh without new vertices: each loop gets the triangulation
+/// (dynamic programming over the polygon, Liepa 2003 / Barequet–Sharir) that maximises the minimum triangle
+/// quality Q, then the sum of Q; triangles that would repeat an existing edge, or whose normal opposes the
+/// vertex normals (when @p normals holds one per vertex), are avoided: if no triangulation qualifies, the normal
+/// test is dropped (corners where creases meet); if every triangulation repeats an edge, or its worst Q is below
+/// params.minQuality and a fan does better, the loop becomes a fan around a new vertex at its centroid (appended to the mesh, and to @p normals when it holds one per vertex).
+/// New faces follow the loop's orientation.
+/// @note O(loops · m³) with m ≤ maxEdges. Deterministic.
+HoleFillingReport fillSmallHoles(TriangleMesh& mesh, std::vector<Eigen::Vector3d>& normals,
+                                 const HoleFillingParams& params = {});
+
+/// @brief Make every vertex manifold: where a vertex's faces form several fans (its link has several parts),
+/// keep the fan with the most faces (ties: the one with the lowest face index) and remove the others' faces.
+/// The holes this opens are for fillSmallHoles().
+/// @return number of faces removed.
+/// @note Vertices are visited in index order; deterministic. O(F log F).
+std::size_t removeExtraFans(TriangleMesh& mesh);
+
+/// @brief Remove the faces of connected components (through shared vertices) with fewer than @p minFaces faces:
+/// stray islands a local method leaves inside a hole. @return number of faces removed.
+std::size_t removeSmallComponents(TriangleMesh& mesh, std::size_t minFaces);
+
+/// @brief Delaunay edge flips: flip an interior edge whose opposite angles sum to more than π when both faces
+/// and both new faces lie within @p maxDihedralDeg of each other (creases are kept), the new edge is new and
+/// the smallest angle improves. Sweeps until nothing flips or @p maxSweeps.
+/// @return number of flips.
+std::size_t flipToDelaunay(TriangleMesh& mesh, double maxDihedralDeg = 25.0, int maxSweeps = 10);
+
+/// @brief What orientConsistently() did.
+struct OrientationReport {
+  std::size_t components = 0;         ///< face components (through manifold edges)
+  std::size_t facesFlipped = 0;       ///< faces reversed
+  std::size_t conflicts = 0;          ///< edges left inconsistent (a non-orientable or non-manifold part)
+};
+
+/// @brief Orient each component consistently (breadth-first over manifold edges from its lowest face), then
+/// choose each component's sign: agreeing with @p normals (one per vertex) when given, else outward (positive
+/// signed volume).
+/// @note Deterministic.
+OrientationReport orientConsistently(TriangleMesh& mesh, const std::vector<Eigen::Vector3d>& normals);
+
+/// @brief Remove vertices no face refers to. @return old index of every kept vertex, in the new order.
+std::vector<std::size_t> removeUnusedVertices(TriangleMesh& mesh);
+
+}  // namespace iires

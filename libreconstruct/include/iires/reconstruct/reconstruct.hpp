@@ -1,0 +1,84 @@
+#pragma once
+/// @file reconstruct.hpp
+/// @brief The reconstruction pipeline (DESIGN §5): cloud → (isotropic resampling to N) → triangulation
+/// (local Delaunay 1-rings or CGAL's advancing front) → small holes closed → consistent orientation → quality
+/// report.
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "iires/neighbourhood.hpp"
+#include "iires/reconstruct/advancing_front.hpp"
+#include "iires/reconstruct/mesh_quality.hpp"
+#include "iires/reconstruct/mesh_repair.hpp"
+#include "iires/reconstruct/triangulate.hpp"
+#include "iires/resample.hpp"
+#include "iires/types.hpp"
+
+namespace iires {
+
+/// @brief Triangulation method.
+enum class ReconstructMethod {
+  kLocal,           ///< tangent-plane Delaunay 1-rings with vertex agreement (triangulate.hpp)
+  kAdvancingFront,  ///< CGAL's advancing-front surface reconstruction (advancing_front.hpp)
+};
+
+/// @brief "local" or "advancing-front".
+std::string toString(ReconstructMethod method);
+/// @brief Parse "local" / "advancing-front". @throws std::invalid_argument otherwise.
+ReconstructMethod parseReconstructMethod(const std::string& name);
+
+/// @brief Parameters of reconstruct().
+struct ReconstructParams {
+  std::size_t targetCount = 10000;  ///< N, the vertex count of the mesh when resampling (≥ 4)
+  bool resample = true;             ///< resample isotropically to N first; false = triangulate the input points
+  ReconstructMethod method = ReconstructMethod::kLocal;  ///< triangulation method
+  ResampleParams resampling;        ///< resampler settings (targetCount, seed, threads, rule are set from here)
+  TriangulateParams local;          ///< local method settings (threads and rule are set from here)
+  AdvancingFrontParams advancingFront;  ///< advancing-front settings
+  std::size_t minComponentFaces = 20;  ///< components with fewer faces are removed before hole filling (0 = keep)
+  bool fillHoles = true;            ///< close small holes (loops short in edges and perimeter)
+  HoleFillingParams holes;          ///< which loops count as small
+  bool evaluate = true;             ///< compute the quality report (distance to the validated input cloud)
+  MeshQualityParams quality;        ///< report settings (threads and seed are set from here)
+  /// Neighbour rule for resampling and the 1-rings (nullptr = Euclidean), e.g. an intrinsic (geodesic) rule.
+  std::shared_ptr<NeighbourRule> neighbourRule;
+  std::uint64_t seed = 0;  ///< seed of the resampling and the report's mesh sampling; same seed → same mesh
+  int threads = 0;         ///< 0 = all cores; the mesh does not depend on it
+
+  /// @throws std::invalid_argument with a readable message when a field is out of range.
+  void validate() const;
+};
+
+/// @brief What reconstruct() produced, with diagnostics.
+struct ReconstructResult {
+  TriangleMesh mesh;                 ///< the reconstructed mesh, oriented (outward for closed surfaces)
+  PointCloud samples;                ///< the points that were triangulated (resampled or the input), with normals
+  std::string method;                ///< "local" or "advancing-front"
+  std::size_t inputPoints = 0;       ///< points read
+  bool resampled = false;            ///< whether the input was resampled
+  ResampleResult resampling;         ///< the resampler's report (its cloud is moved into samples)
+  TriangulateResult triangulation;   ///< the local method's diagnostics (its mesh is moved into mesh)
+  std::size_t smallComponentFaces = 0;  ///< faces of small components removed
+  HoleFillingReport holes;           ///< small holes closed / kept
+  std::size_t flipsAfterFilling = 0; ///< Delaunay flips after hole filling (local method)
+  OrientationReport orientation;     ///< orientation diagnostics
+  std::size_t unusedVertices = 0;    ///< samples no triangle uses (removed from the mesh)
+  MeshQuality quality;               ///< the quality report (when params.evaluate)
+  std::vector<StageTime> timings;    ///< per stage, in order; the last is "total"
+
+  /// @brief Seconds spent meshing after resampling (triangulation, holes, orientation).
+  double meshingSeconds() const;
+  /// @brief The report as a JSON object.
+  std::string toJson() const;
+};
+
+/// @brief Reconstruct a triangle mesh from @p input.
+/// @throws InputError for an unusable cloud (empty, NaN, fewer than 4 distinct points, collinear);
+/// std::invalid_argument for bad parameters.
+/// @note Deterministic: same input, params and seed give the same mesh for any thread count.
+ReconstructResult reconstruct(const PointCloud& input, const ReconstructParams& params = {});
+
+}  // namespace iires

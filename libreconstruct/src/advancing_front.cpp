@@ -1,0 +1,41 @@
+#include "iires/reconstruct/advancing_front.hpp"
+
+#include <CGAL/Advancing_front_surface_reconstruction.h>
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+
+#include <array>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace iires {
+
+void AdvancingFrontParams::validate() const {
+  if (!(radiusRatioBound > 0)) throw std::invalid_argument("advancing front: radiusRatioBound must be positive");
+  if (!(beta > 0 && beta < M_PI)) throw std::invalid_argument("advancing front: beta must be in (0, pi)");
+}
+
+AdvancingFrontResult advancingFront(const PointCloud& cloud, const AdvancingFrontParams& params) {
+  params.validate();
+  using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
+  if (cloud.size() < 4)
+    throw InputError("advancing front needs at least 4 points (got " + std::to_string(cloud.size()) + ")");
+  std::vector<Kernel::Point_3> points;
+  points.reserve(cloud.size());
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    const auto& p = cloud.points[i];
+    if (!p.allFinite()) throw InputError("point " + std::to_string(i) + " has a non-finite coordinate");
+    points.emplace_back(p.x(), p.y(), p.z());
+  }
+  std::vector<std::array<std::size_t, 3>> facets;
+  CGAL::advancing_front_surface_reconstruction(points.begin(), points.end(), std::back_inserter(facets),
+                                               params.radiusRatioBound, params.beta);
+  AdvancingFrontResult result;
+  result.mesh.vertices = cloud.points;
+  result.mesh.triangles.reserve(facets.size());
+  for (const auto& f : facets)
+    result.mesh.triangles.emplace_back(static_cast<int>(f[0]), static_cast<int>(f[1]), static_cast<int>(f[2]));
+  return result;
+}
+
+}  // namespace iires

@@ -1,0 +1,462 @@
+#include "iires/reconstruct/mesh_repair.hpp"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <deque>
+#include <limits>
+#include <map>
+#include <stdexcept>
+#include <string>
+#include <unordered_map>
+#include <unordered_set>
+
+#include "iires/reconstruct/mesh_quality.hpp"
+
+namespace iires {
+namespace {
+
+std::uint64_t undirectedKey(std::uint32_t a, std::uint32_t b) {
+  return (static_cast<std::uint64_t>(std::min(a, b)) << 32) | std::max(a, b);
+}
+std::uint64_t directedKey(std::uint32_t a, std::uint32_t b) { return (static_cast<std::uint64_t>(a) << 32) | b; }
+
+std::uint32_t vtx(const Eigen::Vector3i& t, int c) { return static_cast<std::uint32_t>(t[c]); }
+
+Eigen::Vector3d faceNormal(const TriangleMesh& m, std::uint32_t a, std::uint32_t b, std::uint32_t c) {
+  return (m.vertices[b] - m.vertices[a]).cross(m.vertices[c] - m.vertices[a]);
+}
+
+/// Angle at vertex o of triangle (o, x, y), radians.
+double cornerAngle(const Eigen::Vector3d& o, const Eigen::Vector3d& x, const Eigen::Vector3d& y) {
+  const Eigen::Vector3d u = x - o, v = y - o;
+  return std::atan2(u.cross(v).norm(), u.dot(v));
+}
+
+/// Edge → the faces using it, built fresh from the face list.
+std::unordered_map<std::uint64_t, std::vector<std::uint32_t>> edgeFaces(const TriangleMesh& mesh) {
+  std::unordered_map<std::uint64_t, std::vector<std::uint32_t>> map;
+  map.reserve(mesh.triangles.size() * 2);
+  for (std::uint32_t f = 0; f < mesh.triangles.size(); ++f)
+    for (int c = 0; c < 3; ++c) map[undirectedKey(vtx(mesh.triangles[f], c), vtx(mesh.triangles[f], (c + 1) % 3))].push_back(f);
+  return map;
+}
+
+/// Optimal triangulation of one hole polygon (vertices in the order new faces must follow).
+/// Returns false when every triangulation contains a forbidden triangle.
+bool triangulatePolygon(const TriangleMesh& mesh, const std::vector<Eigen::Vector3d>& normals,
+                        const std::vector<std::uint32_t>& loop, const std::unordered_set<std::uint64_t>& edges,
+                        bool useNormals, std::vector<Eigen::Vector3i>& out, double* minQuality = nullptr) {
+  const int m = static_cast<int>(loop.size());
+  constexpr double kForbidden = -1.0;
+  auto weight = [&](int i, int j, int k) {
+    const std::uint32_t a = loop[static_cast<std::size_t>(i)], b = loop[static_cast<std::size_t>(j)],
+                        c = loop[static_cast<std::size_t>(k)];
+    // Diagonals (non-adjacent loop vertices) must not be existing edges: that would make them non-manifold.
+    if (j != i + 1 && edges.count(undirectedKey(a, b))) return kForbidden;
+    if (k != j + 1 && edges.count(undirectedKey(b, c))) return kForbidden;
+    if (!(i == 0 && k == m - 1) && edges.count(undirectedKey(a, c))) return kForbidden;
+    const double q = triangleQuality(mesh.vertices[a], mesh.vertices[b], mesh.vertices[c]);
+    if (q <= 1e-6) return kForbidden;
+    if (useNormals && normals.size() == mesh.vertices.size()) {
+      const Eigen::Vector3d fn = faceNormal(mesh, a, b, c);
+      if (fn.dot(normals[a] + normals[b] + normals[c]) <= 0) return kForbidden;
+    }
+    return q;
+  };
+  // best[i][k]: (min Q, sum Q) of the best triangulation of the sub-polygon i..k.
+  std::vector<std::vector<std::pair<double, double>>> best(
+      static_cast<std::size_t>(m), std::vector<std::pair<double, double>>(static_cast<std::size_t>(m), {2.0, 0.0}));
+  std::vector<std::vector<int>> split(static_cast<std::size_t>(m), std::vector<int>(static_cast<std::size_t>(m), -1));
+  for (int len = 2; len < m; ++len)
+    for (int i = 0; i + len < m; ++i) {
+      const int k = i + len;
+      std::pair<double, double> top{-2.0, 0.0};
+      for (int j = i + 1; j < k; ++j) {
+        const double w = weight(i, j, k);
+        const auto& l = best[static_cast<std::size_t>(i)][static_cast<std::size_t>(j)];
+        const auto& r = best[static_cast<std::size_t>(j)][static_cast<std::size_t>(k)];
+        const std::pair<double, double> cand{std::min({w, l.first, r.first}), w + l.second + r.second};
+        if (cand > top) top = cand, split[static_cast<std::size_t>(i)][static_cast<std::size_t>(k)] = j;
+      }
+      best[static_cast<std::size_t>(i)][static_cast<std::size_t>(k)] = top;
+    }
+  if (best[0][static_cast<std::size_t>(m - 1)].first <= 0) return false;
+  if (minQuality) *minQuality = best[0][static_cast<std::size_t>(m - 1)].first;
+  std::vector<std::pair<int, int>> stack{{0, m - 1}};
+  while (!stack.empty()) {
+    const auto [i, k] = stack.back();
+    stack.pop_back();
+    if (k - i < 2) continue;
+    const int j = split[static_cast<std::size_t>(i)][static_cast<std::size_t>(k)];
+    out.emplace_back(static_cast<int>(loop[static_cast<std::size_t>(i)]), static_cast<int>(loop[static_cast<std::size_t>(j)]),
+                     static_cast<int>(loop[static_cast<std::size_t>(k)]));
+    stack.emplace_back(i, j);
+    stack.emplace_back(j, k);
+  }
+  return true;
+}
+
+}  // namespace
+
+void HoleFillingParams::validate() const {
+  if (maxEdges < 3) throw std::invalid_argument("hole filling: maxEdges must be at least 3");
+  if (!(maxPerimeter > 0)) throw std::invalid_argument("hole filling: maxPerimeter must be positive");
+  if (!(minQuality >= 0 && minQuality <= 1)) throw std::invalid_argument("hole filling: minQuality must be in [0, 1]");
+}
+
+HoleFillingReport fillSmallHoles(TriangleMesh& mesh, std::vector<Eigen::Vector3d>& normals,
+                                 const HoleFillingParams& params) {
+  params.validate();
+  HoleFillingReport report;
+  // Boundary half-edges a→b (of the one face using the edge); the hole is walked along b→a.
+  std::unordered_map<std::uint64_t, int> count;
+  count.reserve(mesh.triangles.size() * 2);
+  double edgeSum = 0;
+  for (const auto& t : mesh.triangles)
+    for (int c = 0; c < 3; ++c) {
+      auto [it, inserted] = count.emplace(undirectedKey(vtx(t, c), vtx(t, (c + 1) % 3)), 0);
+      if (inserted) edgeSum += (mesh.vertices[vtx(t, c)] - mesh.vertices[vtx(t, (c + 1) % 3)]).norm();
+      ++it->second;
+    }
+  if (count.empty()) return report;
+  const double meanEdge = edgeSum / static_cast<double>(count.size());
+  std::unordered_set<std::uint64_t> edges;
+  edges.reserve(count.size());
+  for (const auto& [key, c] : count) edges.insert(key);
+  std::map<std::uint32_t, std::vector<std::uint32_t>> next;  // reversed boundary edges, deterministic order
+  std::size_t boundaryEdges = 0;
+  for (const auto& t : mesh.triangles)
+    for (int c = 0; c < 3; ++c) {
+      const std::uint32_t a = vtx(t, c), b = vtx(t, (c + 1) % 3);
+      if (count[undirectedKey(a, b)] == 1) next[b].push_back(a), ++boundaryEdges;
+    }
+  for (auto& [v, list] : next) std::sort(list.begin(), list.end());
+  const bool haveNormals = normals.size() == mesh.vertices.size();
+  // At a vertex with several boundary edges leaving it (two fans meeting), take the one that closes the
+  // smallest hole wedge: the smallest clockwise turn (about the vertex normal) from the edge we arrived on.
+  auto choose = [&](std::uint32_t prev, std::uint32_t cur, const std::vector<std::uint32_t>& outs,
+                    const std::unordered_set<std::uint64_t>& seen) {
+    std::uint32_t bestV = std::numeric_limits<std::uint32_t>::max();
+    double bestTurn = std::numeric_limits<double>::max();
+    const Eigen::Vector3d back = mesh.vertices[prev] - mesh.vertices[cur];
+    for (std::uint32_t cand : outs) {
+      if (seen.count(directedKey(cur, cand))) continue;
+      if (!haveNormals || outs.size() == 1) return cand;
+      const Eigen::Vector3d& n = normals[cur];
+      const Eigen::Vector3d out = mesh.vertices[cand] - mesh.vertices[cur];
+      double turn = std::atan2(back.cross(out).dot(n), back.dot(out));  // counter-clockwise from back
+      turn = turn <= 0 ? -turn : 2 * M_PI - turn;                        // clockwise angle in (0, 2π]
+      if (cand == prev) turn = 2 * M_PI;
+      if (turn < bestTurn) bestTurn = turn, bestV = cand;
+    }
+    return bestV;
+  };
+  std::unordered_set<std::uint64_t> visited;
+  std::vector<Eigen::Vector3i> added;
+  std::vector<std::vector<std::uint32_t>> loops;
+  for (const auto& [start, outs] : next)
+    for (std::uint32_t first : outs) {
+      if (visited.count(directedKey(start, first))) continue;
+      // Walk the closed boundary start → first → ... → start, then split it into simple cycles at the
+      // vertices it passes more than once.
+      std::vector<std::uint32_t> walk{start};
+      visited.insert(directedKey(start, first));
+      std::uint32_t prev = start, cur = first;
+      bool closedWalk = true;
+      while (cur != start) {
+        walk.push_back(cur);
+        const auto it = next.find(cur);
+        const std::uint32_t nxt =
+            it == next.end() ? std::numeric_limits<std::uint32_t>::max() : choose(prev, cur, it->second, visited);
+        if (nxt == std::numeric_limits<std::uint32_t>::max() || walk.size() > boundaryEdges) {
+          closedWalk = false;
+          break;
+        }
+        visited.insert(directedKey(cur, nxt));
+        prev = cur;
+        cur = nxt;
+      }
+      if (!closedWalk) {
+        ++report.loops;
+        ++report.kept;
+        continue;
+      }
+      std::vector<std::uint32_t> stack;
+      std::unordered_map<std::uint32_t, std::size_t> position;
+      for (std::uint32_t v : walk) {
+        const auto it = position.find(v);
+        if (it != position.end()) {
+          // The cycle v ... (top of stack) closes here.
+          loops.emplace_back(stack.begin() + static_cast<std::ptrdiff_t>(it->second), stack.end());
+          for (std::size_t x = it->second + 1; x < stack.size(); ++x) position.erase(stack[x]);
+          stack.resize(it->second + 1);
+        } else {
+          position[v] = stack.size();
+          stack.push_back(v);
+        }
+      }
+      loops.push_back(stack);
+    }
+  for (const auto& loop : loops) {
+    ++report.loops;
+    double perimeter = 0;
+    for (std::size_t i = 0; i < loop.size(); ++i)
+      perimeter += (mesh.vertices[loop[i]] - mesh.vertices[loop[(i + 1) % loop.size()]]).norm();
+    if (loop.size() < 3 || loop.size() > params.maxEdges || perimeter > params.maxPerimeter * meanEdge) {
+      ++report.kept;
+      continue;
+    }
+    // Best: no new vertex and faces agreeing with the normals; then without the normal test (a corner of
+    // several creases, or a small fold); last, a fan around a new vertex at the loop's centroid (when every
+    // diagonal already exists elsewhere).
+    std::vector<Eigen::Vector3i> faces;
+    double dpQuality = 0;
+    const bool dp = triangulatePolygon(mesh, normals, loop, edges, true, faces, &dpQuality);
+    // The fan around the centroid, for comparison.
+    Eigen::Vector3d centre = Eigen::Vector3d::Zero(), normal = Eigen::Vector3d::Zero();
+    for (std::uint32_t v : loop) centre += mesh.vertices[v];
+    centre /= static_cast<double>(loop.size());
+    if (haveNormals)
+      for (std::uint32_t v : loop) normal += normals[v];
+    double fanQuality = 1;
+    for (std::size_t i = 0; i < loop.size(); ++i) {
+      const Eigen::Vector3d &a = mesh.vertices[loop[i]], &b = mesh.vertices[loop[(i + 1) % loop.size()]];
+      const bool folded = haveNormals && (b - a).cross(centre - a).dot(normal) <= 0;
+      fanQuality = std::min(fanQuality, folded ? 0.0 : triangleQuality(a, b, centre));
+    }
+    const bool useFan = (!dp && fanQuality > 0) || (dp && dpQuality < params.minQuality && fanQuality > dpQuality);
+    if (!dp && !useFan) {
+      faces.clear();
+      if (!triangulatePolygon(mesh, normals, loop, edges, false, faces)) {
+        ++report.kept;
+        continue;
+      }
+    }
+    if (useFan) {
+      faces.clear();
+      const auto c = static_cast<int>(mesh.vertices.size());
+      mesh.vertices.push_back(centre);
+      if (haveNormals) normals.push_back(normal.normalized());
+      for (std::size_t i = 0; i < loop.size(); ++i)
+        faces.emplace_back(static_cast<int>(loop[i]), static_cast<int>(loop[(i + 1) % loop.size()]), c);
+      ++report.verticesAdded;
+    }
+    for (const auto& f : faces)
+      for (int c = 0; c < 3; ++c) edges.insert(undirectedKey(vtx(f, c), vtx(f, (c + 1) % 3)));
+    added.insert(added.end(), faces.begin(), faces.end());
+    ++report.filled;
+  }
+  report.facesAdded = added.size();
+  mesh.triangles.insert(mesh.triangles.end(), added.begin(), added.end());
+  return report;
+}
+
+std::size_t removeExtraFans(TriangleMesh& mesh) {
+  auto& T = mesh.triangles;
+  const std::size_t nv = mesh.vertices.size();
+  std::vector<std::vector<std::uint32_t>> incident(nv);
+  for (std::uint32_t f = 0; f < T.size(); ++f)
+    for (int c = 0; c < 3; ++c) incident[vtx(T[f], c)].push_back(f);
+  std::vector<char> removed(T.size(), 0);
+  std::size_t count = 0;
+  std::vector<std::uint32_t> faces, parent;
+  for (std::uint32_t v = 0; v < nv; ++v) {
+    faces.clear();
+    for (std::uint32_t f : incident[v])
+      if (!removed[f]) faces.push_back(f);
+    if (faces.size() < 2) continue;
+    // Fans: faces around v joined through a shared edge (v, x).
+    parent.resize(faces.size());
+    for (std::uint32_t i = 0; i < faces.size(); ++i) parent[i] = i;
+    auto find = [&](std::uint32_t x) {
+      while (parent[x] != x) x = parent[x] = parent[parent[x]];
+      return x;
+    };
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> spokes;  // (other vertex, local face)
+    for (std::uint32_t i = 0; i < faces.size(); ++i)
+      for (int c = 0; c < 3; ++c) {
+        const std::uint32_t x = vtx(T[faces[i]], c);
+        if (x != v) spokes.emplace_back(x, i);
+      }
+    std::sort(spokes.begin(), spokes.end());
+    for (std::size_t s = 1; s < spokes.size(); ++s)
+      if (spokes[s].first == spokes[s - 1].first) {
+        const std::uint32_t a = find(spokes[s].second), b = find(spokes[s - 1].second);
+        if (a != b) parent[std::max(a, b)] = std::min(a, b);
+      }
+    std::vector<std::uint32_t> size(faces.size(), 0);
+    for (std::uint32_t i = 0; i < faces.size(); ++i) ++size[find(i)];
+    std::uint32_t best = 0;
+    for (std::uint32_t i = 1; i < faces.size(); ++i)
+      if (size[i] > size[best]) best = i;  // roots only have size > 0; ties keep the lowest face
+    for (std::uint32_t i = 0; i < faces.size(); ++i)
+      if (find(i) != best) removed[faces[i]] = 1, ++count;
+  }
+  if (count) {
+    std::size_t w = 0;
+    for (std::size_t f = 0; f < T.size(); ++f)
+      if (!removed[f]) T[w++] = T[f];
+    T.resize(w);
+  }
+  return count;
+}
+
+std::size_t removeSmallComponents(TriangleMesh& mesh, std::size_t minFaces) {
+  auto& T = mesh.triangles;
+  std::vector<std::uint32_t> parent(mesh.vertices.size());
+  for (std::uint32_t i = 0; i < parent.size(); ++i) parent[i] = i;
+  auto find = [&](std::uint32_t x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  };
+  for (const auto& t : T)
+    for (int c = 1; c < 3; ++c) {
+      const std::uint32_t a = find(vtx(t, 0)), b = find(vtx(t, c));
+      if (a != b) parent[std::max(a, b)] = std::min(a, b);
+    }
+  std::vector<std::size_t> size(parent.size(), 0);
+  for (const auto& t : T) ++size[find(vtx(t, 0))];
+  std::size_t w = 0;
+  for (std::size_t f = 0; f < T.size(); ++f)
+    if (size[find(vtx(T[f], 0))] >= minFaces) T[w++] = T[f];
+  const std::size_t removed = T.size() - w;
+  T.resize(w);
+  return removed;
+}
+
+std::size_t flipToDelaunay(TriangleMesh& mesh, double maxDihedralDeg, int maxSweeps) {
+  const double cosMax = std::cos(maxDihedralDeg * M_PI / 180.0);
+  std::size_t flips = 0;
+  auto& T = mesh.triangles;
+  const auto& P = mesh.vertices;
+  for (int sweep = 0; sweep < maxSweeps; ++sweep) {
+    auto map = edgeFaces(mesh);
+    std::vector<std::uint64_t> keys;
+    keys.reserve(map.size());
+    for (const auto& [key, faces] : map)
+      if (faces.size() == 2) keys.push_back(key);
+    std::sort(keys.begin(), keys.end());
+    std::vector<char> dirty(T.size(), 0);
+    std::size_t sweepFlips = 0;
+    for (std::uint64_t key : keys) {
+      const auto& faces = map[key];
+      std::uint32_t f1 = faces[0], f2 = faces[1];
+      if (dirty[f1] || dirty[f2]) continue;
+      // Arrange f1 = (a, b, c) and f2 = (b, a, d).
+      const std::uint32_t x = static_cast<std::uint32_t>(key >> 32), y = static_cast<std::uint32_t>(key);
+      auto rotate = [&](std::uint32_t f, std::uint32_t from, std::uint32_t to, std::uint32_t& third) {
+        const auto& t = T[f];
+        for (int c = 0; c < 3; ++c)
+          if (vtx(t, c) == from && vtx(t, (c + 1) % 3) == to) {
+            third = vtx(t, (c + 2) % 3);
+            return true;
+          }
+        return false;
+      };
+      std::uint32_t a = x, b = y, c = 0, d = 0;
+      if (!rotate(f1, a, b, c)) std::swap(a, b);
+      if (!rotate(f1, a, b, c) || !rotate(f2, b, a, d)) continue;  // inconsistent orientation: leave it
+      if (c == d) continue;
+      const double sum = cornerAngle(P[c], P[a], P[b]) + cornerAngle(P[d], P[b], P[a]);
+      if (sum <= M_PI + 1e-9) continue;
+      const Eigen::Vector3d n1 = faceNormal(mesh, a, b, c).normalized(), n2 = faceNormal(mesh, b, a, d).normalized();
+      if (n1.dot(n2) < cosMax) continue;
+      const Eigen::Vector3d m1 = faceNormal(mesh, a, d, c), m2 = faceNormal(mesh, d, b, c);
+      if (m1.norm() == 0 || m2.norm() == 0) continue;
+      const Eigen::Vector3d u1 = m1.normalized(), u2 = m2.normalized();
+      if (u1.dot(u2) < cosMax || u1.dot(n1 + n2) <= 0 || u2.dot(n1 + n2) <= 0) continue;
+      if (map.count(undirectedKey(c, d))) continue;
+      const double before = std::min(triangleMinAngle(P[a], P[b], P[c]), triangleMinAngle(P[b], P[a], P[d]));
+      const double after = std::min(triangleMinAngle(P[a], P[d], P[c]), triangleMinAngle(P[d], P[b], P[c]));
+      if (after <= before) continue;
+      T[f1] = Eigen::Vector3i(static_cast<int>(a), static_cast<int>(d), static_cast<int>(c));
+      T[f2] = Eigen::Vector3i(static_cast<int>(d), static_cast<int>(b), static_cast<int>(c));
+      dirty[f1] = dirty[f2] = 1;
+      map[undirectedKey(c, d)] = {f1, f2};
+      ++sweepFlips;
+    }
+    flips += sweepFlips;
+    if (sweepFlips == 0) break;
+  }
+  return flips;
+}
+
+OrientationReport orientConsistently(TriangleMesh& mesh, const std::vector<Eigen::Vector3d>& normals) {
+  OrientationReport report;
+  auto& T = mesh.triangles;
+  const auto map = edgeFaces(mesh);
+  // Face adjacency through manifold edges.
+  std::vector<std::vector<std::uint32_t>> adj(T.size());
+  for (const auto& [key, faces] : map)
+    if (faces.size() == 2) adj[faces[0]].push_back(faces[1]), adj[faces[1]].push_back(faces[0]);
+  for (auto& a : adj) std::sort(a.begin(), a.end());
+  auto sharesDirection = [&](std::uint32_t f, std::uint32_t g) {
+    for (int c = 0; c < 3; ++c)
+      for (int e = 0; e < 3; ++e)
+        if (T[f][c] == T[g][e] && T[f][(c + 1) % 3] == T[g][(e + 1) % 3]) return true;
+    return false;
+  };
+  std::vector<int> component(T.size(), -1);
+  std::vector<std::vector<std::uint32_t>> members;
+  for (std::uint32_t seed = 0; seed < T.size(); ++seed) {
+    if (component[seed] >= 0) continue;
+    const int id = static_cast<int>(members.size());
+    members.emplace_back();
+    std::deque<std::uint32_t> queue{seed};
+    component[seed] = id;
+    while (!queue.empty()) {
+      const std::uint32_t f = queue.front();
+      queue.pop_front();
+      members.back().push_back(f);
+      for (std::uint32_t g : adj[f]) {
+        if (component[g] >= 0) continue;
+        component[g] = id;
+        if (sharesDirection(f, g)) {
+          std::swap(T[g][1], T[g][2]);
+          ++report.facesFlipped;
+        }
+        queue.push_back(g);
+      }
+    }
+  }
+  report.components = members.size();
+  for (const auto& faces : members) {
+    double sign = 0;
+    for (std::uint32_t f : faces) {
+      const auto& t = T[f];
+      const Eigen::Vector3d fn = faceNormal(mesh, vtx(t, 0), vtx(t, 1), vtx(t, 2));
+      if (normals.size() == mesh.vertices.size())
+        sign += fn.dot(normals[vtx(t, 0)] + normals[vtx(t, 1)] + normals[vtx(t, 2)]);
+      else
+        sign += mesh.vertices[vtx(t, 0)].dot(fn);  // 6 × signed volume
+    }
+    if (sign < 0) {
+      for (std::uint32_t f : faces) std::swap(T[f][1], T[f][2]);
+      report.facesFlipped += faces.size();
+    }
+  }
+  for (const auto& [key, faces] : map)
+    if (faces.size() == 2 && sharesDirection(faces[0], faces[1])) ++report.conflicts;
+  return report;
+}
+
+std::vector<std::size_t> removeUnusedVertices(TriangleMesh& mesh) {
+  std::vector<long long> remap(mesh.vertices.size(), -1);
+  for (const auto& t : mesh.triangles)
+    for (int c = 0; c < 3; ++c) remap[static_cast<std::size_t>(t[c])] = 0;
+  std::vector<std::size_t> kept;
+  std::vector<Eigen::Vector3d> verts;
+  for (std::size_t v = 0; v < mesh.vertices.size(); ++v)
+    if (remap[v] == 0) {
+      remap[v] = static_cast<long long>(kept.size());
+      kept.push_back(v);
+      verts.push_back(mesh.vertices[v]);
+    }
+  for (auto& t : mesh.triangles)
+    for (int c = 0; c < 3; ++c) t[c] = static_cast<int>(remap[static_cast<std::size_t>(t[c])]);
+  mesh.vertices.swap(verts);
+  return kept;
+}
+
+}  // namespace iires

@@ -1,0 +1,182 @@
+#include "iires/reconstruct/reconstruct.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <iomanip>
+#include <sstream>
+#include <stdexcept>
+
+#include "iires/normals.hpp"
+#include "iires/validate.hpp"
+
+namespace iires {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double secondsSince(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+std::string num(double x) {
+  if (!std::isfinite(x)) return "null";
+  std::ostringstream os;
+  os << std::setprecision(10) << x;
+  return os.str();
+}
+
+/// Indent every line after the first of a JSON block by two spaces and drop its trailing newline.
+std::string nested(std::string json) {
+  while (!json.empty() && json.back() == '\n') json.pop_back();
+  std::string out;
+  for (char c : json) {
+    out += c;
+    if (c == '\n') out += "  ";
+  }
+  return out;
+}
+
+}  // namespace
+
+std::string toString(ReconstructMethod method) {
+  return method == ReconstructMethod::kLocal ? "local" : "advancing-front";
+}
+
+ReconstructMethod parseReconstructMethod(const std::string& name) {
+  if (name == "local") return ReconstructMethod::kLocal;
+  if (name == "advancing-front") return ReconstructMethod::kAdvancingFront;
+  throw std::invalid_argument("unknown method '" + name + "' (expected local or advancing-front)");
+}
+
+void ReconstructParams::validate() const {
+  if (resample && targetCount < 4)
+    throw std::invalid_argument("target count N must be at least 4 (got " + std::to_string(targetCount) + ")");
+  if (threads < 0) throw std::invalid_argument("threads must be non-negative");
+  ResampleParams r = resampling;
+  r.targetCount = std::max<std::size_t>(targetCount, 1);
+  if (resample) r.validate();
+  local.validate();
+  advancingFront.validate();
+  holes.validate();
+  quality.validate();
+}
+
+double ReconstructResult::meshingSeconds() const {
+  double s = 0;
+  for (const auto& t : timings)
+    if (t.name == "triangulate" || t.name == "holes" || t.name == "orient") s += t.seconds;
+  return s;
+}
+
+std::string ReconstructResult::toJson() const {
+  std::ostringstream os;
+  os << "{\n  \"method\": \"" << method << "\",\n  \"input_points\": " << inputPoints
+     << ",\n  \"resampled\": " << (resampled ? "true" : "false") << ",\n  \"samples\": " << samples.size()
+     << ",\n  \"mesh_vertices\": " << mesh.vertices.size() << ",\n  \"mesh_faces\": " << mesh.triangles.size()
+     << ",\n  \"unused_samples\": " << unusedVertices << ",\n  \"small_component_faces_removed\": " << smallComponentFaces;
+  if (resampled) os << ",\n  \"resampling\": " << nested(resampling.toJson());
+  if (method == "local")
+    os << ",\n  \"triangulation\": {\"candidates\": " << triangulation.candidates
+       << ", \"proposed_by_3\": " << triangulation.proposedBy3 << ", \"proposed_by_2\": " << triangulation.proposedBy2
+       << ", \"kept\": " << triangulation.kept << ", \"rejected_conflicts\": " << triangulation.rejectedConflicts
+       << ", \"removed_fan_faces\": " << triangulation.removedFans << ", \"flips\": " << triangulation.flips << ", \"flips_after_filling\": " << flipsAfterFilling << "}";
+  os << ",\n  \"holes\": {\"loops\": " << holes.loops << ", \"filled\": " << holes.filled
+     << ", \"kept\": " << holes.kept << ", \"faces_added\": " << holes.facesAdded << ", \"vertices_added\": " << holes.verticesAdded << "}"
+     << ",\n  \"orientation\": {\"components\": " << orientation.components
+     << ", \"faces_flipped\": " << orientation.facesFlipped << ", \"conflicts\": " << orientation.conflicts << "}"
+     << ",\n  \"quality\": " << nested(quality.toJson()) << ",\n  \"meshing_time_s\": " << num(meshingSeconds())
+     << ",\n  \"time_s\": {";
+  for (std::size_t i = 0; i < timings.size(); ++i)
+    os << (i ? ", " : "") << "\"" << timings[i].name << "\": " << num(timings[i].seconds);
+  os << "}\n}\n";
+  return os.str();
+}
+
+ReconstructResult reconstruct(const PointCloud& input, const ReconstructParams& params) {
+  params.validate();
+  const auto start = Clock::now();
+  ReconstructResult result;
+  result.method = toString(params.method);
+  result.inputPoints = input.size();
+  auto stage = [&](const char* name, Clock::time_point t) { result.timings.push_back({name, secondsSince(t)}); };
+
+  auto t = Clock::now();
+  PointCloud cloud = input;
+  validateCloud(cloud, 4, "input");
+  stage("validate", t);
+
+  if (params.resample) {
+    t = Clock::now();
+    ResampleParams rp = params.resampling;
+    rp.targetCount = params.targetCount;
+    rp.seed = params.seed;
+    rp.threads = params.threads;
+    if (params.neighbourRule) rp.neighbourRule = params.neighbourRule;
+    result.resampling = resample(cloud, rp);
+    result.samples = std::move(result.resampling.cloud);
+    result.resampling.cloud = PointCloud{};
+    result.resampled = true;
+    stage("resample", t);
+  } else {
+    t = Clock::now();
+    result.samples = cloud;
+    if (!result.samples.hasNormals()) {
+      NormalParams np = params.resampling.normals;
+      np.threads = params.threads;
+      result.samples.normals = estimateNormals(result.samples.points, np);
+    }
+    for (auto& n : result.samples.normals) n.normalize();
+    stage("normals", t);
+  }
+
+  t = Clock::now();
+  if (params.method == ReconstructMethod::kLocal) {
+    TriangulateParams tp = params.local;
+    tp.threads = params.threads;
+    if (params.neighbourRule) tp.neighbourRule = params.neighbourRule;
+    result.triangulation = triangulateLocal(result.samples, tp);
+    result.mesh = std::move(result.triangulation.mesh);
+    result.triangulation.mesh = TriangleMesh{};
+  } else {
+    result.mesh = advancingFront(result.samples, params.advancingFront).mesh;
+  }
+  stage("triangulate", t);
+
+  t = Clock::now();
+  std::vector<Eigen::Vector3d> normals = result.samples.normals;  // grows with any vertex hole filling adds
+  if (params.minComponentFaces > 1) result.smallComponentFaces = removeSmallComponents(result.mesh, params.minComponentFaces);
+  if (params.fillHoles) {
+    result.holes = fillSmallHoles(result.mesh, normals, params.holes);
+    // A filled loop can pinch two sheets together at a vertex: drop the smaller fan there, and close again.
+    if (removeExtraFans(result.mesh) > 0) {
+      if (params.minComponentFaces > 1)
+        result.smallComponentFaces += removeSmallComponents(result.mesh, params.minComponentFaces);
+      const HoleFillingReport again = fillSmallHoles(result.mesh, normals, params.holes);
+      result.holes.loops += again.loops;
+      result.holes.filled += again.filled;
+      result.holes.kept = again.kept;
+      result.holes.facesAdded += again.facesAdded;
+      result.holes.verticesAdded += again.verticesAdded;
+    }
+    if (params.method == ReconstructMethod::kLocal && params.local.flipMaxDihedral > 0 && result.holes.facesAdded)
+      result.flipsAfterFilling = flipToDelaunay(result.mesh, params.local.flipMaxDihedral, params.local.maxFlipSweeps);
+  }
+  stage("holes", t);
+
+  t = Clock::now();
+  result.orientation = orientConsistently(result.mesh, normals);
+  const std::size_t before = result.mesh.vertices.size();
+  removeUnusedVertices(result.mesh);
+  result.unusedVertices = before - result.mesh.vertices.size();
+  stage("orient", t);
+
+  if (params.evaluate) {
+    t = Clock::now();
+    MeshQualityParams qp = params.quality;
+    qp.threads = params.threads;
+    qp.seed = params.seed + 1;
+    result.quality = evaluateMesh(result.mesh, &cloud, qp);
+    stage("quality", t);
+  }
+  stage("total", start);
+  return result;
+}
+
+}  // namespace iires

@@ -1,0 +1,207 @@
+#include "iires/outliers.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+#include "iires/io.hpp"
+#include "iires/knn.hpp"
+#include "iires/metrics.hpp"
+#include "iires/sampling.hpp"
+#include "shapes.hpp"
+#include "test_util.hpp"
+
+namespace {
+
+using iires::OutlierMode;
+using iires::OutlierParams;
+using iires::PointCloud;
+
+double spacing6(const std::vector<Eigen::Vector3d>& pts) {
+  iires::KnnIndex index(pts);
+  double sum = 0;
+  std::vector<std::uint32_t> idx;
+  std::vector<double> d2;
+  for (const auto& p : pts) {
+    index.knn(p, 7, idx, d2);
+    for (int j = 1; j < 7; ++j) sum += std::sqrt(d2[j]) / 6.0;
+  }
+  return sum / static_cast<double>(pts.size());
+}
+
+/// A unit plane (z = 0) with noise uniform in ±noise·l and a share of points moved ±[3, 6]·l along z.
+struct Noisy {
+  PointCloud cloud;
+  std::vector<std::uint8_t> injected;
+  std::size_t count = 0;
+  double l = 0;
+};
+
+Noisy noisyPlane(std::size_t n, double ratio, double noise, double fraction, std::uint64_t seed) {
+  Noisy out;
+  out.cloud = iires::test::planeCloud(n, 1.0, ratio, seed);
+  out.l = spacing6(out.cloud.points);
+  std::mt19937_64 rng(seed + 100);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  out.injected.assign(n, 0);
+  for (auto& p : out.cloud.points) p.z() = (2 * u(rng) - 1) * noise * out.l;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (u(rng) >= fraction) continue;
+    out.injected[i] = 1, ++out.count;
+    out.cloud.points[i].z() = (u(rng) < 0.5 ? -1 : 1) * (3 + 3 * u(rng)) * out.l;
+  }
+  return out;
+}
+
+struct Rates {
+  double recall = 0, falsePositive = 0;
+};
+
+Rates rates(const Noisy& data, const std::vector<std::uint32_t>& found) {
+  std::size_t tp = 0;
+  for (auto i : found) tp += data.injected[i];
+  Rates r;
+  r.recall = data.count ? double(tp) / double(data.count) : 1.0;
+  r.falsePositive = double(found.size() - tp) / double(data.injected.size() - data.count);
+  return r;
+}
+
+TEST(Outliers, ParseMode) {
+  EXPECT_EQ(iires::parseOutlierMode("pull"), OutlierMode::kPull);
+  EXPECT_EQ(iires::parseOutlierMode("remove"), OutlierMode::kRemove);
+  EXPECT_EQ(iires::parseOutlierMode("keep"), OutlierMode::kKeep);
+  EXPECT_THROW(iires::parseOutlierMode("drop"), std::invalid_argument);
+  EXPECT_EQ(iires::toString(OutlierMode::kRemove), "remove");
+}
+
+TEST(Outliers, RuleFindsOutliersOnANoisyPlane) {
+  for (double noise : {0.0, 0.33, 0.66}) {
+    const Noisy data = noisyPlane(30000, 1.0, noise, 0.03, 11);
+    OutlierParams p;
+    p.mode = OutlierMode::kKeep;
+    const auto r = iires::processOutliers(data.cloud, p);
+    const Rates rt = rates(data, r.outliers);
+    EXPECT_GE(rt.recall, 0.95) << "noise " << noise;
+    EXPECT_LT(rt.falsePositive, 0.01) << "noise " << noise;
+    EXPECT_EQ(r.found, r.outliers.size());
+    EXPECT_EQ(r.pulled + r.removed, 0u);
+    EXPECT_EQ(r.cloud.points, data.cloud.points);  // keep: untouched
+    EXPECT_TRUE(std::is_sorted(r.outliers.begin(), r.outliers.end()));
+  }
+}
+
+TEST(Outliers, DensityChangeIsNotAnOutlier) {
+  // 5× density change across the plane, no outliers: the literal eq. 4 flags many of these points.
+  for (double noise : {0.0, 0.33}) {
+    const Noisy data = noisyPlane(30000, 5.0, noise, 0.0, 12);
+    OutlierParams p;
+    p.mode = OutlierMode::kKeep;
+    const auto r = iires::processOutliers(data.cloud, p);
+    EXPECT_LT(double(r.found) / double(data.cloud.size()), 0.01) << "noise " << noise << " found " << r.found;
+    // The literal rule (any non-mutual neighbour) on the same cloud flags far more: the reason for the
+    // geometric test.
+    OutlierParams literal = p;
+    literal.minMutual = literal.k;
+    literal.planeThreshold = 1e-9;
+    const auto lit = iires::processOutliers(data.cloud, literal);
+    if (noise > 0) {
+      EXPECT_GT(lit.found, 10 * std::max<std::size_t>(r.found, 10));
+    }
+  }
+}
+
+TEST(Outliers, PullBringsOutliersWithinOneSpacing) {
+  const Noisy data = noisyPlane(30000, 1.0, 0.33, 0.03, 13);
+  PointCloud withNormals = data.cloud;
+  withNormals.normals.assign(withNormals.size(), Eigen::Vector3d::UnitZ());
+  const auto r = iires::processOutliers(withNormals, {});
+  EXPECT_EQ(r.cloud.size(), data.cloud.size());
+  EXPECT_EQ(r.pulled, r.found);
+  std::size_t within = 0;
+  for (std::size_t i = 0; i < data.cloud.size(); ++i) {
+    if (data.injected[i]) within += std::abs(r.cloud.points[i].z()) <= data.l;
+  }
+  EXPECT_GE(double(within) / double(data.count), 0.95);
+  for (auto i : r.outliers) {
+    EXPECT_GT(r.cloud.normals[i].z(), 0.95);  // n_a, oriented like the nearest non-outlier's normal
+    // eq. (5) moves along n_a only: the tangential move is |height|·sin(tilt of n_a), ≤ 6·l·sin 18°.
+    EXPECT_LT((r.cloud.points[i] - data.cloud.points[i]).head<2>().norm(), 2.0 * data.l);
+  }
+}
+
+TEST(Outliers, RemoveDropsThem) {
+  const Noisy data = noisyPlane(20000, 1.0, 0.33, 0.03, 14);
+  OutlierParams p;
+  p.mode = OutlierMode::kRemove;
+  const auto r = iires::processOutliers(data.cloud, p);
+  EXPECT_EQ(r.removed, r.found);
+  EXPECT_EQ(r.cloud.size(), data.cloud.size() - r.found);
+  std::size_t far = 0;
+  for (const auto& q : r.cloud.points) far += std::abs(q.z()) > 2.5 * data.l;
+  EXPECT_LE(double(far), 0.05 * double(data.count));
+}
+
+TEST(Outliers, SameOutputForOneAndTwoThreads) {
+  const Noisy data = noisyPlane(10000, 3.0, 0.5, 0.03, 15);
+  OutlierParams p1, p2;
+  p1.threads = 1;
+  p2.threads = 2;
+  const auto a = iires::processOutliers(data.cloud, p1), b = iires::processOutliers(data.cloud, p2);
+  EXPECT_EQ(a.outliers, b.outliers);
+  EXPECT_EQ(a.cloud.points, b.cloud.points);
+}
+
+TEST(Outliers, DegenerateInputs) {
+  EXPECT_THROW(iires::processOutliers(PointCloud{}), iires::InputError);
+  const PointCloud few = iires::test::planeCloud(16);  // planeNeighbours = 16 needs 17 points
+  EXPECT_THROW(iires::processOutliers(few), iires::InputError);
+  EXPECT_NO_THROW(iires::processOutliers(iires::test::planeCloud(17)));
+  OutlierParams bad;
+  bad.minMutual = 9;
+  EXPECT_THROW(bad.validate(), std::invalid_argument);
+  bad = {};
+  bad.planeThreshold = -1;
+  EXPECT_THROW(iires::processOutliers(iires::test::planeCloud(100), bad), std::invalid_argument);
+  // A clean cloud: nothing found, output equal to the input.
+  const PointCloud plane = iires::test::planeCloud(2000);
+  const auto r = iires::processOutliers(plane);
+  EXPECT_EQ(r.found, 0u);
+  EXPECT_EQ(r.cloud.points, plane.points);
+}
+
+TEST(Outliers, NonUniformBunnyWithOutliers) {
+  // Real data: bunny00 sampled with a 5× density change, 0.33·l uniform noise and 2 % outliers at 3–6·l.
+  const iires::TriangleMesh mesh = iires::readMesh(iires::test::dataPath("meshes/bunny00.off"));
+  const iires::MeshDistance md(mesh);
+  iires::MeshSamplingParams sp;
+  sp.count = 60000;
+  sp.densityRatio = 5.0;
+  sp.seed = 21;
+  const PointCloud clean = iires::sampleMesh(mesh, sp);
+  const double l = spacing6(clean.points);
+  sp.noise = 0.33 * l;
+  sp.gaussianNoise = false;
+  sp.outlierFraction = 0.02;
+  sp.outlierMin = 3 * l;
+  sp.outlierMax = 6 * l;
+  PointCloud noisy = iires::sampleMesh(mesh, sp);
+  noisy.normals.clear();
+  // Same seed → same surface samples: an injected outlier is a point that moved more than the noise.
+  std::vector<std::uint8_t> injected(noisy.size());
+  std::size_t count = 0;
+  for (std::size_t i = 0; i < noisy.size(); ++i)
+    count += injected[i] = (noisy.points[i] - clean.points[i]).norm() > 0.34 * l;
+  ASSERT_EQ(count, 1200u);
+  const auto r = iires::processOutliers(noisy, {});
+  std::size_t tp = 0, within = 0;
+  for (auto i : r.outliers) tp += injected[i];
+  for (std::size_t i = 0; i < noisy.size(); ++i)
+    if (injected[i] && md.distance(r.cloud.points[i]) <= l) ++within;
+  EXPECT_GE(double(tp) / double(count), 0.95);
+  EXPECT_LT(double(r.found - tp) / double(noisy.size() - count), 0.01);
+  EXPECT_GE(double(within) / double(count), 0.95);
+}
+
+}  // namespace

@@ -1,0 +1,262 @@
+// Tests of triangulate.hpp, mesh_repair.hpp, advancing_front.hpp and reconstruct.hpp (+ the CLI).
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <cmath>
+#include <random>
+
+#include "iires/io.hpp"
+#include "iires/reconstruct/reconstruct.hpp"
+#include "iires/sampling.hpp"
+#include "shapes.hpp"
+#include "test_util.hpp"
+
+namespace iires {
+namespace {
+
+/// Random points on a torus (uniform by area), outward normals.
+PointCloud torusCloud(std::size_t n, double major = 1.0, double minor = 0.4, std::uint64_t seed = 5) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  PointCloud c;
+  while (c.size() < n) {
+    const double a = 2 * M_PI * u(rng), b = 2 * M_PI * u(rng);
+    if (u(rng) * (major + minor) > major + minor * std::cos(b)) continue;  // area weight
+    const Eigen::Vector3d centre(major * std::cos(a), major * std::sin(a), 0);
+    const Eigen::Vector3d n(std::cos(b) * std::cos(a), std::cos(b) * std::sin(a), std::sin(b));
+    c.points.push_back(centre + minor * n);
+    c.normals.push_back(n);
+  }
+  return c;
+}
+
+double signedVolume(const TriangleMesh& m) {
+  double v = 0;
+  for (const auto& t : m.triangles)
+    v += m.vertices[t[0]].dot(m.vertices[t[1]].cross(m.vertices[t[2]])) / 6.0;
+  return v;
+}
+
+void expectClosedGenus(const MeshQuality& q, long long euler) {
+  EXPECT_EQ(q.boundaryEdges, 0u);
+  EXPECT_EQ(q.nonManifoldEdges, 0u);
+  EXPECT_EQ(q.nonManifoldVertices, 0u);
+  EXPECT_TRUE(q.closed);
+  EXPECT_TRUE(q.oriented);
+  EXPECT_EQ(q.components, 1u);
+  EXPECT_EQ(q.euler, euler);
+}
+
+TEST(Triangulate, FibonacciSphereIsClosedWithoutRepair) {
+  PointCloud c;
+  c.points = test::fibonacciSphere(3000);
+  c.normals = c.points;
+  const TriangulateResult r = triangulateLocal(c);
+  const MeshQuality q = evaluateMesh(r.mesh);
+  expectClosedGenus(q, 2);
+  EXPECT_GT(q.qualityMean, 0.8);  // the Delaunay triangulation of a Fibonacci spiral is not hexagonal: ≈ 0.83
+  EXPECT_GT(signedVolume(r.mesh), 0);  // outward, from the normals
+}
+
+TEST(Triangulate, SameMeshForAnyThreadCount) {
+  PointCloud c;
+  c.points = test::fibonacciSphere(2000);
+  c.normals = c.points;
+  TriangulateParams p1, p2;
+  p1.threads = 1;
+  p2.threads = 2;
+  const auto a = triangulateLocal(c, p1).mesh, b = triangulateLocal(c, p2).mesh;
+  ASSERT_EQ(a.triangles.size(), b.triangles.size());
+  for (std::size_t f = 0; f < a.triangles.size(); ++f) EXPECT_EQ(a.triangles[f], b.triangles[f]);
+}
+
+TEST(Triangulate, RejectsBadInput) {
+  PointCloud two;
+  two.points = {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(1, 0, 0)};
+  two.normals = {Eigen::Vector3d(0, 0, 1), Eigen::Vector3d(0, 0, 1)};
+  EXPECT_THROW(triangulateLocal(two), InputError);
+  PointCloud noNormals;
+  noNormals.points = test::fibonacciSphere(100);
+  EXPECT_THROW(triangulateLocal(noNormals), InputError);
+  TriangulateParams bad;
+  bad.minVotes = 4;
+  EXPECT_THROW(bad.validate(), std::invalid_argument);
+}
+
+TEST(MeshRepair, FillsSmallHoleKeepsLargeOne) {
+  PointCloud c;
+  c.points = test::fibonacciSphere(3000);
+  c.normals = c.points;
+  TriangleMesh m = triangulateLocal(c).mesh;
+  // Punch a small hole (the faces of one vertex) near the north pole, a large one (a cap) at the south pole.
+  std::vector<Eigen::Vector3i> kept;
+  for (const auto& t : m.triangles) {
+    const bool small = t[0] == 10 || t[1] == 10 || t[2] == 10;
+    bool cap = false;
+    for (int k = 0; k < 3; ++k) cap = cap || m.vertices[t[k]].z() < -0.8;
+    if (!small && !cap) kept.push_back(t);
+  }
+  m.triangles = kept;
+  const MeshQuality before = evaluateMesh(m);
+  EXPECT_EQ(before.boundaryLoops, 2u);
+  std::vector<Eigen::Vector3d> normals = c.normals;
+  const HoleFillingReport r = fillSmallHoles(m, normals);
+  EXPECT_EQ(r.filled, 1u);
+  EXPECT_EQ(r.kept, 1u);
+  const MeshQuality after = evaluateMesh(m);
+  EXPECT_EQ(after.boundaryLoops, 1u);
+  EXPECT_TRUE(after.oriented);
+  EXPECT_TRUE(after.manifold);
+}
+
+TEST(MeshRepair, OrientsFlippedFacesOutward) {
+  PointCloud c;
+  c.points = test::fibonacciSphere(1000);
+  c.normals = c.points;
+  TriangleMesh m = triangulateLocal(c).mesh;
+  for (std::size_t f = 0; f < m.triangles.size(); f += 3) std::swap(m.triangles[f][1], m.triangles[f][2]);
+  EXPECT_FALSE(evaluateMesh(m).oriented);
+  orientConsistently(m, {});  // no normals: outward by signed volume
+  EXPECT_TRUE(evaluateMesh(m).oriented);
+  EXPECT_GT(signedVolume(m), 0);
+}
+
+TEST(Reconstruct, SphereCloudClosedGenus0) {
+  ReconstructParams p;
+  p.targetCount = 2000;
+  const ReconstructResult r = reconstruct(test::sphereCloud(20000), p);
+  expectClosedGenus(r.quality, 2);
+  EXPECT_GT(signedVolume(r.mesh), 0);
+  EXPECT_GE(r.quality.qualityMean, 0.88);
+  EXPECT_GE(r.quality.qualityMin, 0.4);
+  // Distance to the true sphere: vertices on it, face centroids within the chord sagitta (the distance to the
+  // random input cloud mostly measures that cloud's own gaps).
+  for (const auto& v : r.mesh.vertices) EXPECT_NEAR(v.norm(), 1.0, 5e-3);
+  for (const auto& t : r.mesh.triangles)
+    EXPECT_GT(((r.mesh.vertices[t[0]] + r.mesh.vertices[t[1]] + r.mesh.vertices[t[2]]) / 3.0).norm(), 0.99);
+  EXPECT_EQ(r.samples.size(), 2000u);
+  EXPECT_NE(r.toJson().find("\"method\": \"local\""), std::string::npos);
+}
+
+TEST(Reconstruct, TorusCloudClosedGenus1) {
+  ReconstructParams p;
+  p.targetCount = 3000;
+  const ReconstructResult r = reconstruct(torusCloud(30000), p);
+  expectClosedGenus(r.quality, 0);
+  EXPECT_EQ(r.quality.genus, 1);
+  EXPECT_GE(r.quality.qualityMean, 0.88);
+}
+
+TEST(Reconstruct, CroppedSphereKeepsItsBoundary) {
+  PointCloud full = test::sphereCloud(20000), cropped;
+  for (std::size_t i = 0; i < full.size(); ++i)
+    if (full.points[i].z() < 0.5) cropped.points.push_back(full.points[i]), cropped.normals.push_back(full.normals[i]);
+  ReconstructParams p;
+  p.targetCount = 2000;
+  const ReconstructResult r = reconstruct(cropped, p);
+  EXPECT_FALSE(r.quality.closed);
+  EXPECT_EQ(r.quality.boundaryLoops, 1u);
+  EXPECT_GT(r.quality.boundaryEdges, 30u);  // the rim: circumference 2π·0.87 over an edge of ≈ 0.07
+  EXPECT_EQ(r.quality.nonManifoldEdges, 0u);
+  EXPECT_TRUE(r.quality.oriented);
+  EXPECT_EQ(r.quality.euler, 1);  // a disc
+}
+
+TEST(Reconstruct, AdvancingFrontOnSphere) {
+  ReconstructParams p;
+  p.targetCount = 2000;
+  p.method = ReconstructMethod::kAdvancingFront;
+  const ReconstructResult r = reconstruct(test::sphereCloud(20000), p);
+  EXPECT_EQ(r.method, "advancing-front");
+  EXPECT_GT(r.mesh.triangles.size(), 3800u);
+  EXPECT_TRUE(r.quality.oriented);
+  EXPECT_GT(signedVolume(r.mesh), 0);
+  EXPECT_LT(r.quality.distance.relativeHausdorff(), 0.02);
+}
+
+TEST(Reconstruct, DegenerateInputIsAnInputError) {
+  PointCloud line;
+  for (int i = 0; i < 100; ++i) line.points.emplace_back(i, 2.0 * i, -i);
+  EXPECT_THROW(reconstruct(line), InputError);
+  PointCloud few;
+  few.points = {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(1, 0, 0), Eigen::Vector3d(0, 1, 0)};
+  EXPECT_THROW(reconstruct(few), InputError);
+  EXPECT_THROW(reconstruct(PointCloud{}), InputError);
+  ReconstructParams p;
+  p.targetCount = 2;
+  EXPECT_THROW(reconstruct(test::sphereCloud(100), p), std::invalid_argument);
+  EXPECT_THROW(parseReconstructMethod("poisson"), std::invalid_argument);
+}
+
+TEST(Reconstruct, SameMeshForAnyThreadCount) {
+  ReconstructParams p1, p2;
+  p1.targetCount = p2.targetCount = 1000;
+  p1.threads = 1;
+  p2.threads = 2;
+  p1.evaluate = p2.evaluate = false;
+  const PointCloud c = test::sphereCloud(8000);
+  const auto a = reconstruct(c, p1).mesh, b = reconstruct(c, p2).mesh;
+  ASSERT_EQ(a.triangles.size(), b.triangles.size());
+  EXPECT_EQ(a.vertices, b.vertices);
+  for (std::size_t f = 0; f < a.triangles.size(); ++f) EXPECT_EQ(a.triangles[f], b.triangles[f]);
+}
+
+// Real data (issue 7 acceptance): a dense sampling of fandisk (sharp creases and corners) at N = 10k.
+TEST(ReconstructRealData, Fandisk10k) {
+  const TriangleMesh truth = readMesh(test::dataPath("meshes/fandisk.off"));
+  MeshSamplingParams sp;
+  sp.count = 100000;
+  sp.seed = 3;
+  ReconstructParams p;
+  p.targetCount = 10000;
+  const ReconstructResult r = reconstruct(sampleMesh(truth, sp), p);
+  const MeshQuality& q = r.quality;
+  expectClosedGenus(q, 2);
+  EXPECT_GE(q.qualityMean, 0.90);
+  EXPECT_GE(q.qualityMin, 0.4);
+  EXPECT_LT(q.shareBelow30, 0.01);
+  const SurfaceDistance d = surfaceDistance(r.mesh, truth);
+  EXPECT_LE(d.relativeHausdorff(), 0.01);
+}
+
+// The CLI: exit codes, outputs, --quality-only.
+class ReconstructCli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = test::tempDir();
+    cloud_ = dir_ + "/sphere.ply";
+    writePointCloud(cloud_, test::sphereCloud(5000));
+  }
+  std::string dir_, cloud_;
+};
+
+TEST_F(ReconstructCli, WritesMeshAndReport) {
+  const std::string mesh = dir_ + "/mesh.off", report = dir_ + "/report.json";
+  std::string out;
+  ASSERT_EQ(test::run(test::tool("iires-reconstruct") + " " + cloud_ + " " + mesh + " -n 800 --report " + report,
+                      &out),
+            0)
+      << out;
+  EXPECT_NE(out.find("triangle quality"), std::string::npos) << out;
+  const TriangleMesh m = readMesh(mesh);
+  EXPECT_EQ(m.vertices.size(), 800u);
+  EXPECT_NE(test::readText(report).find("\"closed\": true"), std::string::npos);
+  // Report on the mesh just written.
+  ASSERT_EQ(test::run(test::tool("iires-reconstruct") + " " + cloud_ + " --quality-only " + mesh, &out), 0) << out;
+  EXPECT_NE(out.find("Hausdorff"), std::string::npos) << out;
+}
+
+TEST_F(ReconstructCli, ExitCodes) {
+  const std::string t = test::tool("iires-reconstruct");
+  EXPECT_EQ(test::run(t + " " + dir_ + "/missing.ply " + dir_ + "/m.ply"), 2);
+  EXPECT_EQ(test::run(t + " " + cloud_ + " " + dir_ + "/m.ply -n 2"), 2);
+  EXPECT_EQ(test::run(t + " " + cloud_ + " " + dir_ + "/m.xyz"), 2);
+  EXPECT_EQ(test::run(t + " " + cloud_ + " " + dir_ + "/m.ply --method poisson"), 2);
+  EXPECT_EQ(test::run(t + " " + cloud_), 2);  // no OUTPUT_MESH
+  EXPECT_EQ(test::run(t + " " + cloud_ + " --quality-only " + dir_ + "/missing.off"), 2);
+  EXPECT_FALSE(test::fileExists(dir_ + "/m.ply"));
+  EXPECT_EQ(test::run(t + " --version"), 0);
+}
+
+}  // namespace
+}  // namespace iires

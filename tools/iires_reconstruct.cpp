@@ -1,0 +1,88 @@
+// iires-reconstruct: a triangle mesh of near-equilateral triangles from a point cloud, with a quality report.
+#include <CLI/CLI.hpp>
+#include <cstdio>
+#include <iomanip>
+#include <iostream>
+
+#include "common.hpp"
+#include "iires/io.hpp"
+#include "iires/reconstruct/reconstruct.hpp"
+
+int main(int argc, char** argv) {
+  return iires::tools::guardedMain("iires-reconstruct", [&]() -> int {
+    CLI::App app{"Reconstruct a triangle mesh from a point cloud (isotropic resampling + local Delaunay) and "
+                 "report its quality."};
+    std::string input, output, reportPath, qualityOnly, method = "local";
+    long long count = 10000;
+    bool noResample = false, noHoles = false, quiet = false;
+    iires::ReconstructParams params;
+    app.add_option("INPUT", input, "input cloud (.ply .pcd .xyz .xyzn .pts, or mesh vertices .obj .off .stl)")
+        ->required();
+    app.add_option("OUTPUT_MESH", output, "output mesh (.ply .obj .off by extension)");
+    app.add_option("-n,--count", count, "vertices of the mesh: resample to exactly N points first (>= 4)");
+    app.add_flag("--no-resample", noResample, "triangulate the input points as they are");
+    app.add_option("--method", method, "triangulation: local (default) or advancing-front")
+        ->check(CLI::IsMember({"local", "advancing-front"}));
+    app.add_flag("--no-hole-filling", noHoles, "leave small holes open");
+    app.add_option("--max-hole-edges", params.holes.maxEdges, "close holes of at most this many edges (>= 3)");
+    app.add_option("--quality-only", qualityOnly,
+                   "report on this existing mesh (INPUT is the reference cloud); no OUTPUT_MESH");
+    app.add_option("--report", reportPath, "write the report as JSON to this file");
+    app.add_option("--threads", params.threads, "threads (0 = all cores); the output does not depend on it");
+    app.add_option("--seed", params.seed, "seed; same seed -> same mesh");
+    app.add_flag("-q,--quiet", quiet, "print nothing on success");
+    app.set_version_flag("--version", iires::tools::versionString());
+    try {
+      app.parse(argc, argv);
+    } catch (const CLI::Success& e) {
+      return app.exit(e);
+    } catch (const CLI::ParseError& e) {
+      app.exit(e);
+      return iires::tools::kBadInput;
+    }
+
+    if (!qualityOnly.empty()) {
+      if (!output.empty()) throw iires::InputError("--quality-only takes no OUTPUT_MESH (got " + output + ")");
+      const iires::TriangleMesh mesh = iires::readMesh(qualityOnly);
+      const iires::PointCloud reference = iires::readPointCloud(input);
+      iires::MeshQualityParams qp;
+      qp.threads = params.threads;
+      qp.seed = params.seed + 1;
+      const iires::MeshQuality q = iires::evaluateMesh(mesh, &reference, qp);
+      if (!reportPath.empty()) iires::writeTextFile(reportPath, q.toJson());
+      if (!quiet) std::cout << "quality of " << qualityOnly << " (reference " << input << ")\n" << q.toTable();
+      return iires::tools::kOk;
+    }
+    if (output.empty()) throw iires::InputError("OUTPUT_MESH is required (or use --quality-only MESH)");
+    if (count < 4) throw iires::InputError("-n must be at least 4 (got " + std::to_string(count) + ")");
+    // Fail on a bad output extension before the work, not after it.
+    const std::string ext = iires::extensionOf(output);
+    if (ext != ".ply" && ext != ".obj" && ext != ".off")
+      throw iires::InputError("cannot write " + output + ": unknown mesh format (use .ply, .obj or .off)");
+    params.targetCount = static_cast<std::size_t>(count);
+    params.resample = !noResample;
+    params.fillHoles = !noHoles;
+    params.method = iires::parseReconstructMethod(method);
+
+    const iires::PointCloud cloud = iires::readPointCloud(input);
+    iires::ReconstructResult result;
+    try {
+      result = iires::reconstruct(cloud, params);
+    } catch (const iires::InputError& e) {
+      throw iires::InputError(input + ": " + e.what());
+    }
+    iires::writeMesh(output, result.mesh);
+    if (!reportPath.empty()) iires::writeTextFile(reportPath, result.toJson());
+    if (!quiet) {
+      std::cout << "mesh " << output << " (" << result.method << ", " << result.mesh.vertices.size()
+                << " vertices from " << result.inputPoints << " input points)\n"
+                << result.quality.toTable();
+      std::cout << "  " << std::left << std::setw(30) << "small holes closed / kept" << result.holes.filled << " / "
+                << result.holes.kept << "\n";
+      std::cout << "  " << std::left << std::setw(30) << "time (s)";
+      for (const auto& s : result.timings) std::cout << s.name << " " << std::setprecision(3) << s.seconds << "  ";
+      std::cout << "\n";
+    }
+    return iires::tools::kOk;
+  });
+}
