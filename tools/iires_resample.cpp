@@ -6,6 +6,7 @@
 #include "common.hpp"
 #include "iires/geodesic.hpp"
 #include "iires/io.hpp"
+#include "iires/preprocess.hpp"
 #include "iires/resample.hpp"
 
 int main(int argc, char** argv) {
@@ -14,12 +15,18 @@ int main(int argc, char** argv) {
     std::string input, output, reportPath;
     long long count = 0;
     iires::ResampleParams params;
-    bool quiet = false, noIntrinsic = false;
+    bool quiet = false, noIntrinsic = false, noDenoise = false, denoiseOnly = false;
+    std::string outlierMode = "pull";
     std::string geodesicPath;
     app.add_option("INPUT", input, "input cloud (.ply .pcd .xyz .xyzn .pts, or mesh vertices .obj .off .stl)")
         ->required();
     app.add_option("OUTPUT", output, "output cloud (.ply binary with normals, .xyz, .xyzn)")->required();
-    app.add_option("-n,--count", count, "exact number of output points N (>= 1)")->required();
+    app.add_option("-n,--count", count, "exact number of output points N (>= 1); required unless --denoise-only");
+    app.add_option("--outliers", outlierMode, "outliers: pull back onto the surface, remove, or keep")
+        ->check(CLI::IsMember({"pull", "remove", "keep"}));
+    app.add_flag("--no-denoise", noDenoise, "skip the MLS denoising of the input");
+    app.add_flag("--denoise-only", denoiseOnly,
+                 "only pre-process (outliers + denoising) and write the cleaned cloud at its own point count");
     app.add_option("--seed", params.seed, "seed for tie-breaking; same seed -> same output");
     app.add_option("--threads", params.threads, "threads (0 = all cores); the output does not depend on it");
     app.add_option("--report", reportPath, "write the report as JSON to this file");
@@ -36,6 +43,22 @@ int main(int argc, char** argv) {
     } catch (const CLI::ParseError& e) {
       app.exit(e);
       return iires::tools::kBadInput;
+    }
+    params.preprocessing.outliers.mode = iires::parseOutlierMode(outlierMode);
+    params.preprocessing.runDenoise = !noDenoise;
+    if (denoiseOnly) {
+      const iires::PointCloud cloud = iires::readPointCloud(input);
+      iires::PreprocessResult cleaned;
+      try {
+        params.preprocessing.threads = params.threads;
+        cleaned = iires::preprocess(cloud, params.preprocessing);
+      } catch (const iires::InputError& e) {
+        throw iires::InputError(input + ": " + e.what());
+      }
+      iires::writePointCloud(output, cleaned.cloud);
+      if (!reportPath.empty()) iires::writeTextFile(reportPath, cleaned.toJson() + "\n");
+      if (!quiet) std::cout << cleaned.toJson() << "\n";
+      return iires::tools::kOk;
     }
     if (count < 1) throw iires::InputError("-n must be at least 1 (got " + std::to_string(count) + ")");
     params.targetCount = static_cast<std::size_t>(count);

@@ -15,7 +15,7 @@ void PreprocessParams::validate() const {
 std::string PreprocessResult::toJson() const {
   std::ostringstream s;
   s.precision(10);
-  s << "{\"input_points\": " << inputPoints << ", \"output_points\": " << cloud.size()
+  s << "{\"input_points\": " << inputPoints << ", \"output_points\": " << outputPoints
     << ", \"outliers_found\": " << outliersFound << ", \"outliers_pulled\": " << outliersPulled
     << ", \"outliers_removed\": " << outliersRemoved << ", \"denoise_iterations\": " << denoiseIterations
     << ", \"mean_displacement\": " << meanDisplacement << ", \"outlier_time_s\": " << outlierSeconds
@@ -47,6 +47,7 @@ PreprocessResult preprocess(const PointCloud& input, const PreprocessParams& par
     result.cloud = std::move(outliers.cloud);
   }
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  result.outputPoints = result.cloud.size();
   return result;
 }
 

@@ -521,6 +521,7 @@ std::string ResampleResult::toJson() const {
      << ",\n  \"relax_iterations\": " << relaxIterations << ",\n  \"splits\": " << splits
      << ",\n  \"collapses\": " << collapses << ",\n  \"target_length\": " << jsonNumber(targetLength)
      << ",\n  \"components\": " << components << ",\n  \"satellites\": " << satellites
+     << ",\n  \"preprocess\": " << preprocessing.toJson()
      << ",\n  \"spacing\": {\"mean\": " << jsonNumber(spacing.mean) << ", \"min\": " << jsonNumber(spacing.min)
      << ", \"max\": " << jsonNumber(spacing.max) << ", \"cv\": " << jsonNumber(spacing.cv) << "},\n  \"time_s\": {";
   for (std::size_t i = 0; i < timings.size(); ++i)
@@ -542,6 +543,17 @@ ResampleResult resample(const PointCloud& input, const ResampleParams& params) {
   const ValidationReport report = validateCloud(cloud, 4, "input");
   result.duplicatesMerged = report.duplicatesMerged;
   stage("validate", t);
+
+  constexpr std::size_t kPreprocessMinPoints = 25;
+  if (params.preprocess && cloud.size() >= kPreprocessMinPoints) {
+    t = Clock::now();
+    PreprocessParams pp = params.preprocessing;
+    pp.threads = params.threads;
+    result.preprocessing = iires::preprocess(cloud, pp);
+    cloud = std::move(result.preprocessing.cloud);
+    result.preprocessing.cloud = {};
+    stage("preprocess", t);
+  }
 
   t = Clock::now();
   if (!cloud.hasNormals()) {

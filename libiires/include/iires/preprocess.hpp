@@ -25,6 +25,7 @@ struct PreprocessParams {
 struct PreprocessResult {
   PointCloud cloud;             ///< pull/keep: input size and order; remove: outliers dropped
   std::size_t inputPoints = 0;  ///< points given
+  std::size_t outputPoints = 0;  ///< points returned (fewer than given only with outliers removed)
   std::size_t outliersFound = 0, outliersPulled = 0, outliersRemoved = 0;
   int denoiseIterations = 0;    ///< 0 when denoising was skipped
   double meanDisplacement = 0;  ///< mean move of the denoising sweeps, input units

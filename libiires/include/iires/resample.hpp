@@ -14,6 +14,7 @@
 #include "iires/mls.hpp"
 #include "iires/neighbourhood.hpp"
 #include "iires/normals.hpp"
+#include "iires/preprocess.hpp"
 #include "iires/types.hpp"
 
 namespace iires {
@@ -31,6 +32,10 @@ struct ResampleParams {
   int relaxPatience = 4;            ///< stop the final relaxation after this many iterations without a better CV
   double overRelaxation = 1.5;      ///< Lloyd step factor ω: move to p + ω(c − p); 1 = plain Lloyd, < 2
   double candidateFactor = 3.0;     ///< density initialisation keeps ≈ this × N voxel cells, then eliminates to N
+  /// Pre-processing of the input before anything else (paper §3.1): outliers pulled back (or removed/kept)
+  /// and MLS denoising. Skipped for clouds too small for it (fewer than 25 points).
+  bool preprocess = true;
+  PreprocessParams preprocessing;   ///< its parameters (`--outliers`, `--no-denoise`)
   MlsParams mls;                    ///< the surface every sample is projected onto
   NormalParams normals;             ///< used when the input has no normals
   std::uint64_t seed = 0;           ///< tie-breaking in the initial sample elimination; same seed → same output
@@ -69,6 +74,8 @@ struct ResampleResult {
   SpacingStats spacing;              ///< nearest-neighbour spacing of the output
   /// Edges present in both endpoints' tangent-plane Delaunay 1-rings of the output (indices into cloud, a < b).
   std::vector<std::array<std::uint32_t, 2>> ringEdges;
+  /// What pre-processing did (its cloud left empty: the cleaned input is not kept); all zero when skipped.
+  PreprocessResult preprocessing;
   std::size_t components = 0;        ///< connected components of the input (intrinsic control), else 0
   std::size_t satellites = 0;        ///< geodesic satellites in all (3 per component)
   /// The geodesic coordinates of the input (intrinsic control), e.g. for writeGeodesicPly; else null.
@@ -81,7 +88,8 @@ struct ResampleResult {
 
 /// @brief Resample @p input to exactly params.targetCount points, uniformly spaced on its MLS surface.
 ///
-/// Pipeline: validate (merge duplicates) → normals (PCA + MST orientation, unless given) → MLS surface →
+/// Pipeline: validate (merge duplicates) → pre-processing (outliers, MLS denoising) → normals (PCA + MST
+/// orientation, unless given or produced by denoising) → MLS surface →
 /// geodesic coordinates and the intrinsic neighbour rule (unless switched off) → density initialisation (voxel cells, then weighted sample elimination down to N; or all points when
 /// upsampling) → passes of split/collapse on the tangent-plane Delaunay 1-ring edges with target length l
 /// (count control: l = mean edge · √(|S|/N)) and Lloyd relaxation in each sample's tangent-plane Voronoi cell,
