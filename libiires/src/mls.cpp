@@ -45,18 +45,25 @@ MlsSurface::MlsSurface(const std::vector<Eigen::Vector3d>& points, const std::ve
 MlsSurface::~MlsSurface() = default;
 
 Eigen::Vector3d MlsSurface::project(const Eigen::Vector3d& x0, Eigen::Vector3d* normalOut, double* offSurface,
-                                    const Eigen::Vector3d* hint) const {
+                                    const Eigen::Vector3d* hint, MlsCache* cache) const {
   std::vector<std::uint32_t> idx;
   std::vector<double> d2;
   Eigen::Vector3d x = x0, normal = Eigen::Vector3d::UnitZ();
   double off = 0;
   Eigen::Vector3d queried = x;
   double lastH = 0;
+  if (cache && cache->h > 0 && (x - cache->centre).squaredNorm() <= 0.0625 * cache->h * cache->h) {
+    idx = cache->indices;
+    queried = cache->centre;
+    lastH = cache->h;
+    d2.resize(idx.size());
+  }
   for (int it = 0; it < std::max(1, params_.iterations); ++it) {
     // Re-centre the neighbourhood only when the estimate moved by more than a quarter kernel width.
-    if (it == 0 || (x - queried).squaredNorm() > 0.0625 * lastH * lastH) {
+    if (lastH == 0 || (x - queried).squaredNorm() > 0.0625 * lastH * lastH) {
       index_.knn(x, static_cast<std::size_t>(params_.k), idx, d2);
       queried = x;
+      lastH = 0;
     } else {
       for (std::size_t j = 0; j < idx.size(); ++j) d2[j] = (points_[idx[j]] - x).squaredNorm();
     }
@@ -69,6 +76,7 @@ Eigen::Vector3d MlsSurface::project(const Eigen::Vector3d& x0, Eigen::Vector3d* 
     double h = 0;
     for (std::size_t j = 0; j < found; ++j) h += h_[idx[j]];
     h /= static_cast<double>(found);
+    if (lastH == 0 && cache) *cache = {idx, queried, h};
     lastH = h;
     const double inv = 1.0 / (h * h);
     // eq. (2): Gaussian weights; eq. (1): weighted average a(x) and averaged oriented normal n_a.

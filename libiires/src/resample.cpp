@@ -29,11 +29,13 @@ constexpr double kOffSurfaceLimit = 0.6;  // MlsSurface::project's offSurface be
 struct Samples {
   std::vector<Eigen::Vector3d> pos, nrm;
   std::vector<char> fixed;
+  std::vector<MlsCache> cache;  // each sample's last MLS neighbourhood (saves most k-NN searches in relaxation)
   std::size_t size() const { return pos.size(); }
-  void add(const Eigen::Vector3d& p, const Eigen::Vector3d& n, bool isFixed) {
+  void add(const Eigen::Vector3d& p, const Eigen::Vector3d& n, bool isFixed, MlsCache c = {}) {
     pos.push_back(p);
     nrm.push_back(n);
     fixed.push_back(isFixed ? 1 : 0);
+    cache.push_back(std::move(c));
   }
 };
 
@@ -101,7 +103,7 @@ class Resampler {
   void run(Samples& s, ResampleResult& result);
 
  private:
-  Rings computeRings(const Samples& s, double cellRadius) const;
+  Rings computeRings(const Samples& s, double cellRadius, bool refreshRule = true) const;
   std::vector<Edge> edges(const Samples& s, const Rings& r) const;
   double relax(Samples& s, double l, int iterations);
   void splitAndCollapse(Samples& s, const std::vector<Edge>& sorted, std::size_t splits, double minSplit,
@@ -116,8 +118,8 @@ class Resampler {
   NeighbourRule& rule_;
 };
 
-Rings Resampler::computeRings(const Samples& s, double cellRadius) const {
-  rule_.update(s.pos, s.nrm);
+Rings Resampler::computeRings(const Samples& s, double cellRadius, bool refreshRule) const {
+  if (refreshRule) rule_.update(s.pos, s.nrm);
   const int k = params_.neighbours;
   Rings r;
   r.stride = k;
@@ -127,15 +129,18 @@ Rings Resampler::computeRings(const Samples& s, double cellRadius) const {
   r.outward.assign(s.size(), Eigen::Vector3d::Zero());
   KnnIndex index(s.pos);
   parallelFor(s.size(), params_.threads, [&](std::size_t i) {
-    std::vector<std::uint32_t> idx;
-    std::vector<double> d2;
+    // Per-thread scratch buffers: this runs for every sample in every iteration.
+    thread_local std::vector<std::uint32_t> idx, lab, tmpL;
+    thread_local std::vector<double> d2, angles;
+    thread_local std::vector<std::pair<std::uint32_t, Eigen::Vector2d>> nb;
+    thread_local std::vector<Eigen::Vector2d> poly, tmpV;
     index.knn(s.pos[i], static_cast<std::size_t>(k) + 1, idx, d2);
     const Eigen::Vector3d& n = s.nrm[i];
     const Eigen::Vector3d u = n.unitOrthogonal(), v = n.cross(u);
     // Accepted neighbours in tangent coordinates. Log-map approximation: the tangent direction of the neighbour
     // with its true 3-D distance, so that on curved patches Lloyd equalises real spacings rather than their
     // (shorter) tangent-plane projections.
-    std::vector<std::pair<std::uint32_t, Eigen::Vector2d>> nb;
+    nb.clear();
     for (std::size_t c = 0; c < idx.size(); ++c) {
       const std::uint32_t j = idx[c];
       if (j == i || !rule_.accept(i, j)) continue;
@@ -149,8 +154,8 @@ Rings Resampler::computeRings(const Samples& s, double cellRadius) const {
     // samples are sparser than l (upsampling), so rings never depend on how far the count still is from N.
     const double nearest = nb.empty() ? 0.0 : nb.front().second.norm();
     const double radius = std::max(cellRadius, nearest);
-    std::vector<Eigen::Vector2d> poly, tmpV;
-    std::vector<std::uint32_t> lab, tmpL;
+    poly.clear();
+    lab.clear();
     const double rad = radius / std::cos(M_PI / 16);
     for (int e = 0; e < 16; ++e) {
       poly.emplace_back(rad * std::cos(2 * M_PI * e / 16), rad * std::sin(2 * M_PI * e / 16));
@@ -167,7 +172,7 @@ Rings Resampler::computeRings(const Samples& s, double cellRadius) const {
     std::sort(lab.begin(), lab.end());
     lab.erase(std::unique(lab.begin(), lab.end()), lab.end());
     int w = 0;
-    std::vector<double> angles;
+    angles.clear();
     for (std::uint32_t j : lab) {
       if (j == kNone || w >= k) continue;
       r.ring[i * static_cast<std::size_t>(k) + static_cast<std::size_t>(w++)] = j;
@@ -212,7 +217,9 @@ std::vector<Edge> Resampler::edges(const Samples& s, const Rings& r) const {
 double Resampler::relax(Samples& s, double l, int iterations) {
   double cv = 0;
   for (int it = 0; it < iterations; ++it) {
-    const Rings r = computeRings(s, l);
+    // Relaxation moves samples by a fraction of a spacing and keeps their order: the neighbour rule's view of
+    // them is refreshed on the first iteration of each call only.
+    const Rings r = computeRings(s, l, it == 0);
     std::vector<Eigen::Vector3d> pos(s.pos), nrm(s.nrm);
     parallelFor(s.size(), params_.threads, [&](std::size_t i) {
       if (s.fixed[i]) return;
@@ -223,7 +230,7 @@ double Resampler::relax(Samples& s, double l, int iterations) {
       for (int attempt = 0; attempt < 3; ++attempt) {
         Eigen::Vector3d n;
         double off = 0;
-        const Eigen::Vector3d p = surface_.project(target, &n, &off, &s.nrm[i]);
+        const Eigen::Vector3d p = surface_.project(target, &n, &off, &s.nrm[i], &s.cache[i]);
         if (off <= kOffSurfaceLimit) {
           pos[i] = p;
           nrm[i] = n;
@@ -284,7 +291,7 @@ void Resampler::splitAndCollapse(Samples& s, const std::vector<Edge>& sorted, st
   }
   Samples kept;
   for (std::size_t i = 0; i < s.size(); ++i)
-    if (!removed[i]) kept.add(s.pos[i], s.nrm[i], s.fixed[i]);
+    if (!removed[i]) kept.add(s.pos[i], s.nrm[i], s.fixed[i], std::move(s.cache[i]));
   for (std::size_t c = 0; c < newPos.size(); ++c) kept.add(newPos[c], newNrm[c], false);
   s = std::move(kept);
   result.splits += newPos.size();
@@ -475,11 +482,11 @@ void Resampler::run(Samples& s, ResampleResult& result) {
     ++result.relaxIterations;
   }
   if (s.size() != n) throw std::runtime_error("resample: could not reach the requested count");
-  // Lloyd relaxation until the spacing CV has not improved for relaxPatience iterations.
+  // Lloyd relaxation in rounds of 4 iterations until the spacing CV has not improved for relaxPatience rounds.
   double best = std::numeric_limits<double>::max();
-  for (int it = 0, stale = 0; it < params_.maxRelaxIterations && stale < params_.relaxPatience; ++it) {
-    const double cv = relax(s, l, 1);
-    ++result.relaxIterations;
+  for (int it = 0, stale = 0; it < params_.maxRelaxIterations && stale < params_.relaxPatience; it += 4) {
+    const double cv = relax(s, l, std::min(4, params_.maxRelaxIterations - it));
+    result.relaxIterations += std::min(4, params_.maxRelaxIterations - it);
     stale = cv < best - 1e-5 ? 0 : stale + 1;
     best = std::min(best, cv);
   }

@@ -16,6 +16,15 @@ struct MlsParams {
   int iterations = 2;   ///< projection steps per query (each re-centres the fit on the last estimate)
 };
 
+/// @brief The input neighbourhood of a previous projection, kept by a caller that projects the same moving
+/// point again and again (a sample during relaxation): project() reuses it while the query stays within a
+/// quarter kernel width of where it was gathered, and refreshes it otherwise.
+struct MlsCache {
+  std::vector<std::uint32_t> indices;
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+  double h = 0;  ///< kernel width there; 0 = empty
+};
+
 /// @brief Projection onto the MLS surface of a cloud with oriented normals.
 /// The kernel is θ(d) = exp(−d²/h²) (paper eq. 2) with h per input point = its distance to its 8th
 /// neighbour, clamped to the 90th percentile so an outlier cannot inflate it (DESIGN §3.3).
@@ -33,8 +42,9 @@ class MlsSurface {
   /// @p hint (optional) is the normal the caller expects there (e.g. the sample's normal before a small move):
   /// input points whose normals face away from it (another sheet: across a thin gap, between fingers) get no
   /// weight. Without a hint the nearest input point's normal is used.
+  /// @p cache (optional) saves the k-NN search when the point was projected from nearby before.
   Eigen::Vector3d project(const Eigen::Vector3d& x, Eigen::Vector3d* normal = nullptr, double* offSurface = nullptr,
-                          const Eigen::Vector3d* hint = nullptr) const;
+                          const Eigen::Vector3d* hint = nullptr, MlsCache* cache = nullptr) const;
 
   const KnnIndex& index() const { return index_; }
   /// @brief Mean distance from an input point to its nearest neighbour (the input spacing).

@@ -28,8 +28,8 @@ struct ResampleParams {
   int maxPasses = 8;                ///< split/collapse + relaxation passes (count control, then clean-up at N)
   int relaxPerPass = 2;             ///< Lloyd iterations after each pass's edge operations
   double maxEditShare = 0.005;      ///< at N, a pass replaces at most this share of samples (collapse + split)
-  int maxRelaxIterations = 40;      ///< cap on the final Lloyd relaxation iterations
-  int relaxPatience = 4;            ///< stop the final relaxation after this many iterations without a better CV
+  int maxRelaxIterations = 16;      ///< cap on the final Lloyd relaxation iterations (run in rounds of 4)
+  int relaxPatience = 1;            ///< stop the final relaxation after this many rounds without a better CV
   double overRelaxation = 1.5;      ///< Lloyd step factor ω: move to p + ω(c − p); 1 = plain Lloyd, < 2
   double candidateFactor = 3.0;     ///< density initialisation keeps ≈ this × N voxel cells, then eliminates to N
   /// Pre-processing of the input before anything else (paper §3.1): outliers pulled back (or removed/kept)
