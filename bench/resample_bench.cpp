@@ -1,6 +1,6 @@
 // Resampling benchmark: iires vs Open3D farthest-point and voxel down-sampling on the same non-uniform dense
 // sampling of a CGAL model, in one run. Prints one key=value line per (model, input, N, method).
-// Usage: resample_bench MESH INPUT_COUNT N [N ...] [--density-ratio R] [--fps-limit X] [--threads T]
+// Usage: resample_bench MESH INPUT_COUNT N [N ...] [--density-ratio R] [--fps-limit X] [--threads T] [--no-peers]
 #include <open3d/geometry/PointCloud.h>
 
 #include <chrono>
@@ -44,9 +44,12 @@ int main(int argc, char** argv) {
   std::vector<std::size_t> counts;
   double ratio = 5.0, fpsLimit = 2e10;
   int threads = 0;
+  bool peers = true;
   for (int a = 3; a < argc; ++a) {
     const std::string arg = argv[a];
-    if (arg == "--density-ratio" && a + 1 < argc) {
+    if (arg == "--no-peers") {
+      peers = false;
+    } else if (arg == "--density-ratio" && a + 1 < argc) {
       ratio = std::stod(argv[++a]);
     } else if (arg == "--fps-limit" && a + 1 < argc) {
       fpsLimit = std::stod(argv[++a]);
@@ -80,6 +83,7 @@ int main(int argc, char** argv) {
     double t = now();
     const auto r = iires::resample(cloud, p);
     report(prefix, "iires", r.cloud.points, now() - t, distance, reference);
+    if (!peers) continue;
     if (static_cast<double>(n) * static_cast<double>(inputCount) <= fpsLimit) {
       t = now();
       const auto fps = o3d.FarthestPointDownSample(n);

@@ -39,9 +39,11 @@ TEST(Resample, UniformOnSphereAndOnTheSurface) {
   EXPECT_LT(maxRadiusError(r.cloud), 2e-4);
   for (std::size_t i = 0; i < r.cloud.size(); ++i)
     EXPECT_GT(r.cloud.normals[i].dot(r.cloud.points[i]), 0.99);
-  // Hexagonal packing of N points on area 4π: spacing sqrt(2A / (√3 N)).
+  // Hexagonal packing of N points on area 4π: spacing sqrt(2A / (√3 N)). The nearest-neighbour distance is the
+  // shortest of ~6 edges whose lengths vary by ~5 %, so it sits ~1.3σ ≈ 6–8 % below the mean edge (0.92 here).
   const double ideal = std::sqrt(2.0 * 4.0 * M_PI / (std::sqrt(3.0) * 3000.0));
-  EXPECT_NEAR(r.spacing.mean, ideal, 0.08 * ideal);
+  EXPECT_GT(r.spacing.mean, 0.90 * ideal);
+  EXPECT_LT(r.spacing.mean, 1.00 * ideal);
 }
 
 TEST(Resample, NonUniformOpenPlaneBecomesUniform) {

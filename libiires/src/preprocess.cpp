@@ -1,13 +1,17 @@
 #include "iires/preprocess.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <sstream>
 #include <stdexcept>
+
+#include "iires/metrics.hpp"
 
 namespace iires {
 
 void PreprocessParams::validate() const {
   if (threads < 0) throw std::invalid_argument("PreprocessParams: threads must be >= 0 (0 = all cores)");
+  if (!(cleanDisplacement >= 0)) throw std::invalid_argument("PreprocessParams: cleanDisplacement must be >= 0");
   outliers.validate();
   if (runDenoise) denoise.validate();
 }
@@ -18,7 +22,7 @@ std::string PreprocessResult::toJson() const {
   s << "{\"input_points\": " << inputPoints << ", \"output_points\": " << outputPoints
     << ", \"outliers_found\": " << outliersFound << ", \"outliers_pulled\": " << outliersPulled
     << ", \"outliers_removed\": " << outliersRemoved << ", \"denoise_iterations\": " << denoiseIterations
-    << ", \"mean_displacement\": " << meanDisplacement << ", \"outlier_time_s\": " << outlierSeconds
+    << ", \"clean_input\": " << (cleanInput ? "true" : "false") << ", \"mean_displacement\": " << meanDisplacement << ", \"outlier_time_s\": " << outlierSeconds
     << ", \"denoise_time_s\": " << denoiseSeconds << ", \"time_s\": " << seconds << "}";
   return s.str();
 }
@@ -38,11 +42,29 @@ PreprocessResult preprocess(const PointCloud& input, const PreprocessParams& par
   result.outliersRemoved = outliers.removed;
   result.outlierSeconds = outliers.seconds;
   if (params.runDenoise) {
-    DenoiseResult denoised = denoise(outliers.cloud, dp);  // eq. (1)–(3)
-    result.cloud = std::move(denoised.cloud);
-    result.denoiseIterations = denoised.iterations;
-    result.meanDisplacement = denoised.meanDisplacement;
+    // eq. (1)–(3). The first sweep doubles as a noise probe: when it moves points by less than
+    // cleanDisplacement input spacings on average, the cloud is already clean and further sweeps would only
+    // erode tight curvature (folds, thin parts, sparse clouds) — keep the positions, take the fitted normals.
+    DenoiseParams first = dp;
+    first.iterations = std::min(1, dp.iterations);
+    DenoiseResult denoised = denoise(outliers.cloud, first);
+    const double spacing = spacingStats(outliers.cloud.points, dp.threads).mean;
     result.denoiseSeconds = denoised.seconds;
+    result.cleanInput = denoised.meanDisplacement < params.cleanDisplacement * spacing;
+    if (result.cleanInput) {
+      denoised.cloud.points = std::move(outliers.cloud.points);
+    } else if (dp.iterations > 1) {
+      DenoiseParams rest = dp;
+      rest.iterations = dp.iterations - 1;
+      const double firstMove = denoised.meanDisplacement;
+      denoised = denoise(denoised.cloud, rest);
+      denoised.meanDisplacement = (firstMove + rest.iterations * denoised.meanDisplacement) / dp.iterations;
+      denoised.iterations = dp.iterations;
+      result.denoiseSeconds += denoised.seconds;
+    }
+    result.cloud = std::move(denoised.cloud);
+    result.denoiseIterations = result.cleanInput ? 0 : denoised.iterations;
+    result.meanDisplacement = result.cleanInput ? 0.0 : denoised.meanDisplacement;
   } else {
     result.cloud = std::move(outliers.cloud);
   }

@@ -15,6 +15,9 @@ struct PreprocessParams {
   OutlierParams outliers;  ///< mode pull | remove | keep (`--outliers`)
   DenoiseParams denoise;   ///< MLS projection sweeps
   bool runDenoise = true;  ///< false: outliers only (`--no-denoise`)
+  /// Denoising stops after its first sweep when that sweep moved points by less than this many input spacings
+  /// on average: the input is clean, and smoothing it further would only erode tight curvature.
+  double cleanDisplacement = 0.05;
   int threads = 0;         ///< overrides outliers.threads and denoise.threads when > 0
 
   /// @throws std::invalid_argument with a readable message when a field is out of range.
@@ -27,7 +30,8 @@ struct PreprocessResult {
   std::size_t inputPoints = 0;  ///< points given
   std::size_t outputPoints = 0;  ///< points returned (fewer than given only with outliers removed)
   std::size_t outliersFound = 0, outliersPulled = 0, outliersRemoved = 0;
-  int denoiseIterations = 0;    ///< 0 when denoising was skipped
+  int denoiseIterations = 0;    ///< 0 when denoising was skipped or found the input clean
+  bool cleanInput = false;      ///< the first sweep's probe found no noise to remove (positions kept)
   double meanDisplacement = 0;  ///< mean move of the denoising sweeps, input units
   double outlierSeconds = 0, denoiseSeconds = 0, seconds = 0;  ///< wall times
 
