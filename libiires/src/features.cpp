@@ -1,0 +1,875 @@
+#include "iires/features.hpp"
+
+#include <CGAL/Delaunay_triangulation_3.h>
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Triangulation_vertex_base_with_info_3.h>
+#include <CGAL/vcm_estimate_edges.h>
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <list>
+#include <map>
+#include <numeric>
+#include <stdexcept>
+#include <string>
+#include <tuple>
+#include <unordered_map>
+
+#include "iires/knn.hpp"
+#include "iires/parallel.hpp"
+
+namespace iires {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+constexpr double kDeg = M_PI / 180.0;
+
+/// The crease at a point: the intersection line of two fitted planes.
+struct Crease {
+  bool valid = false;
+  Eigen::Vector3d point = Eigen::Vector3d::Zero();  ///< the query point projected onto the line
+  Eigen::Vector3d direction = Eigen::Vector3d::Zero();
+};
+
+/// Plane through the centroid of @p pts (indices into @p points) by PCA; returns RMS residual.
+double fitPlane(const std::vector<Eigen::Vector3d>& points, const std::vector<std::uint32_t>& idx,
+                const Eigen::Vector3d& hint, Eigen::Vector3d& normal, double& offset) {
+  Eigen::Vector3d c = Eigen::Vector3d::Zero();
+  for (std::uint32_t i : idx) c += points[i];
+  c /= static_cast<double>(idx.size());
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  for (std::uint32_t i : idx) {
+    const Eigen::Vector3d d = points[i] - c;
+    cov += d * d.transpose();
+  }
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(cov);
+  normal = es.eigenvectors().col(0);
+  if (normal.dot(hint) < 0) normal = -normal;
+  offset = normal.dot(c);
+  return std::sqrt(std::max(0.0, es.eigenvalues()(0)) / static_cast<double>(idx.size()));
+}
+
+/// Two-plane fit of the neighbourhood @p nbr of point @p i (the normal-variation test). Returns whether the
+/// point is on a crease by the thresholds in @p prm; fills @p crease.
+bool twoPlaneTest(const std::vector<Eigen::Vector3d>& points, const std::vector<Eigen::Vector3d>& normals,
+                  std::size_t i, const std::vector<std::uint32_t>& nbr, double h, const FeatureParams& prm,
+                  Crease& crease) {
+  crease = Crease{};
+  const std::size_t m = nbr.size();
+  if (m < 8) return false;
+  // Seeds of the 2-means on normals: the normal farthest from the mean, then the one farthest from it.
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (std::uint32_t j : nbr) mean += normals[j];
+  mean.normalize();
+  std::size_t a = 0, b = 0;
+  for (std::size_t t = 1; t < m; ++t)
+    if (normals[nbr[t]].dot(mean) < normals[nbr[a]].dot(mean)) a = t;
+  for (std::size_t t = 1; t < m; ++t)
+    if (normals[nbr[t]].dot(normals[nbr[a]]) < normals[nbr[b]].dot(normals[nbr[a]])) b = t;
+  Eigen::Vector3d na = normals[nbr[a]], nb = normals[nbr[b]];
+  if (na.dot(nb) > std::cos(prm.angle * kDeg)) return false;  // the neighbours' normals vary too little
+  std::vector<char> side(m, 0);
+  for (int it = 0; it < 5; ++it) {
+    Eigen::Vector3d sa = Eigen::Vector3d::Zero(), sb = Eigen::Vector3d::Zero();
+    for (std::size_t t = 0; t < m; ++t) {
+      side[t] = normals[nbr[t]].dot(na) >= normals[nbr[t]].dot(nb) ? 0 : 1;
+      (side[t] == 0 ? sa : sb) += normals[nbr[t]];
+    }
+    if (sa.squaredNorm() == 0 || sb.squaredNorm() == 0) return false;
+    na = sa.normalized();
+    nb = sb.normalized();
+  }
+  // Planes through each cluster's positions, refined by reassigning points to the nearer plane.
+  std::vector<std::uint32_t> ca, cb;
+  Eigen::Vector3d pa, pb;
+  double oa = 0, ob = 0, ra = 0, rb = 0;
+  const std::size_t minCount = std::max<std::size_t>(3, static_cast<std::size_t>(prm.minClusterShare * m));
+  for (int it = 0; it < 3; ++it) {
+    ca.clear();
+    cb.clear();
+    for (std::size_t t = 0; t < m; ++t) (side[t] == 0 ? ca : cb).push_back(nbr[t]);
+    if (ca.size() < minCount || cb.size() < minCount) return false;
+    ra = fitPlane(points, ca, na, pa, oa);
+    rb = fitPlane(points, cb, nb, pb, ob);
+    if (it == 2) break;
+    for (std::size_t t = 0; t < m; ++t) {
+      const double da = std::abs(pa.dot(points[nbr[t]]) - oa), db = std::abs(pb.dot(points[nbr[t]]) - ob);
+      side[t] = da <= db ? 0 : 1;
+    }
+  }
+  if (ra > prm.maxResidual * h || rb > prm.maxResidual * h) return false;
+  const Eigen::Vector3d dir = pa.cross(pb);
+  const double sinAngle = dir.norm();
+  if (pa.dot(pb) > std::cos(prm.angle * kDeg) || sinAngle < 1e-6) return false;
+  // Closest point of the line {x : pa·x = oa, pb·x = ob} to p: x = p + α pa + β pb.
+  const Eigen::Vector3d& p = points[i];
+  Eigen::Matrix2d g;
+  g << 1.0, pa.dot(pb), pa.dot(pb), 1.0;
+  const Eigen::Vector2d rhs(oa - pa.dot(p), ob - pb.dot(p));
+  const Eigen::Vector2d ab = g.inverse() * rhs;
+  const Eigen::Vector3d x = p + ab(0) * pa + ab(1) * pb;
+  if ((x - p).norm() > prm.maxLineDistance * h) return false;
+  crease.valid = true;
+  crease.point = x;
+  crease.direction = dir / sinAngle;
+  return true;
+}
+
+// ---- Voronoi covariance measure (CGAL's compute_vcm, parallelised; see vcm_estimate_normals.h) ----------
+
+using K = CGAL::Exact_predicates_inexact_constructions_kernel;
+using Vb = CGAL::Triangulation_vertex_base_with_info_3<std::uint32_t, K>;
+using Tds = CGAL::Triangulation_data_structure_3<Vb>;
+using Delaunay = CGAL::Delaunay_triangulation_3<K, Tds>;
+using Covariance = std::array<double, 6>;
+
+/// VCM of every point: covariance of its Voronoi cell ∩ ball(offset) (the ball discretised by CGAL's
+/// 20-plane sphere), then summed over the points within @p convolution. The Delaunay neighbour lists are
+/// gathered sequentially (CGAL's traversal marks cells), the cells are intersected in parallel.
+std::vector<Covariance> computeVcm(const std::vector<Eigen::Vector3d>& pts, double offset, double convolution,
+                                   int threads) {
+  const std::size_t n = pts.size();
+  std::vector<std::pair<K::Point_3, std::uint32_t>> input(n);
+  for (std::size_t i = 0; i < n; ++i)
+    input[i] = {K::Point_3(pts[i].x(), pts[i].y(), pts[i].z()), static_cast<std::uint32_t>(i)};
+  Delaunay dt(input.begin(), input.end());
+  // Each input point's vertex (exact duplicates share one), and its Delaunay neighbours, sorted.
+  std::vector<Delaunay::Vertex_handle> vertexOf(n);
+  for (auto v = dt.finite_vertices_begin(); v != dt.finite_vertices_end(); ++v) vertexOf[v->info()] = v;
+  for (std::size_t i = 0; i < n; ++i)
+    if (vertexOf[i] == Delaunay::Vertex_handle() || vertexOf[i]->info() != i) vertexOf[i] = dt.nearest_vertex(input[i].first);
+  std::vector<std::size_t> offsets(n + 1, 0);
+  std::vector<std::uint32_t> adj;
+  std::vector<Delaunay::Vertex_handle> tmp;
+  for (std::size_t i = 0; i < n; ++i) {
+    tmp.clear();
+    dt.finite_adjacent_vertices(vertexOf[i], std::back_inserter(tmp));
+    const std::size_t start = adj.size();
+    for (const auto& v : tmp) adj.push_back(v->info());
+    std::sort(adj.begin() + static_cast<std::ptrdiff_t>(start), adj.end());
+    offsets[i + 1] = adj.size();
+  }
+  const CGAL::Voronoi_covariance_3::Sphere_discretization<K> sphere(offset, 20);
+  std::vector<Covariance> cov(n);
+  parallelFor(n, threads, [&](std::size_t i) {
+    using Traits = CGAL::Convex_hull_traits_3<K, CGAL::HalfedgeDS_default<K, CGAL::HalfedgeDS_items_3>>;
+    using Polyhedron = Traits::Polygon_mesh;
+    std::list<K::Plane_3> planes;
+    for (std::size_t e = offsets[i]; e < offsets[i + 1]; ++e) {
+      const Eigen::Vector3d d = (pts[adj[e]] - pts[i]) / 2.0;
+      const K::Vector_3 v(d.x(), d.y(), d.z());
+      planes.emplace_back(CGAL::ORIGIN + v, v);
+    }
+    sphere(std::back_inserter(planes));
+    Polyhedron poly;
+    CGAL::halfspace_intersection_with_constructions_3(planes.begin(), planes.end(), poly,
+                                                      boost::make_optional(K::Point_3(CGAL::ORIGIN)));
+    CGAL::Voronoi_covariance_3::internal::Covariance_accumulator_3<double> acc;
+    for (auto fd : faces(poly)) {
+      CGAL::Halfedge_around_face_circulator<Polyhedron> h0(halfedge(fd, poly), poly), hf = h0--,
+          hs = std::next(hf);
+      while (hs != h0) {
+        acc((*h0)->vertex()->point(), (*hf)->vertex()->point(), (*hs)->vertex()->point());
+        ++hs;
+        ++hf;
+      }
+    }
+    cov[i] = acc.result();
+  });
+  if (convolution <= 0) return cov;
+  KnnIndex index(pts);
+  std::vector<Covariance> out(n);
+  parallelFor(n, threads, [&](std::size_t i) {
+    std::vector<std::uint32_t> idx;
+    std::vector<double> d2;
+    index.radius(pts[i], convolution, idx, d2);
+    std::sort(idx.begin(), idx.end());  // fixed summation order
+    Covariance m{};
+    for (std::uint32_t j : idx)
+      for (int c = 0; c < 6; ++c) m[c] += cov[j][c];
+    out[i] = m;
+  });
+  return out;
+}
+
+// ---- chains ---------------------------------------------------------------------------------------------
+
+struct Dsu {
+  std::vector<std::uint32_t> parent;
+  explicit Dsu(std::size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0u); }
+  std::uint32_t find(std::uint32_t x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  }
+};
+
+struct TreeEdge {
+  std::uint32_t to;
+  double w;
+};
+
+/// Farthest vertex from @p src within the alive part of a forest (weighted), with parent links.
+std::uint32_t farthest(const std::vector<std::vector<TreeEdge>>& g, const std::vector<char>& alive,
+                       std::uint32_t src, std::vector<double>& dist, std::vector<std::int64_t>& parent,
+                       std::vector<std::uint32_t>& visited) {
+  visited.clear();
+  std::vector<std::uint32_t> stack{src};
+  dist[src] = 0;
+  parent[src] = -1;
+  std::uint32_t best = src;
+  while (!stack.empty()) {
+    const std::uint32_t u = stack.back();
+    stack.pop_back();
+    visited.push_back(u);
+    if (dist[u] > dist[best] || (dist[u] == dist[best] && u < best)) best = u;
+    for (const TreeEdge& e : g[u])
+      if (alive[e.to] && static_cast<std::int64_t>(e.to) != parent[u]) {
+        parent[e.to] = u;
+        dist[e.to] = dist[u] + e.w;
+        stack.push_back(e.to);
+      }
+  }
+  return best;
+}
+
+double arcLength(const FeatureChain& c) {
+  double len = 0;
+  for (std::size_t t = 1; t < c.points.size(); ++t) len += (c.points[t] - c.points[t - 1]).norm();
+  return len;
+}
+
+/// Denoise a chain: every vertex is projected onto the line fitted (PCA) to the vertices within ±w of it;
+/// directions become the fitted lines' directions, oriented along the chain. Removes the per-point jitter
+/// of the crease estimates, also across the crease, without shrinking the ends.
+void fitLocalLines(FeatureChain& c, int w) {
+  const std::size_t n = c.points.size();
+  if (n == 2)
+    for (auto& dd : c.directions)
+      if (dd.dot(c.points[1] - c.points[0]) < 0) dd = -dd;
+  if (n < 3) return;
+  std::vector<Eigen::Vector3d> p(n), d(n);
+  for (std::size_t t = 0; t < n; ++t) {
+    const std::size_t lo = t >= static_cast<std::size_t>(w) ? t - w : 0, hi = std::min(n - 1, t + w);
+    Eigen::Vector3d m = Eigen::Vector3d::Zero();
+    for (std::size_t u = lo; u <= hi; ++u) m += c.points[u];
+    m /= static_cast<double>(hi - lo + 1);
+    Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+    for (std::size_t u = lo; u <= hi; ++u) cov += (c.points[u] - m) * (c.points[u] - m).transpose();
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(cov);
+    Eigen::Vector3d dir = es.eigenvectors().col(2);
+    if (dir.dot(c.points[hi] - c.points[lo]) < 0) dir = -dir;
+    p[t] = m + dir * (c.points[t] - m).dot(dir);
+    d[t] = dir;
+  }
+  c.points.swap(p);
+  c.directions.swap(d);
+}
+
+/// An open chain end: its position and the unit direction pointing out of the chain.
+struct ChainEnd {
+  std::size_t chain;
+  bool back;
+  Eigen::Vector3d pos, out;
+};
+
+std::vector<ChainEnd> openEnds(const std::vector<FeatureChain>& chains) {
+  std::vector<ChainEnd> ends;
+  for (std::size_t c = 0; c < chains.size(); ++c) {
+    const auto& ch = chains[c];
+    if (ch.closed || ch.points.size() < 2) continue;
+    ends.push_back({c, false, ch.points.front(), -ch.directions.front()});
+    ends.push_back({c, true, ch.points.back(), ch.directions.back()});
+  }
+  return ends;
+}
+
+/// Post-processing of the raw chains (paths of crease points):
+///  1. local line fits (denoising);
+///  2. the ends (where a third surface or a fading crease biases the fit) are trimmed by one
+///     neighbourhood radius and re-grown along the end line;
+///  3. chains whose ends meet head-on are joined (and a chain meeting itself is closed);
+///  4. an end whose line meets another end's line (a corner) or another chain (a T-junction) within reach is
+///     extended to the meeting point, so the feature lines reach their corners;
+///  5. deterministic orientation and order (longest first).
+void finishChains(std::vector<FeatureChain>& chains, double h, const FeatureParams& prm) {
+  const double link = prm.chainRadius * h, cosTurn = std::cos(prm.maxChainTurn * kDeg);
+  const double trim = prm.radius * h, tol = 2.0 * prm.maxLineDistance * h;
+  for (auto& c : chains) {
+    fitLocalLines(c, 6);
+    // 2. trim the biased ends, remember by how much, and grow back along the end lines.
+    if (arcLength(c) > 4 * trim) {
+      for (int side = 0; side < 2; ++side) {
+        std::reverse(c.points.begin(), c.points.end());
+        std::reverse(c.directions.begin(), c.directions.end());
+        for (auto& dd : c.directions) dd = -dd;
+        const Eigen::Vector3d end = c.points.back();
+        while (c.points.size() > 2 && (c.points.back() - end).norm() < trim) {
+          c.points.pop_back();
+          c.directions.pop_back();
+        }
+        // End line: PCA of the last vertices (beyond the trimmed part).
+        const std::size_t n = c.points.size(), lo = n > 12 ? n - 12 : 0;
+        Eigen::Vector3d m = Eigen::Vector3d::Zero();
+        for (std::size_t u = lo; u < n; ++u) m += c.points[u];
+        m /= static_cast<double>(n - lo);
+        Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+        for (std::size_t u = lo; u < n; ++u) cov += (c.points[u] - m) * (c.points[u] - m).transpose();
+        Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(cov);
+        Eigen::Vector3d dir = es.eigenvectors().col(2);
+        if (dir.dot(c.points.back() - c.points[lo]) < 0) dir = -dir;
+        const Eigen::Vector3d tip = m + dir * (end - m).dot(dir);
+        c.points.push_back(tip);
+        c.directions.push_back(dir);
+        c.directions[n - 1] = dir;
+      }
+    }
+  }
+  // 3. join head-on ends: candidate pairs of ends (anti-parallel end directions, each end on the other's end
+  // line, gap up to 4 links: random samplings leave stretches of a crease with no point close enough to be
+  // detected), accepted greedily nearest first, each end once; a group meeting itself is closed.
+  {
+    const std::size_t nc = chains.size();
+    std::vector<Eigen::Vector3d> pos(2 * nc), out(2 * nc);
+    for (std::size_t c = 0; c < nc; ++c) {
+      pos[2 * c] = chains[c].points.front();
+      out[2 * c] = -chains[c].directions.front();
+      pos[2 * c + 1] = chains[c].points.back();
+      out[2 * c + 1] = chains[c].directions.back();
+    }
+    std::vector<std::tuple<double, std::uint32_t, std::uint32_t>> pairs;
+    if (nc > 0) {
+      KnnIndex endIndex(pos);
+      std::vector<std::uint32_t> idx;
+      std::vector<double> d2;
+      for (std::uint32_t a = 0; a < 2 * nc; ++a) {
+        endIndex.radius(pos[a], 4 * link, idx, d2);
+        for (std::uint32_t b : idx) {
+          if (b <= a) continue;
+          const Eigen::Vector3d gap = pos[b] - pos[a];
+          const double len = gap.norm();
+          if (-out[a].dot(out[b]) < cosTurn) continue;
+          if (len > tol && (out[a].dot(gap) < cosTurn * len || -out[b].dot(gap) < cosTurn * len)) continue;
+          const double offA = (gap - out[a] * gap.dot(out[a])).norm();
+          const double offB = (gap - out[b] * gap.dot(out[b])).norm();
+          if (len > link && std::max(offA, offB) > tol) continue;
+          pairs.emplace_back(len, a, b);
+        }
+      }
+    }
+    std::sort(pairs.begin(), pairs.end());
+    std::vector<std::int64_t> partner(2 * nc, -1);
+    Dsu groups(nc);
+    std::vector<double> groupLength(nc);
+    for (std::size_t c = 0; c < nc; ++c) groupLength[c] = arcLength(chains[c]);
+    for (const auto& [len, a, b] : pairs) {
+      if (partner[a] >= 0 || partner[b] >= 0) continue;
+      const std::uint32_t ga = groups.find(a / 2), gb = groups.find(b / 2);
+      if (ga == gb && groupLength[ga] < 3 * link) continue;  // closing a loop: only a long one
+      partner[a] = b;
+      partner[b] = a;
+      if (ga != gb) {
+        groups.parent[ga] = gb;
+        groupLength[gb] += groupLength[ga] + len;
+      }
+    }
+    // Assemble: walk each group from a free end (or anywhere, for a loop), appending chains in order.
+    std::vector<FeatureChain> joined;
+    std::vector<char> used(nc, 0);
+    auto append = [](FeatureChain& dst, const FeatureChain& src, bool reversed) {
+      if (!reversed) {
+        dst.points.insert(dst.points.end(), src.points.begin(), src.points.end());
+        dst.directions.insert(dst.directions.end(), src.directions.begin(), src.directions.end());
+      } else {
+        for (std::size_t t = src.points.size(); t-- > 0;) {
+          dst.points.push_back(src.points[t]);
+          dst.directions.push_back(-src.directions[t]);
+        }
+      }
+    };
+    for (std::size_t c0 = 0; c0 < nc; ++c0) {
+      if (used[c0]) continue;
+      // Find the start: go out through front ends until a free end or back to c0.
+      std::uint32_t entry = static_cast<std::uint32_t>(2 * c0);  // the end through which we enter the chain
+      bool loop = false;
+      for (std::size_t guard = 0; guard <= nc; ++guard) {
+        if (partner[entry] < 0) break;
+        const std::uint32_t nextExit = static_cast<std::uint32_t>(partner[entry]);
+        entry = nextExit ^ 1u;  // enter the neighbour through its other end when walking backwards
+        if (entry / 2 == c0) {
+          loop = true;
+          entry = static_cast<std::uint32_t>(2 * c0);
+          break;
+        }
+      }
+      FeatureChain g;
+      std::uint32_t e = entry;
+      for (;;) {
+        const std::uint32_t c = e / 2;
+        if (used[c]) break;
+        used[c] = 1;
+        append(g, chains[c], (e & 1u) != 0);  // entering through the back end: traverse reversed
+        const std::int64_t nxt = partner[e ^ 1u];
+        if (nxt < 0) break;
+        e = static_cast<std::uint32_t>(nxt);
+      }
+      g.closed = loop;
+      joined.push_back(std::move(g));
+    }
+    // Drop what is still short after joining.
+    chains.clear();
+    for (auto& g : joined)
+      if (g.points.size() >= 2 && arcLength(g) >= prm.minChainLength * h) chains.push_back(std::move(g));
+  }
+  // 4. corners and T-junctions: extend each open end to where its line meets another end's line or chain.
+  const double reach = 2 * link + trim;
+  const auto ends = openEnds(chains);
+  std::vector<std::pair<std::size_t, Eigen::Vector3d>> extensions;  // (end index, new tip)
+  for (std::size_t a = 0; a < ends.size(); ++a) {
+    const ChainEnd& e = ends[a];
+    double bestS = reach;
+    Eigen::Vector3d tip;
+    bool found = false;
+    for (std::size_t b = 0; b < ends.size(); ++b) {  // line–line closest approach, both ahead of their ends
+      const ChainEnd& f = ends[b];
+      if (b == a || f.chain == e.chain || (f.pos - e.pos).norm() > 2 * reach) continue;
+      const double bb = e.out.dot(f.out), denom = 1 - bb * bb;
+      if (denom < 0.1) continue;  // near-parallel lines: a join, not a corner
+      const Eigen::Vector3d w = e.pos - f.pos;
+      const double dd = e.out.dot(w), ee = f.out.dot(w);
+      const double s = (bb * ee - dd) / denom, t = (ee - bb * dd) / denom;
+      if (s < -tol || t < -tol || s > reach || t > reach) continue;
+      const Eigen::Vector3d pe = e.pos + s * e.out, pf = f.pos + t * f.out;
+      if ((pe - pf).norm() > tol || s >= bestS) continue;
+      bestS = s;
+      tip = 0.5 * (pe + pf);
+      found = true;
+    }
+    for (std::size_t c = 0; c < chains.size(); ++c) {  // T-junction: the ray hits another chain's vertex
+      if (c == e.chain) continue;
+      for (const auto& v : chains[c].points) {
+        const double s = (v - e.pos).dot(e.out);
+        if (s < 0 || s >= bestS || (v - e.pos - s * e.out).norm() > tol) continue;
+        bestS = s;
+        tip = v;
+        found = true;
+      }
+    }
+    if (found && bestS > 1e-9 * h) extensions.emplace_back(a, tip);
+  }
+  for (const auto& [a, tip] : extensions) {
+    FeatureChain& c = chains[ends[a].chain];
+    if (ends[a].back) {
+      c.points.push_back(tip);
+      c.directions.push_back(c.directions.back());
+    } else {
+      c.points.insert(c.points.begin(), tip);
+      c.directions.insert(c.directions.begin(), c.directions.front());
+    }
+  }
+  // 5. lengths, orientation, order.
+  for (auto& c : chains) {
+    c.length = arcLength(c);
+    if (c.closed) c.length += (c.points.back() - c.points.front()).norm();
+    auto lex = [](const Eigen::Vector3d& p, const Eigen::Vector3d& q) {
+      return std::tie(p.x(), p.y(), p.z()) < std::tie(q.x(), q.y(), q.z());
+    };
+    if (lex(c.points.back(), c.points.front())) {
+      std::reverse(c.points.begin(), c.points.end());
+      std::reverse(c.directions.begin(), c.directions.end());
+      for (auto& dd : c.directions) dd = -dd;
+    }
+  }
+  std::stable_sort(chains.begin(), chains.end(),
+                   [](const FeatureChain& a, const FeatureChain& b) { return a.length > b.length; });
+}
+
+std::vector<FeatureChain> buildChains(const std::vector<Eigen::Vector3d>& x0,
+                                      const std::vector<Eigen::Vector3d>& d0, double h, const FeatureParams& prm) {
+  std::vector<FeatureChain> chains;
+  std::vector<Eigen::Vector3d> x, d;
+  const double link = prm.chainRadius * h, cosTurn = std::cos(prm.maxChainTurn * kDeg);
+  // Thin the crease points to a minimum separation of h/2 (in index order, deterministic): on a line of
+  // well-separated points the minimum spanning tree is a path, not a zigzag with parallel branches.
+  {
+    KnnIndex all(x0);
+    std::vector<char> removed(x0.size(), 0);
+    std::vector<std::uint32_t> idx;
+    std::vector<double> d2;
+    for (std::size_t i = 0; i < x0.size(); ++i) {
+      if (removed[i]) continue;
+      all.radius(x0[i], 0.5 * h, idx, d2);
+      for (std::uint32_t j : idx)
+        if (j > i) removed[j] = 1;
+    }
+    for (std::size_t i = 0; i < x0.size(); ++i)
+      if (!removed[i]) {
+        x.push_back(x0[i]);
+        d.push_back(d0[i]);
+      }
+  }
+  const std::size_t n = x.size();
+  if (n < 2) return chains;
+  // Candidate links: within `link`, directions and the link itself along the crease.
+  KnnIndex index(x);
+  std::vector<std::vector<std::pair<std::uint32_t, double>>> cand(n);
+  parallelFor(n, prm.threads, [&](std::size_t i) {
+    std::vector<std::uint32_t> idx;
+    std::vector<double> d2;
+    index.radius(x[i], link, idx, d2);
+    for (std::size_t t = 0; t < idx.size(); ++t) {
+      const std::uint32_t j = idx[t];
+      if (j <= i) continue;
+      if (std::abs(d[i].dot(d[j])) < cosTurn) continue;
+      const double len = std::sqrt(d2[t]);
+      if (len > 1e-12 * h && std::abs((x[j] - x[i]).dot(d[i])) < cosTurn * len) continue;
+      cand[i].emplace_back(j, len);
+    }
+  });
+  std::vector<std::tuple<double, std::uint32_t, std::uint32_t>> edges;
+  for (std::size_t i = 0; i < n; ++i)
+    for (const auto& [j, w] : cand[i]) edges.emplace_back(w, static_cast<std::uint32_t>(i), j);
+  std::sort(edges.begin(), edges.end());
+  // Minimum spanning forest (Kruskal; ties broken by indices → deterministic).
+  Dsu dsu(n);
+  std::vector<std::vector<TreeEdge>> g(n);
+  for (const auto& [w, a, b] : edges) {
+    const std::uint32_t ra = dsu.find(a), rb = dsu.find(b);
+    if (ra == rb) continue;
+    dsu.parent[ra] = rb;
+    g[a].push_back({b, w});
+    g[b].push_back({a, w});
+  }
+  // Peel each tree into longest paths (its diameter, then the diameters of what remains).
+  std::vector<char> alive(n, 1);
+  std::vector<double> dist(n, 0);
+  std::vector<std::int64_t> parent(n, -1);
+  std::vector<std::uint32_t> visited;
+  std::vector<char> peeled(n, 0);
+  const double minLen = prm.minChainLength * h;
+  for (std::uint32_t s = 0; s < n; ++s) {
+    while (alive[s]) {
+      const std::uint32_t a = farthest(g, alive, s, dist, parent, visited);
+      const std::uint32_t b = farthest(g, alive, a, dist, parent, visited);
+      const double len = dist[b];
+      std::vector<std::uint32_t> path;
+      for (std::int64_t v = b; v >= 0; v = parent[v]) path.push_back(static_cast<std::uint32_t>(v));
+      // A tree's first path (its diameter) is kept however short: chainsJoin may bridge it to others across a
+      // sampling gap. Later paths are branches of an already peeled tree: spurs unless long.
+      const std::uint32_t tree = dsu.find(s);
+      const bool first = !peeled[tree];
+      peeled[tree] = 1;
+      if (!first && len < minLen) {  // a spur: drop what remains of this piece
+        for (std::uint32_t v : visited) alive[v] = 0;
+        break;
+      }
+      for (std::uint32_t v : path) alive[v] = 0;
+      FeatureChain c;
+      for (std::uint32_t v : path) {
+        c.points.push_back(x[v]);
+        c.directions.push_back(d[v]);
+      }
+      chains.push_back(std::move(c));
+    }
+  }
+  finishChains(chains, h, prm);
+  return chains;
+}
+
+struct CellKey {
+  std::int64_t x, y, z;
+  bool operator==(const CellKey& o) const { return x == o.x && y == o.y && z == o.z; }
+};
+struct CellHash {
+  std::size_t operator()(const CellKey& k) const {
+    return static_cast<std::size_t>(k.x * 73856093LL ^ k.y * 19349663LL ^ k.z * 83492791LL);
+  }
+};
+
+double segmentDistance(const Eigen::Vector3d& p, const Segment& s) {
+  const Eigen::Vector3d e = s[1] - s[0];
+  const double l2 = e.squaredNorm();
+  const double t = l2 > 0 ? std::clamp((p - s[0]).dot(e) / l2, 0.0, 1.0) : 0.0;
+  return (s[0] + t * e - p).norm();
+}
+
+}  // namespace
+
+void FeatureParams::validate() const {
+  auto fail = [](const std::string& m) { throw std::invalid_argument("FeatureParams: " + m); };
+  if (!(spacing >= 0.0)) fail("spacing must be >= 0 (0 = estimate)");
+  if (!(radius >= 1.0)) fail("radius must be >= 1 spacing");
+  if (!(angle > 0.0 && angle < 180.0)) fail("angle must be in (0, 180) degrees");
+  if (!(maxResidual > 0.0)) fail("maxResidual must be > 0");
+  if (!(maxLineDistance > 0.0)) fail("maxLineDistance must be > 0");
+  if (!(minClusterShare > 0.0 && minClusterShare < 0.5)) fail("minClusterShare must be in (0, 0.5)");
+  if (!(vcmOffset > 0.0)) fail("vcmOffset must be > 0");
+  if (!(vcmConvolution >= 0.0)) fail("vcmConvolution must be >= 0");
+  if (!(vcmThreshold > 0.0 && vcmThreshold < 1.0)) fail("vcmThreshold must be in (0, 1)");
+  if (!(chainRadius > 0.0)) fail("chainRadius must be > 0");
+  if (!(maxChainTurn > 0.0 && maxChainTurn < 90.0)) fail("maxChainTurn must be in (0, 90) degrees");
+  if (!(minChainLength >= 0.0)) fail("minChainLength must be >= 0");
+  if (!(sampleSpacing >= 0.0)) fail("sampleSpacing must be >= 0");
+}
+
+double estimateSpacing(const std::vector<Eigen::Vector3d>& points, int threads) {
+  if (points.size() < 2) return 0.0;
+  KnnIndex index(points);
+  std::vector<double> local(points.size());
+  parallelFor(points.size(), threads, [&](std::size_t i) {
+    std::vector<std::uint32_t> idx;
+    std::vector<double> d2;
+    index.knn(points[i], 7, idx, d2);
+    double sum = 0;
+    int m = 0;
+    for (std::size_t t = 0; t < idx.size(); ++t)
+      if (idx[t] != i) {
+        sum += std::sqrt(d2[t]);
+        ++m;
+      }
+    local[i] = m > 0 ? sum / m : 0.0;
+  });
+  auto mid = local.begin() + static_cast<std::ptrdiff_t>(local.size() / 2);
+  std::nth_element(local.begin(), mid, local.end());
+  return *mid;
+}
+
+FeatureResult detectFeatures(const PointCloud& cloud, const FeatureParams& params) {
+  params.validate();
+  if (cloud.size() < 8) throw InputError("feature detection needs at least 8 points, got " +
+                                         std::to_string(cloud.size()));
+  if (!cloud.hasNormals()) throw std::invalid_argument("detectFeatures: the cloud needs one normal per point");
+  const auto& pts = cloud.points;
+  const auto& nrm = cloud.normals;
+  const std::size_t n = pts.size();
+  FeatureResult r;
+  auto t0 = Clock::now();
+  r.spacing = params.spacing > 0 ? params.spacing : estimateSpacing(pts, params.threads);
+  const double h = r.spacing;
+  if (!(h > 0)) throw InputError("feature detection: the points have zero spacing (all duplicates?)");
+
+  KnnIndex index(pts);
+  std::vector<char> flag(n, 0);
+  std::vector<Crease> creases(n);
+  auto neighbourhood = [&](std::size_t i, std::vector<std::uint32_t>& idx) {
+    std::vector<double> d2;
+    index.radius(pts[i], params.radius * h, idx, d2);
+    if (idx.size() > 200) idx.resize(200);  // nearest first; bounds the cost in dense clusters
+  };
+  if (params.detector == FeatureDetector::NormalVariation) {
+    parallelFor(n, params.threads, [&](std::size_t i) {
+      std::vector<std::uint32_t> idx;
+      neighbourhood(i, idx);
+      flag[i] = twoPlaneTest(pts, nrm, i, idx, h, params, creases[i]) ? 1 : 0;
+    });
+  } else {
+    const auto cov = computeVcm(pts, params.vcmOffset * h, params.vcmConvolution * h, params.threads);
+    parallelFor(n, params.threads, [&](std::size_t i) {
+      Covariance c = cov[i];
+      flag[i] = CGAL::vcm_is_on_feature_edge(c, params.vcmThreshold) ? 1 : 0;
+      if (!flag[i]) return;
+      // The crease for the chains: the two-plane fit with the sharpness test relaxed to a 1° minimum and
+      // no line-distance limit (the VCM decided; the fit only supplies the line).
+      FeatureParams loose = params;
+      loose.angle = 1.0;
+      loose.maxLineDistance = params.radius;
+      loose.maxResidual = 1e9;
+      std::vector<std::uint32_t> idx;
+      neighbourhood(i, idx);
+      twoPlaneTest(pts, nrm, i, idx, h, loose, creases[i]);
+    });
+  }
+  std::vector<Eigen::Vector3d> x, d;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!flag[i]) continue;
+    r.detectedIndices.push_back(static_cast<std::uint32_t>(i));
+    if (!creases[i].valid) continue;
+    x.push_back(creases[i].point);
+    d.push_back(creases[i].direction);
+  }
+  r.creasePoints = x.size();
+  r.detectSeconds = since(t0);
+
+  t0 = Clock::now();
+  r.chains = buildChains(x, d, h, params);
+  // The final feature points: input points within maxLineDistance of a chain (densified at h/4).
+  {
+    std::vector<Eigen::Vector3d> dense;
+    for (const auto& c : r.chains) {
+      const std::size_t nv = c.points.size(), segs = c.closed ? nv : nv - 1;
+      for (std::size_t t = 0; t < segs; ++t) {
+        const Eigen::Vector3d &a = c.points[t], &b = c.points[(t + 1) % nv];
+        const int m = std::max(1, static_cast<int>(std::ceil((b - a).norm() / (0.25 * h))));
+        for (int u = 0; u < m; ++u) dense.push_back(a + (b - a) * (static_cast<double>(u) / m));
+      }
+      if (!c.closed && nv > 0) dense.push_back(c.points.back());
+    }
+    if (!dense.empty()) {
+      KnnIndex chainIndex(dense);
+      const double reach = params.maxLineDistance * h;
+      std::vector<char> near(n, 0);
+      parallelFor(n, params.threads, [&](std::size_t i) {
+        double d2 = 0;
+        chainIndex.nearest(pts[i], &d2);
+        near[i] = d2 <= (reach + 0.125 * h) * (reach + 0.125 * h) ? 1 : 0;
+      });
+      for (std::size_t i = 0; i < n; ++i)
+        if (near[i]) r.featureIndices.push_back(static_cast<std::uint32_t>(i));
+    }
+  }
+  r.chainSeconds = since(t0);
+  if (params.sampleSpacing > 0) {
+    t0 = Clock::now();
+    r.samples = sampleFeatureChains(r.chains, params.sampleSpacing, &r.sampleChain);
+    r.sampleSeconds = since(t0);
+  }
+  return r;
+}
+
+std::vector<Eigen::Vector3d> sampleFeatureChains(const std::vector<FeatureChain>& chains, double spacing,
+                                                 std::vector<std::uint32_t>* chainOfSample) {
+  if (!(spacing > 0)) throw std::invalid_argument("sampleFeatureChains: spacing must be > 0");
+  std::vector<Eigen::Vector3d> out;
+  std::vector<std::uint32_t> owner;
+  std::unordered_map<CellKey, std::vector<std::uint32_t>, CellHash> grid;
+  auto key = [&](const Eigen::Vector3d& p) {
+    return CellKey{static_cast<std::int64_t>(std::floor(p.x() / spacing)),
+                   static_cast<std::int64_t>(std::floor(p.y() / spacing)),
+                   static_cast<std::int64_t>(std::floor(p.z() / spacing))};
+  };
+  auto crowded = [&](const Eigen::Vector3d& p, std::uint32_t chain) {
+    const CellKey k = key(p);
+    for (std::int64_t dx = -1; dx <= 1; ++dx)
+      for (std::int64_t dy = -1; dy <= 1; ++dy)
+        for (std::int64_t dz = -1; dz <= 1; ++dz) {
+          auto it = grid.find({k.x + dx, k.y + dy, k.z + dz});
+          if (it == grid.end()) continue;
+          for (std::uint32_t s : it->second)
+            if (owner[s] != chain && (out[s] - p).norm() < 0.5 * spacing) return true;
+        }
+    return false;
+  };
+  for (std::uint32_t ci = 0; ci < chains.size(); ++ci) {
+    const FeatureChain& c = chains[ci];
+    const std::size_t nv = c.points.size();
+    if (nv == 0) continue;
+    std::vector<Eigen::Vector3d> poly = c.points, dirs = c.directions;
+    if (c.closed) {
+      poly.push_back(c.points.front());
+      dirs.push_back(c.directions.front());
+    }
+    std::vector<double> arc(poly.size(), 0.0);
+    for (std::size_t t = 1; t < poly.size(); ++t) arc[t] = arc[t - 1] + (poly[t] - poly[t - 1]).norm();
+    const double len = arc.back();
+    std::vector<double> at;  // arc-length positions of this chain's samples
+    if (c.closed) {
+      const std::size_t m = std::max<std::size_t>(3, static_cast<std::size_t>(std::lround(len / spacing)));
+      for (std::size_t s = 0; s < m; ++s) at.push_back(len * static_cast<double>(s) / static_cast<double>(m));
+    } else {
+      const std::size_t m = static_cast<std::size_t>(std::lround(len / spacing));
+      if (m == 0) {
+        at.push_back(0.5 * len);
+      } else {
+        for (std::size_t s = 0; s <= m; ++s) at.push_back(len * static_cast<double>(s) / static_cast<double>(m));
+      }
+    }
+    std::size_t seg = 0;
+    for (double a : at) {
+      while (seg + 2 < poly.size() && arc[seg + 1] < a) ++seg;
+      const std::size_t nxt = std::min(seg + 1, poly.size() - 1);
+      const double span = arc[nxt] - arc[seg];
+      const double w = span > 0 ? std::clamp((a - arc[seg]) / span, 0.0, 1.0) : 0.0;
+      Eigen::Vector3d p = (1 - w) * poly[seg] + w * poly[nxt];
+      // Onto the crease line of the nearer vertex (the polyline chord cuts a curved crease slightly).
+      const std::size_t v = w < 0.5 ? seg : nxt;
+      p = poly[v] + dirs[v] * (p - poly[v]).dot(dirs[v]);
+      if (crowded(p, ci)) continue;
+      grid[key(p)].push_back(static_cast<std::uint32_t>(out.size()));
+      out.push_back(p);
+      owner.push_back(ci);
+    }
+  }
+  if (chainOfSample) *chainOfSample = owner;
+  return out;
+}
+
+std::vector<Segment> sharpMeshEdges(const TriangleMesh& mesh, double minAngleDegrees, bool includeBoundary) {
+  std::map<std::pair<int, int>, std::vector<std::size_t>> faces;
+  std::vector<Eigen::Vector3d> fn(mesh.triangles.size());
+  for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
+    const auto& t = mesh.triangles[f];
+    fn[f] = (mesh.vertices[t[1]] - mesh.vertices[t[0]]).cross(mesh.vertices[t[2]] - mesh.vertices[t[0]]);
+    if (fn[f].norm() > 0) fn[f].normalize();
+    for (int e = 0; e < 3; ++e) {
+      const int a = t[e], b = t[(e + 1) % 3];
+      faces[{std::min(a, b), std::max(a, b)}].push_back(f);
+    }
+  }
+  std::vector<Segment> out;
+  const double cosMin = std::cos(minAngleDegrees * kDeg);
+  for (const auto& [e, fs] : faces) {
+    bool sharp = fs.size() == 1 ? includeBoundary : false;
+    for (std::size_t a = 0; a < fs.size() && !sharp; ++a)
+      for (std::size_t b = a + 1; b < fs.size() && !sharp; ++b) sharp = fn[fs[a]].dot(fn[fs[b]]) < cosMin;
+    if (sharp) out.push_back({mesh.vertices[e.first], mesh.vertices[e.second]});
+  }
+  return out;
+}
+
+double distanceToSegments(const Eigen::Vector3d& p, const std::vector<Segment>& edges) {
+  double best = std::numeric_limits<double>::infinity();
+  for (const Segment& s : edges) best = std::min(best, segmentDistance(p, s));
+  return best;
+}
+
+FeatureScore scoreFeatures(const std::vector<Eigen::Vector3d>& points,
+                           const std::vector<std::uint32_t>& featureIndices, const std::vector<Segment>& edges,
+                           double tolerance, double band, int threads) {
+  FeatureScore s;
+  s.detected = featureIndices.size();
+  if (edges.empty() || points.empty()) return s;
+  // Densify the edges at step δ; a point within r of an edge has a densified sample within r + δ/2.
+  const double reach = std::max(tolerance, band);
+  const double step = std::max(reach, 1e-12);
+  std::vector<Eigen::Vector3d> dense;
+  std::vector<std::uint32_t> owner;
+  for (std::uint32_t e = 0; e < edges.size(); ++e) {
+    const double len = (edges[e][1] - edges[e][0]).norm();
+    const int m = std::max(1, static_cast<int>(std::ceil(len / step)));
+    for (int t = 0; t <= m; ++t) {
+      dense.push_back(edges[e][0] + (edges[e][1] - edges[e][0]) * (static_cast<double>(t) / m));
+      owner.push_back(e);
+    }
+  }
+  KnnIndex index(dense);
+  std::vector<double> dist(points.size());
+  parallelFor(points.size(), threads, [&](std::size_t i) {
+    std::vector<std::uint32_t> idx;
+    std::vector<double> d2;
+    index.radius(points[i], reach + step, idx, d2);
+    double best = std::numeric_limits<double>::infinity();
+    for (std::uint32_t j : idx) best = std::min(best, segmentDistance(points[i], edges[owner[j]]));
+    dist[i] = best;
+  });
+  std::vector<char> flagged(points.size(), 0);
+  std::size_t tp = 0;
+  for (std::uint32_t i : featureIndices) {
+    flagged[i] = 1;
+    if (dist[i] <= tolerance) ++tp;
+  }
+  std::size_t found = 0;
+  for (std::size_t i = 0; i < points.size(); ++i)
+    if (dist[i] <= band) {
+      ++s.nearEdge;
+      found += flagged[i];
+    }
+  s.precision = s.detected > 0 ? static_cast<double>(tp) / static_cast<double>(s.detected) : 1.0;
+  s.recall = s.nearEdge > 0 ? static_cast<double>(found) / static_cast<double>(s.nearEdge) : 1.0;
+  return s;
+}
+
+}  // namespace iires

@@ -1,0 +1,52 @@
+#pragma once
+/// @file hausdorff.hpp
+/// @brief Directed, symmetric and trimmed (partial) Hausdorff distances between point sets — the energy of
+/// the rotation search (paper eq. 11–12, DESIGN §4 steps 3–4).
+
+#include <Eigen/Core>
+#include <cstddef>
+#include <limits>
+#include <vector>
+
+#include "iires/knn.hpp"
+
+namespace iires::reg {
+
+/// @brief Number of points a trimmed Hausdorff distance may ignore: n − ⌈overlap·n⌉ (at least one point kept).
+/// @param n number of points in the "from" set
+/// @param overlap share of points expected to have a partner, in (0, 1]; 1 = plain Hausdorff
+/// @throws std::invalid_argument when overlap is not in (0, 1].
+std::size_t allowedOutliers(std::size_t n, double overlap);
+
+/// @brief Directed (trimmed) Hausdorff distance h_f(A → B): the ⌈f·n⌉-th smallest of the distances from each
+/// point of @p from to its nearest point of @p to (f = @p overlap). f = 1 gives max_a min_b ‖a − b‖.
+/// @param from the points a (n ≥ 1)
+/// @param to a k-d tree over the points b (non-empty)
+/// @param overlap f in (0, 1]
+/// @param threads 0 = all cores; the result does not depend on it
+/// @throws std::invalid_argument for an empty set or an overlap outside (0, 1].
+/// @note O(n log m).
+double directedHausdorff(const std::vector<Eigen::Vector3d>& from, const KnnIndex& to, double overlap = 1.0,
+                         int threads = 0);
+
+/// @brief Symmetric (trimmed) Hausdorff distance max(h_f(A → B), h_f(B → A)).
+/// @throws std::invalid_argument for an empty set or an overlap outside (0, 1].
+double hausdorffDistance(const std::vector<Eigen::Vector3d>& a, const std::vector<Eigen::Vector3d>& b,
+                         double overlap = 1.0, int threads = 0);
+
+/// @brief Directed trimmed Hausdorff distance of the rotated set R·A to B with early exit: returns +∞ as soon
+/// as more than @p outliers points of R·A lie farther than @p bound from B, i.e. as soon as the result is
+/// certainly greater than @p bound. Otherwise returns the exact (outliers+1)-th largest distance.
+/// @param from the points a, in the order they are visited (shuffle them so an early exit comes early)
+/// @param rotation R applied to every point of @p from before the query
+/// @param to a k-d tree over B
+/// @param outliers how many of the largest distances to ignore (see allowedOutliers()); < from.size()
+/// @param bound the exit threshold (+∞ = none)
+/// @param scratch reusable buffer (its content is overwritten)
+/// @param[out] visited if not null, receives the number of points queried
+/// @note Single-threaded; call it from parallel loops over candidates. Thread-safe (const queries).
+double boundedDirectedHausdorff(const std::vector<Eigen::Vector3d>& from, const Eigen::Matrix3d& rotation,
+                                const KnnIndex& to, std::size_t outliers, double bound,
+                                std::vector<double>& scratch, std::size_t* visited = nullptr);
+
+}  // namespace iires::reg

@@ -1,0 +1,93 @@
+#pragma once
+/// @file registration.hpp
+/// @brief Scale-free registration without features (paper §5, eq. 11–12; DESIGN §4): resample both clouds to
+/// M isotropic points → normalise (centroid, unit RMS radius) → rotation-grid search for the minimum
+/// (trimmed) Hausdorff energy → ICP with scale on the best few → a similarity T_target_source in original units.
+
+#include <Eigen/Core>
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "iires/register/icp.hpp"
+#include "iires/register/rotation_grid.hpp"
+#include "iires/register/rotation_search.hpp"
+#include "iires/resample.hpp"
+#include "iires/types.hpp"
+
+namespace iires::reg {
+
+/// @brief Parameters of registerClouds().
+struct RegistrationParams {
+  std::size_t samples = 2000;  ///< M, points each cloud is resampled to (≥ 50) [paper: around 2000]
+  RotationGridType grid = RotationGridType::kSo3;  ///< candidate rotations; kEuler is the paper's grid
+  int eulerSteps = 24;         ///< Euler grid: steps per angle [24, θ = π/12]
+  std::size_t so3Count = 6144; ///< SO(3) grid: rotations (6,144 cover SO(3) within ≈ 11.4°, as 24³ Euler)
+  double overlap = 1.0;        ///< share of each cloud expected to overlap the other, (0, 1]; < 1 trims the
+                               ///< Hausdorff energy and the ICP correspondences (partial scans)
+  bool estimateScale = true;   ///< false: the scale is fixed to 1 (rigid registration)
+  std::size_t icpCandidates = 5;  ///< distinct search candidates refined by ICP (≥ 1)
+  int screenIterations = 12;   ///< ICP iterations per candidate before scoring; the best continues (≥ 1)
+  double ambiguityTolerance = 0.05;  ///< another ICP result within this relative score of the best but
+                                     ///< ≥ 10° away marks the result ambiguous (symmetric shape)
+  double planarityThreshold = 1e-3;  ///< smallest/largest covariance eigenvalue below this → planar flag
+  RotationSearchParams search;  ///< coarse/fine search settings (overlap, seed, threads are set from here)
+  IcpParams icp;               ///< ICP settings (overlap, estimateScale, threads are set from here)
+  ResampleParams resample = defaultResample();  ///< resampler settings (targetCount, seed, threads set here)
+  std::uint64_t seed = 0;      ///< resampling tie-breaks and the search's visiting order
+  int threads = 0;             ///< 0 = all cores; the result does not depend on it
+
+  /// @brief Resampler settings tuned for registration: uniform enough, fewer relaxation iterations.
+  static ResampleParams defaultResample();
+  /// @throws std::invalid_argument when a field is out of range.
+  void validate() const;
+};
+
+/// @brief A similarity transform with diagnostics (DESIGN §4 step 6).
+struct RegistrationResult {
+  Eigen::Matrix4d T_target_source = Eigen::Matrix4d::Identity();  ///< (sR | t): source → target, original units
+  double scale = 1.0;                                    ///< s
+  Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();  ///< R
+  double rotationAngleDeg = 0;                           ///< angle of R, degrees
+  Eigen::Vector3d rotationAxis = Eigen::Vector3d::UnitZ();  ///< axis of R (unit)
+  Eigen::Vector3d translation = Eigen::Vector3d::Zero();  ///< t
+  double rmse = 0;              ///< RMS distance of the ICP's (trimmed) matched pairs, target units
+  double hausdorff = 0;         ///< symmetric Hausdorff distance of the aligned resampled clouds, target units
+  double hausdorffTrimmed = 0;  ///< the same, trimmed to the overlap (= hausdorff when overlap = 1)
+  double normalisedEnergy = 0;  ///< search energy E of the chosen candidate (normalised units)
+  std::string grid;             ///< "so3" or "euler"
+  std::size_t gridSize = 0;     ///< candidates in the grid
+  std::size_t bestCandidate = 0;  ///< grid index of the candidate the result came from
+  std::size_t candidateRank = 0;  ///< its rank among the refined candidates (0 = lowest energy)
+  int icpIterations = 0;        ///< ICP iterations of the chosen candidate
+  bool icpConverged = false;    ///< whether that ICP met its tolerance
+  std::size_t exactEvaluations = 0, pointQueries = 0;  ///< search cost
+  bool ambiguous = false;       ///< another clearly different pose fits about as well (symmetry or a plane)
+  bool planar = false;          ///< a cloud is (nearly) planar: mirror poses fit equally well
+  std::string ambiguityReason;  ///< why ambiguous is set ("" otherwise)
+  double secondBestScoreRatio = 0;  ///< score of the best clearly different pose / best score (≥ 1; 0 = none)
+  std::size_t sourcePoints = 0, targetPoints = 0, samples = 0;  ///< input sizes, M
+  double sourceRadius = 0, targetRadius = 0;  ///< RMS radii used for the normalisation, original units
+  std::vector<StageTime> timings;  ///< per stage (validate, resample, normalise, search, icp, evaluate, total)
+
+  /// @brief The report as a JSON object: transform (4 rows), scale, rotation, rotation_angle_deg, translation,
+  /// rmse, hausdorff, best_candidate, icp_iterations, ambiguous, timings, ...
+  std::string toJson() const;
+};
+
+/// @brief Estimate T_target_source mapping @p source onto @p target (same object; any rotation, scale,
+/// translation and sampling density).
+/// @throws InputError when a cloud is unusable: empty, NaN/Inf, fewer than 10 distinct points, collinear
+/// (messages start with "source: " or "target: "); std::invalid_argument for bad parameters.
+/// @note Deterministic: same inputs and parameters give the same result for any thread count.
+RegistrationResult registerClouds(const PointCloud& source, const PointCloud& target,
+                                  const RegistrationParams& params = {});
+
+/// @brief Apply a 4×4 similarity to a cloud (normals are rotated and stay unit).
+PointCloud transformCloud(const PointCloud& cloud, const Eigen::Matrix4d& T);
+
+/// @brief The matrix as text: 4 lines of 4 numbers (17 significant digits), as --transform writes it.
+std::string formatTransform(const Eigen::Matrix4d& T);
+
+}  // namespace iires::reg

@@ -1,0 +1,127 @@
+#include "iires/register/icp.hpp"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <memory>
+#include <numeric>
+#include <stdexcept>
+
+#include "iires/parallel.hpp"
+#include "iires/register/hausdorff.hpp"
+#include "iires/register/rotation_grid.hpp"
+
+namespace iires::reg {
+
+void IcpParams::validate() const {
+  if (maxIterations < 1) throw std::invalid_argument("ICP: maxIterations must be at least 1");
+  if (!(overlap > 0.0 && overlap <= 1.0)) throw std::invalid_argument("ICP: overlap must be in (0, 1]");
+  if (!(tolerance > 0.0)) throw std::invalid_argument("ICP: tolerance must be positive");
+}
+
+Eigen::Matrix4d umeyamaTransform(const std::vector<Eigen::Vector3d>& a, const std::vector<Eigen::Vector3d>& b,
+                                 bool withScale) {
+  if (a.size() != b.size()) throw std::invalid_argument("umeyamaTransform: point sets of different sizes");
+  if (a.size() < 3) throw std::invalid_argument("umeyamaTransform: needs at least 3 pairs");
+  Eigen::Matrix3Xd ma(3, a.size()), mb(3, b.size());
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    ma.col(static_cast<Eigen::Index>(i)) = a[i];
+    mb.col(static_cast<Eigen::Index>(i)) = b[i];
+  }
+  return Eigen::umeyama(ma, mb, withScale);
+}
+
+IcpResult similarityIcp(const std::vector<Eigen::Vector3d>& source, const std::vector<Eigen::Vector3d>& target,
+                        const KnnIndex& targetIndex, const Eigen::Matrix4d& init, const IcpParams& params) {
+  params.validate();
+  if (source.size() < 3 || target.size() < 3) throw std::invalid_argument("ICP needs at least 3 points per cloud");
+  const std::size_t n = source.size();
+  const std::size_t keep = n - allowedOutliers(n, params.overlap);
+  IcpResult result;
+  Eigen::Matrix4d T = init;
+  std::vector<std::int64_t> match(n);
+  std::vector<double> d2(n);
+  std::vector<std::size_t> order(n);
+  std::vector<Eigen::Vector3d> a(keep), b(keep);
+  // RMS radius of the source about its centroid: translation changes are measured relative to it.
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  for (const auto& p : source) centroid += p;
+  centroid /= static_cast<double>(n);
+  double radius = 0;
+  for (const auto& p : source) radius += (p - centroid).squaredNorm();
+  radius = std::sqrt(radius / static_cast<double>(n));
+  auto matchAll = [&](const Eigen::Matrix4d& t) {
+    const Eigen::Matrix3d m = t.topLeftCorner<3, 3>();
+    const Eigen::Vector3d tr = t.topRightCorner<3, 1>();
+    parallelFor(n, params.threads, [&](std::size_t i) { match[i] = targetIndex.nearest(m * source[i] + tr, &d2[i]); });
+    std::iota(order.begin(), order.end(), std::size_t{0});
+    if (keep < n) {
+      // The keep nearest pairs; ties broken by index so the choice is deterministic.
+      std::nth_element(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(keep - 1), order.end(),
+                       [&](std::size_t x, std::size_t y) { return d2[x] < d2[y] || (d2[x] == d2[y] && x < y); });
+      std::sort(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(keep));
+    }
+  };
+  // Reverse matches (target → source), for bidirectional mode: the target moved by T⁻¹ against a tree on
+  // the source; distances are compared in target units (× scale).
+  std::unique_ptr<KnnIndex> sourceTree;
+  const std::size_t m = target.size();
+  const std::size_t keepReverse = m - allowedOutliers(m, params.overlap);
+  std::vector<std::int64_t> rmatch(params.bidirectional ? m : 0);
+  std::vector<double> rd2(rmatch.size());
+  std::vector<std::size_t> rorder(rmatch.size());
+  if (params.bidirectional) sourceTree = std::make_unique<KnnIndex>(source);
+  auto matchReverse = [&](const Eigen::Matrix4d& t) {
+    const Eigen::Matrix4d inv = t.inverse();
+    const Eigen::Matrix3d mi = inv.topLeftCorner<3, 3>();
+    const Eigen::Vector3d ti = inv.topRightCorner<3, 1>();
+    parallelFor(m, params.threads, [&](std::size_t i) { rmatch[i] = sourceTree->nearest(mi * target[i] + ti, &rd2[i]); });
+    std::iota(rorder.begin(), rorder.end(), std::size_t{0});
+    if (keepReverse < m) {
+      std::nth_element(rorder.begin(), rorder.begin() + static_cast<std::ptrdiff_t>(keepReverse - 1), rorder.end(),
+                       [&](std::size_t x, std::size_t y) { return rd2[x] < rd2[y] || (rd2[x] == rd2[y] && x < y); });
+      std::sort(rorder.begin(), rorder.begin() + static_cast<std::ptrdiff_t>(keepReverse));
+    }
+  };
+  for (int it = 0; it < params.maxIterations; ++it) {
+    matchAll(T);
+    a.resize(keep);
+    b.resize(keep);
+    for (std::size_t j = 0; j < keep; ++j) {
+      a[j] = source[order[j]];
+      b[j] = target[static_cast<std::size_t>(match[order[j]])];
+    }
+    if (params.bidirectional) {
+      matchReverse(T);
+      for (std::size_t j = 0; j < keepReverse; ++j) {
+        a.push_back(source[static_cast<std::size_t>(rmatch[rorder[j]])]);
+        b.push_back(target[rorder[j]]);
+      }
+    }
+    const Eigen::Matrix4d next = umeyamaTransform(a, b, params.estimateScale);
+    result.iterations = it + 1;
+    // Convergence: the change between consecutive estimates.
+    const Eigen::Matrix4d delta = next * T.inverse();
+    const double s = delta.topLeftCorner<3, 3>().col(0).norm();
+    const Eigen::Matrix3d rot = delta.topLeftCorner<3, 3>() / s;
+    const double scaleOfT = T.topLeftCorner<3, 3>().col(0).norm();
+    const double tChange = (next.topRightCorner<3, 1>() - T.topRightCorner<3, 1>()).norm() /
+                           std::max(1e-300, scaleOfT * radius);
+    T = next;
+    if (rotationAngle(rot) < params.tolerance && std::abs(s - 1.0) < params.tolerance &&
+        tChange < params.tolerance) {
+      result.converged = true;
+      break;
+    }
+  }
+  matchAll(T);
+  double sum = 0;
+  for (std::size_t j = 0; j < keep; ++j) sum += d2[order[j]];
+  result.T_target_source = T;
+  result.scale = T.topLeftCorner<3, 3>().col(0).norm();
+  result.rmse = std::sqrt(sum / static_cast<double>(keep));
+  result.matched = keep;
+  return result;
+}
+
+}  // namespace iires::reg

@@ -1,0 +1,322 @@
+#include "iires/register/registration.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <iomanip>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+
+#include "iires/knn.hpp"
+#include "iires/parallel.hpp"
+#include "iires/register/hausdorff.hpp"
+#include "iires/validate.hpp"
+
+namespace iires::reg {
+
+namespace {
+
+constexpr std::size_t kMinPoints = 10;
+
+using Clock = std::chrono::steady_clock;
+double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+/// Centroid and RMS radius about it (paper ref. [9]: normalise position and scale).
+struct Frame {
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  double radius = 1.0;
+};
+
+Frame frameOf(const std::vector<Eigen::Vector3d>& p) {
+  Frame f;
+  for (const auto& x : p) f.centroid += x;
+  f.centroid /= static_cast<double>(p.size());
+  double s = 0;
+  for (const auto& x : p) s += (x - f.centroid).squaredNorm();
+  f.radius = std::sqrt(s / static_cast<double>(p.size()));
+  return f;
+}
+
+std::vector<Eigen::Vector3d> normalised(const std::vector<Eigen::Vector3d>& p, const Frame& f) {
+  std::vector<Eigen::Vector3d> out(p.size());
+  for (std::size_t i = 0; i < p.size(); ++i) out[i] = (p[i] - f.centroid) / f.radius;
+  return out;
+}
+
+/// Ratio of the smallest to the largest eigenvalue of the covariance (0 for a plane).
+double flatness(const std::vector<Eigen::Vector3d>& p) {
+  Eigen::Matrix3d c = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d m = Eigen::Vector3d::Zero();
+  for (const auto& x : p) m += x;
+  m /= static_cast<double>(p.size());
+  for (const auto& x : p) c += (x - m) * (x - m).transpose();
+  const Eigen::Vector3d ev = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(c).eigenvalues();
+  return ev(2) > 0 ? std::max(0.0, ev(0)) / ev(2) : 0.0;
+}
+
+/// Trimmed RMS of nearest distances from @p from to @p to (the ⌈overlap·n⌉ nearest).
+double trimmedRms(const std::vector<Eigen::Vector3d>& from, const KnnIndex& to, double overlap, int threads) {
+  std::vector<double> d2(from.size());
+  parallelFor(from.size(), threads, [&](std::size_t i) { to.nearest(from[i], &d2[i]); });
+  const std::size_t keep = from.size() - allowedOutliers(from.size(), overlap);
+  std::nth_element(d2.begin(), d2.begin() + static_cast<std::ptrdiff_t>(keep - 1), d2.end());
+  double s = 0;
+  for (std::size_t i = 0; i < keep; ++i) s += d2[i];
+  return std::sqrt(s / static_cast<double>(keep));
+}
+
+std::vector<Eigen::Vector3d> applied(const std::vector<Eigen::Vector3d>& p, const Eigen::Matrix4d& T) {
+  std::vector<Eigen::Vector3d> out(p.size());
+  const Eigen::Matrix3d m = T.topLeftCorner<3, 3>();
+  const Eigen::Vector3d t = T.topRightCorner<3, 1>();
+  for (std::size_t i = 0; i < p.size(); ++i) out[i] = m * p[i] + t;
+  return out;
+}
+
+ResampleResult resampleFor(const PointCloud& cloud, const RegistrationParams& params, const char* what) {
+  ResampleParams rp = params.resample;
+  rp.targetCount = params.samples;
+  rp.seed = params.seed;
+  rp.threads = params.threads;
+  try {
+    return resample(cloud, rp);
+  } catch (const InputError& e) {
+    throw InputError(std::string(what) + ": " + e.what());
+  }
+}
+
+std::string num(double v) {
+  if (!std::isfinite(v)) return "null";
+  std::ostringstream s;
+  s << std::setprecision(12) << v;
+  return s.str();
+}
+
+}  // namespace
+
+ResampleParams RegistrationParams::defaultResample() {
+  ResampleParams p;
+  p.maxPasses = 6;
+  p.relaxPerPass = 1;
+  p.maxRelaxIterations = 5;
+  p.relaxPatience = 2;
+  return p;
+}
+
+void RegistrationParams::validate() const {
+  if (samples < 50) throw std::invalid_argument("registration: samples (M) must be at least 50");
+  if (eulerSteps < 1) throw std::invalid_argument("registration: eulerSteps must be at least 1");
+  if (so3Count < 1) throw std::invalid_argument("registration: so3Count must be at least 1");
+  if (!(overlap > 0.0 && overlap <= 1.0))
+    throw std::invalid_argument("registration: overlap must be in (0, 1], got " + std::to_string(overlap));
+  if (icpCandidates < 1) throw std::invalid_argument("registration: icpCandidates must be at least 1");
+  if (screenIterations < 1) throw std::invalid_argument("registration: screenIterations must be at least 1");
+  if (!(ambiguityTolerance >= 0.0)) throw std::invalid_argument("registration: ambiguityTolerance must be >= 0");
+  search.validate();
+  icp.validate();
+}
+
+PointCloud transformCloud(const PointCloud& cloud, const Eigen::Matrix4d& T) {
+  PointCloud out;
+  out.points = applied(cloud.points, T);
+  if (cloud.hasNormals()) {
+    const Eigen::Matrix3d m = T.topLeftCorner<3, 3>();
+    const Eigen::Matrix3d n = m.inverse().transpose();
+    out.normals.reserve(cloud.normals.size());
+    for (const auto& v : cloud.normals) out.normals.push_back((n * v).normalized());
+  }
+  return out;
+}
+
+std::string formatTransform(const Eigen::Matrix4d& T) {
+  std::ostringstream s;
+  s << std::setprecision(17);
+  for (int r = 0; r < 4; ++r) {
+    for (int c = 0; c < 4; ++c) s << (c ? " " : "") << (T(r, c) == 0.0 ? 0.0 : T(r, c));
+    s << "\n";
+  }
+  return s.str();
+}
+
+RegistrationResult registerClouds(const PointCloud& sourceIn, const PointCloud& targetIn,
+                                  const RegistrationParams& params) {
+  params.validate();
+  const auto tTotal = Clock::now();
+  RegistrationResult r;
+  auto stage = [&](const char* name, Clock::time_point t) { r.timings.push_back({name, since(t)}); };
+
+  // 1. Validate: empty, NaN/Inf, too few distinct points, collinear → InputError naming the cloud.
+  auto t = Clock::now();
+  PointCloud source = sourceIn, target = targetIn;
+  validateCloud(source, kMinPoints, "source");
+  validateCloud(target, kMinPoints, "target");
+  r.sourcePoints = sourceIn.size();
+  r.targetPoints = targetIn.size();
+  r.samples = params.samples;
+  stage("validate", t);
+
+  // 2. Resample both to the same M isotropic points: centroid and RMS radius no longer depend on density.
+  t = Clock::now();
+  const ResampleResult rs = resampleFor(source, params, "source");
+  const ResampleResult rt = resampleFor(target, params, "target");
+  stage("resample", t);
+
+  // 3. Normalise: centroid → origin, unit RMS radius.
+  t = Clock::now();
+  const Frame fs = frameOf(rs.cloud.points), ft = frameOf(rt.cloud.points);
+  if (!(fs.radius > 0)) throw InputError("source: zero or non-finite extent after resampling");
+  if (!(ft.radius > 0)) throw InputError("target: zero or non-finite extent after resampling");
+  r.sourceRadius = fs.radius;
+  r.targetRadius = ft.radius;
+  const std::vector<Eigen::Vector3d> ns = normalised(rs.cloud.points, fs), nt = normalised(rt.cloud.points, ft);
+  r.planar = std::min(flatness(ns), flatness(nt)) < params.planarityThreshold;
+  stage("normalise", t);
+
+  // 4. Rotation search, eq. (11)–(12).
+  t = Clock::now();
+  RotationSearchParams sp = params.search;
+  sp.overlap = params.overlap;
+  sp.seed = params.seed;
+  sp.threads = params.threads;
+  sp.keep = std::max(sp.keep, params.icpCandidates);
+  const RotationSearch search(ns, nt, sp);
+  const std::vector<Eigen::Matrix3d> grid = rotationGrid(params.grid, params.eulerSteps, params.so3Count);
+  const RotationSearchResult found = search.search(grid);
+  r.grid = toString(params.grid);
+  r.gridSize = grid.size();
+  r.exactEvaluations = found.exactEvaluations;
+  r.pointQueries = found.pointQueries;
+  stage("search", t);
+  if (found.candidates.empty()) throw std::runtime_error("rotation search found no candidate");
+
+  // 5. ICP (with scale) from each of the best few candidates; score by the symmetric trimmed RMS distance so
+  // a shrunken source that covers only part of the target does not win.
+  t = Clock::now();
+  IcpParams ip = params.icp;
+  ip.overlap = params.overlap;
+  ip.estimateScale = params.estimateScale;
+  ip.threads = params.threads;
+  ip.bidirectional = ip.bidirectional || params.overlap < 1.0;  // partial scans: trim both directions
+  const KnnIndex targetTree(nt);
+  const std::size_t nc = std::min(params.icpCandidates, found.candidates.size());
+  std::vector<IcpResult> icp(nc);
+  std::vector<double> score(nc);
+  IcpParams screen = ip;
+  screen.maxIterations = params.screenIterations;
+  // Symmetric trimmed RMS distance (normalised units) of the source moved by T and the target.
+  auto symmetricScore = [&](const Eigen::Matrix4d& T) {
+    const std::vector<Eigen::Vector3d> moved = applied(ns, T);
+    const KnnIndex movedTree(moved);
+    const double a = trimmedRms(moved, targetTree, params.overlap, params.threads);
+    const double b = trimmedRms(nt, movedTree, params.overlap, params.threads);
+    return std::sqrt(0.5 * (a * a + b * b));
+  };
+  for (std::size_t c = 0; c < nc; ++c) {
+    Eigen::Matrix4d init = Eigen::Matrix4d::Identity();
+    init.topLeftCorner<3, 3>() = found.candidates[c].rotation;
+    icp[c] = similarityIcp(ns, nt, targetTree, init, screen);
+    score[c] = symmetricScore(icp[c].T_target_source);
+  }
+  std::size_t best = 0;
+  for (std::size_t c = 1; c < nc; ++c)
+    if (score[c] < score[best]) best = c;
+  // The winner continues to convergence.
+  {
+    const int screened = icp[best].iterations;
+    const bool done = icp[best].converged;
+    if (!done) {
+      icp[best] = similarityIcp(ns, nt, targetTree, icp[best].T_target_source, ip);
+      icp[best].iterations += screened;
+      score[best] = symmetricScore(icp[best].T_target_source);
+    }
+  }
+  stage("icp", t);
+
+  // Ambiguity: a clearly different pose (≥ 10° away after ICP) that fits about as well.
+  const Eigen::Matrix4d& Tn = icp[best].T_target_source;
+  const Eigen::Matrix3d Rbest = Tn.topLeftCorner<3, 3>() / icp[best].scale;
+  double second = std::numeric_limits<double>::infinity();
+  for (std::size_t c = 0; c < nc; ++c) {
+    if (c == best) continue;
+    const Eigen::Matrix3d Rc = icp[c].T_target_source.topLeftCorner<3, 3>() / icp[c].scale;
+    if (rotationAngle(Rbest, Rc) >= 10.0 * M_PI / 180.0) second = std::min(second, score[c]);
+  }
+  r.secondBestScoreRatio = std::isfinite(second) && score[best] > 0 ? second / score[best] : 0.0;
+  if (std::isfinite(second) && second <= score[best] * (1.0 + params.ambiguityTolerance)) {
+    r.ambiguous = true;
+    r.ambiguityReason = "another pose fits within " + num(100 * params.ambiguityTolerance) +
+                        "% (symmetric shape?)";
+  }
+  if (r.planar) {
+    r.ambiguous = true;
+    r.ambiguityReason = r.ambiguityReason.empty() ? std::string("planar cloud: mirrored poses fit equally well")
+                                                  : r.ambiguityReason + "; planar cloud";
+  }
+
+  // 6. Back to original units: t_n = σ R s_n + τ with s_n = (s − c_s)/r_s and t = r_t t_n + c_t gives
+  // t = (σ r_t / r_s) R s + (c_t + r_t τ − (σ r_t / r_s) R c_s).
+  t = Clock::now();
+  const double sigma = icp[best].scale;
+  const Eigen::Vector3d tau = Tn.topRightCorner<3, 1>();
+  r.rotation = Rbest;
+  {  // re-orthonormalise (Umeyama's R is orthonormal up to rounding)
+    Eigen::JacobiSVD<Eigen::Matrix3d> svd(r.rotation, Eigen::ComputeFullU | Eigen::ComputeFullV);
+    r.rotation = svd.matrixU() * svd.matrixV().transpose();
+  }
+  r.scale = sigma * ft.radius / fs.radius;
+  r.translation = ft.centroid + ft.radius * tau - r.scale * r.rotation * fs.centroid;
+  r.T_target_source.setIdentity();
+  r.T_target_source.topLeftCorner<3, 3>() = r.scale * r.rotation;
+  r.T_target_source.topRightCorner<3, 1>() = r.translation;
+  const Eigen::AngleAxisd aa(r.rotation);
+  r.rotationAngleDeg = aa.angle() * 180.0 / M_PI;
+  r.rotationAxis = aa.axis();
+  r.rmse = icp[best].rmse * ft.radius;
+  r.icpIterations = icp[best].iterations;
+  r.icpConverged = icp[best].converged;
+  r.bestCandidate = found.candidates[best].gridIndex;
+  r.candidateRank = best;
+  r.normalisedEnergy = found.candidates[best].energy;
+  r.hausdorff = hausdorffDistance(applied(rs.cloud.points, r.T_target_source), rt.cloud.points, 1.0, params.threads);
+  r.hausdorffTrimmed = params.overlap < 1.0 ? hausdorffDistance(applied(rs.cloud.points, r.T_target_source),
+                                                                rt.cloud.points, params.overlap, params.threads)
+                                            : r.hausdorff;
+  stage("evaluate", t);
+  stage("total", tTotal);
+  return r;
+}
+
+std::string RegistrationResult::toJson() const {
+  std::ostringstream s;
+  auto vec = [&](const Eigen::Vector3d& v) { return "[" + num(v.x()) + ", " + num(v.y()) + ", " + num(v.z()) + "]"; };
+  s << "{\n  \"transform\": [";
+  for (int i = 0; i < 4; ++i) {
+    s << (i ? ", " : "") << "[";
+    for (int j = 0; j < 4; ++j) s << (j ? ", " : "") << num(T_target_source(i, j));
+    s << "]";
+  }
+  s << "],\n  \"scale\": " << num(scale) << ",\n  \"rotation\": [";
+  for (int i = 0; i < 3; ++i) s << (i ? ", " : "") << vec(rotation.row(i).transpose());
+  s << "],\n  \"rotation_angle_deg\": " << num(rotationAngleDeg) << ",\n  \"rotation_axis\": " << vec(rotationAxis)
+    << ",\n  \"translation\": " << vec(translation) << ",\n  \"rmse\": " << num(rmse)
+    << ",\n  \"hausdorff\": " << num(hausdorff) << ",\n  \"hausdorff_trimmed\": " << num(hausdorffTrimmed)
+    << ",\n  \"normalised_energy\": " << num(normalisedEnergy) << ",\n  \"grid\": \"" << grid
+    << "\",\n  \"grid_size\": " << gridSize << ",\n  \"best_candidate\": " << bestCandidate
+    << ",\n  \"candidate_rank\": " << candidateRank << ",\n  \"icp_iterations\": " << icpIterations
+    << ",\n  \"icp_converged\": " << (icpConverged ? "true" : "false")
+    << ",\n  \"exact_evaluations\": " << exactEvaluations << ",\n  \"point_queries\": " << pointQueries
+    << ",\n  \"ambiguous\": " << (ambiguous ? "true" : "false") << ",\n  \"planar\": " << (planar ? "true" : "false")
+    << ",\n  \"ambiguity_reason\": \"" << ambiguityReason << "\",\n  \"second_best_score_ratio\": "
+    << num(secondBestScoreRatio) << ",\n  \"source_points\": " << sourcePoints << ",\n  \"target_points\": "
+    << targetPoints << ",\n  \"samples\": " << samples << ",\n  \"source_radius\": " << num(sourceRadius)
+    << ",\n  \"target_radius\": " << num(targetRadius) << ",\n  \"timings\": {";
+  for (std::size_t i = 0; i < timings.size(); ++i)
+    s << (i ? ", " : "") << "\"" << timings[i].name << "_s\": " << num(timings[i].seconds);
+  s << "}\n}\n";
+  return s.str();
+}
+
+}  // namespace iires::reg

@@ -1,0 +1,212 @@
+#include "iires/features.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+
+#include "iires/io.hpp"
+#include "iires/normals.hpp"
+#include "iires/sampling.hpp"
+#include "shapes.hpp"
+#include "test_util.hpp"
+
+namespace {
+
+using iires::FeatureDetector;
+using iires::FeatureParams;
+using iires::Segment;
+
+/// The cube [0, size]³ as 12 triangles, outward.
+iires::TriangleMesh cubeMesh(double size = 1.0) {
+  iires::TriangleMesh m;
+  for (int i = 0; i < 8; ++i) m.vertices.emplace_back(size * (i & 1), size * ((i >> 1) & 1), size * ((i >> 2) & 1));
+  const int f[12][3] = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6}, {0, 1, 4}, {1, 5, 4},
+                        {2, 6, 3}, {3, 6, 7}, {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}};
+  for (const auto& t : f) m.triangles.emplace_back(t[0], t[1], t[2]);
+  return m;
+}
+
+/// Mesh sampled uniformly, normals estimated (PCA + MST orientation) as the resampler would have them.
+iires::PointCloud sampledWithEstimatedNormals(const iires::TriangleMesh& mesh, std::size_t count,
+                                              std::uint64_t seed = 7) {
+  iires::MeshSamplingParams sp;
+  sp.count = count;
+  sp.seed = seed;
+  iires::PointCloud c = iires::sampleMesh(mesh, sp);
+  c.normals = iires::estimateNormals(c.points);
+  return c;
+}
+
+TEST(FeatureParams, ValidateRejectsBadValues) {
+  FeatureParams p;
+  EXPECT_NO_THROW(p.validate());
+  p.angle = 0;
+  EXPECT_THROW(p.validate(), std::invalid_argument);
+  p = {};
+  p.minClusterShare = 0.6;
+  EXPECT_THROW(p.validate(), std::invalid_argument);
+  p = {};
+  p.radius = 0.5;
+  EXPECT_THROW(p.validate(), std::invalid_argument);
+  p = {};
+  p.sampleSpacing = -1;
+  EXPECT_THROW(p.validate(), std::invalid_argument);
+}
+
+TEST(Features, DegenerateInputs) {
+  iires::PointCloud tiny;
+  tiny.points = {Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitX()};
+  tiny.normals = {Eigen::Vector3d::UnitZ(), Eigen::Vector3d::UnitZ()};
+  EXPECT_THROW(iires::detectFeatures(tiny), iires::InputError);
+  auto noNormals = iires::test::sphereCloud(100);
+  noNormals.normals.clear();
+  EXPECT_THROW(iires::detectFeatures(noNormals), std::invalid_argument);
+  EXPECT_TRUE(iires::sampleFeatureChains({}, 1.0).empty());
+  EXPECT_THROW(iires::sampleFeatureChains({}, 0.0), std::invalid_argument);
+}
+
+TEST(Features, SharpMeshEdgesOfACube) {
+  const auto edges = iires::sharpMeshEdges(cubeMesh(), 45.0);
+  EXPECT_EQ(edges.size(), 12u);  // the face diagonals are flat
+  for (const Segment& s : edges) EXPECT_NEAR((s[1] - s[0]).norm(), 1.0, 1e-12);
+}
+
+TEST(Features, ScoreAgainstBruteForce) {
+  const auto cloud = iires::test::sphereCloud(2000, 1.0, 3);
+  const std::vector<Segment> edges = {{Eigen::Vector3d(-2, 0, 0), Eigen::Vector3d(2, 0, 0)},
+                                      {Eigen::Vector3d(0, -2, 0.9), Eigen::Vector3d(0, 2, 0.9)}};
+  std::vector<std::uint32_t> picked;
+  for (std::uint32_t i = 0; i < 2000; i += 3) picked.push_back(i);
+  const auto s = iires::scoreFeatures(cloud.points, picked, edges, 0.2, 0.1, 2);
+  std::size_t tp = 0, near = 0, found = 0;
+  for (std::uint32_t i : picked) tp += iires::distanceToSegments(cloud.points[i], edges) <= 0.2;
+  for (std::uint32_t i = 0; i < 2000; ++i)
+    if (iires::distanceToSegments(cloud.points[i], edges) <= 0.1) {
+      ++near;
+      found += i % 3 == 0;
+    }
+  EXPECT_EQ(s.nearEdge, near);
+  EXPECT_DOUBLE_EQ(s.precision, static_cast<double>(tp) / picked.size());
+  EXPECT_DOUBLE_EQ(s.recall, static_cast<double>(found) / near);
+}
+
+class CubeFeatures : public ::testing::TestWithParam<FeatureDetector> {};
+
+TEST_P(CubeFeatures, AllTwelveEdgesFoundAndSampledOnTheCrease) {
+  const auto mesh = cubeMesh();
+  // VCM is ~10× slower: a sparser cube keeps the test short.
+  const auto cloud = sampledWithEstimatedNormals(mesh, GetParam() == FeatureDetector::Vcm ? 25000 : 60000);
+  const auto edges = iires::sharpMeshEdges(mesh, 45.0);
+  FeatureParams p;
+  p.detector = GetParam();
+  const double spacing = 0.05;
+  p.sampleSpacing = spacing;
+  const auto r = iires::detectFeatures(cloud, p);
+  const double h = r.spacing;
+  const auto score = iires::scoreFeatures(cloud.points, r.featureIndices, edges, 1.5 * h, 0.5 * h);
+  const auto raw = iires::scoreFeatures(cloud.points, r.detectedIndices, edges, 1.5 * h, 0.5 * h);
+  std::printf("cube %s: h=%.4f raw: detected=%zu recall=%.3f precision=%.3f; chained: %zu recall=%.3f "
+              "precision=%.3f; chains=%zu samples=%zu\n",
+              GetParam() == FeatureDetector::Vcm ? "vcm" : "normal-variation", h, raw.detected, raw.recall,
+              raw.precision, score.detected, score.recall, score.precision, r.chains.size(), r.samples.size());
+  EXPECT_GE(score.recall, 0.95);
+  EXPECT_GE(score.precision, 0.90);
+  if (GetParam() == FeatureDetector::Vcm) {  // VCM: detection only (its crease fits near corners are looser)
+    EXPECT_GE(raw.recall, 0.95);
+    EXPECT_GE(raw.precision, 0.75);
+    return;
+  }
+  // Samples on the true edges…
+  ASSERT_FALSE(r.samples.empty());
+  for (const auto& s : r.samples) EXPECT_LE(iires::distanceToSegments(s, edges), 0.1 * spacing) << s.transpose();
+  // …covering each edge: every point of an edge is within 0.75·spacing of a sample (gaps ≤ 1.5·spacing).
+  for (const Segment& e : edges)
+    for (int t = 0; t <= 200; ++t) {
+      const Eigen::Vector3d q = e[0] + (e[1] - e[0]) * (t / 200.0);
+      double best = 1e9;
+      for (const auto& s : r.samples) best = std::min(best, (s - q).norm());
+      EXPECT_LE(best, 0.75 * spacing) << "edge point " << q.transpose();
+    }
+}
+
+INSTANTIATE_TEST_SUITE_P(Detectors, CubeFeatures,
+                         ::testing::Values(FeatureDetector::NormalVariation, FeatureDetector::Vcm));
+
+TEST(Features, SphereHasNoFeatures) {
+  iires::PointCloud c;
+  c.points = iires::test::fibonacciSphere(20000);
+  c.normals = iires::estimateNormals(c.points);
+  for (FeatureDetector d : {FeatureDetector::NormalVariation, FeatureDetector::Vcm}) {
+    if (d == FeatureDetector::Vcm) {  // a sparser sphere keeps the VCM pass short
+      c.points = iires::test::fibonacciSphere(5000);
+      c.normals = iires::estimateNormals(c.points);
+    }
+    FeatureParams p;
+    p.detector = d;
+    p.sampleSpacing = 0.05;
+    const auto r = iires::detectFeatures(c, p);
+    EXPECT_LE(r.featureIndices.size(), 20u) << (d == FeatureDetector::Vcm ? "vcm" : "nv");
+    EXPECT_TRUE(r.chains.empty());
+    EXPECT_TRUE(r.samples.empty());
+  }
+}
+
+TEST(Features, DeterministicAcrossThreadCounts) {
+  const auto cloud = sampledWithEstimatedNormals(cubeMesh(), 10000, 11);
+  for (FeatureDetector d : {FeatureDetector::NormalVariation, FeatureDetector::Vcm}) {
+    FeatureParams one, two;
+    one.detector = two.detector = d;
+    one.sampleSpacing = two.sampleSpacing = 0.05;
+    one.threads = 1;
+    two.threads = 2;
+    const auto a = iires::detectFeatures(cloud, one), b = iires::detectFeatures(cloud, two);
+    EXPECT_EQ(a.featureIndices, b.featureIndices);
+    EXPECT_EQ(a.samples, b.samples);
+  }
+}
+
+/// The detector comparison on CGAL's CAD models (reference: mesh edges with dihedral angle > 45°).
+/// Precision: detections within 1.5 h of a reference edge; recall: points within 0.5 h that were detected.
+struct Model {
+  const char* name;
+  std::size_t count;
+};
+
+class FeatureData : public ::testing::TestWithParam<Model> {};
+
+TEST_P(FeatureData, DetectorsOnCadModels) {
+  const Model m = GetParam();
+  const auto mesh = iires::readMesh(iires::test::dataPath(std::string("meshes/") + m.name + ".off"));
+  const auto cloud = sampledWithEstimatedNormals(mesh, m.count);
+  const auto edges = iires::sharpMeshEdges(mesh, 45.0);
+  ASSERT_FALSE(edges.empty());
+  // VCM takes ~15 s per model (a 3-D Delaunay triangulation and one half-space intersection per point):
+  // set IIRES_COMPARE_DETECTORS=1 for the full comparison.
+  const bool both = std::getenv("IIRES_COMPARE_DETECTORS") != nullptr;
+  for (FeatureDetector d : {FeatureDetector::NormalVariation, FeatureDetector::Vcm}) {
+    if (d == FeatureDetector::Vcm && !both) continue;
+    FeatureParams p;
+    p.detector = d;
+    const auto r = iires::detectFeatures(cloud, p);
+    const auto s = iires::scoreFeatures(cloud.points, r.featureIndices, edges, 1.5 * r.spacing, 0.5 * r.spacing);
+    const auto raw =
+        iires::scoreFeatures(cloud.points, r.detectedIndices, edges, 1.5 * r.spacing, 0.5 * r.spacing);
+    std::printf("%s n=%zu %s: h=%.5f raw: detected=%zu recall=%.3f precision=%.3f; chained: %zu recall=%.3f "
+                "precision=%.3f; chains=%zu detect=%.2fs\n",
+                m.name, m.count, d == FeatureDetector::Vcm ? "vcm" : "normal-variation", r.spacing, raw.detected,
+                raw.recall, raw.precision, s.detected, s.recall, s.precision, r.chains.size(), r.detectSeconds);
+    if (d == FeatureDetector::NormalVariation) {
+      EXPECT_GE(s.recall, 0.85) << m.name;
+      EXPECT_GE(s.precision, 0.85) << m.name;
+    }
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Cad, FeatureData,
+                         ::testing::Values(Model{"fandisk", 100000}, Model{"joint", 100000},
+                                           Model{"anchor", 100000}),
+                         [](const auto& info) { return std::string(info.param.name); });
+
+}  // namespace

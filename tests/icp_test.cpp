@@ -1,0 +1,89 @@
+#include "iires/register/icp.hpp"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <cmath>
+
+#include "shapes.hpp"
+
+namespace {
+
+using Points = std::vector<Eigen::Vector3d>;
+
+/// An asymmetric test shape: an ellipsoid-ish blob with a bump (no rotational symmetry).
+Points blob(std::size_t n) {
+  Points p;
+  for (const auto& d : iires::test::fibonacciSphere(n)) {
+    const double bump = 0.4 * std::exp(-((d - Eigen::Vector3d(0.6, 0.6, 0.5).normalized()).squaredNorm()) / 0.1);
+    p.push_back(Eigen::Vector3d(1.6 * d.x(), 1.0 * d.y(), 0.7 * d.z()) * (1 + bump));
+  }
+  return p;
+}
+
+Eigen::Matrix4d similarity(double s, const Eigen::Matrix3d& r, const Eigen::Vector3d& t) {
+  Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
+  m.topLeftCorner<3, 3>() = s * r;
+  m.topRightCorner<3, 1>() = t;
+  return m;
+}
+
+Points transformed(const Points& p, const Eigen::Matrix4d& m) {
+  Points out;
+  for (const auto& x : p) out.push_back(m.topLeftCorner<3, 3>() * x + m.topRightCorner<3, 1>());
+  return out;
+}
+
+TEST(Icp, UmeyamaRecoversAnExactSimilarity) {
+  const Points a = blob(200);
+  const Eigen::Matrix4d truth =
+      similarity(2.5, Eigen::AngleAxisd(2.5, Eigen::Vector3d(1, -2, 0.5).normalized()).toRotationMatrix(),
+                 Eigen::Vector3d(3, -1, 7));
+  EXPECT_TRUE(iires::reg::umeyamaTransform(a, transformed(a, truth), true).isApprox(truth, 1e-10));
+  EXPECT_THROW(iires::reg::umeyamaTransform(Points(2), Points(2), true), std::invalid_argument);
+}
+
+TEST(Icp, ConvergesFromANearbyPoseWithScale) {
+  const Points target = blob(3000);
+  const Points source0 = blob(1500);  // a different sampling of the same shape
+  const Eigen::Matrix4d move =
+      similarity(0.3, Eigen::AngleAxisd(0.2, Eigen::Vector3d(0, 1, 1).normalized()).toRotationMatrix(),
+                 Eigen::Vector3d(0.05, 0, 0.02));
+  const Points source = transformed(source0, move);
+  const iires::KnnIndex tree(target);
+  // Start from the right scale-free neighbourhood: scale ~1/0.3, rotation 0.2 rad off.
+  Eigen::Matrix4d init = Eigen::Matrix4d::Identity();
+  init.topLeftCorner<3, 3>() *= 1.0 / 0.28;
+  for (int threads : {1, 2}) {
+    iires::reg::IcpParams p;
+    p.threads = threads;
+    const auto r = iires::reg::similarityIcp(source, target, tree, init, p);
+    const Eigen::Matrix4d truth = move.inverse();
+    EXPECT_NEAR(r.scale, 1.0 / 0.3, 0.01 / 0.3);
+    EXPECT_LT(std::acos(std::clamp(((r.T_target_source.topLeftCorner<3, 3>() / r.scale).transpose() *
+                                     (truth.topLeftCorner<3, 3>() * 0.3))
+                                            .trace() * 0.5 - 0.5,
+                                   -1.0, 1.0)),
+              0.03);  // < 1.7°: two different samplings of the shape
+    EXPECT_LT(r.rmse, 0.05);
+    EXPECT_GT(r.iterations, 1);
+  }
+}
+
+TEST(Icp, RigidKeepsUnitScaleAndTrimmedIgnoresExtraPoints) {
+  Points target = blob(2000);
+  Points source = transformed(blob(1000), similarity(1.0, Eigen::Matrix3d::Identity(), Eigen::Vector3d(0.05, 0, 0)));
+  for (int i = 0; i < 200; ++i) source.emplace_back(5 + 0.01 * i, 5, 5);  // 1/6 of the source has no partner
+  const iires::KnnIndex tree(target);
+  iires::reg::IcpParams p;
+  p.estimateScale = false;
+  p.overlap = 0.8;
+  const auto r = iires::reg::similarityIcp(source, target, tree, Eigen::Matrix4d::Identity(), p);
+  EXPECT_NEAR(r.scale, 1.0, 1e-9);
+  EXPECT_NEAR(r.T_target_source(0, 3), -0.05, 0.01);
+  EXPECT_EQ(r.matched, 960u);
+  p.overlap = 0.0;
+  EXPECT_THROW(p.validate(), std::invalid_argument);
+}
+
+}  // namespace

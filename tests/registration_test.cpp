@@ -1,0 +1,285 @@
+#include "iires/register/registration.hpp"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <random>
+#include <sstream>
+
+#include "iires/io.hpp"
+#include "iires/metrics.hpp"
+#include "iires/sampling.hpp"
+#include "shapes.hpp"
+#include "test_util.hpp"
+
+namespace {
+
+using iires::PointCloud;
+using iires::reg::RegistrationParams;
+using iires::reg::registerClouds;
+
+const iires::TriangleMesh& mesh(const std::string& name) {
+  static std::map<std::string, iires::TriangleMesh> cache;
+  auto it = cache.find(name);
+  if (it == cache.end()) it = cache.emplace(name, iires::readMesh(iires::test::dataPath("meshes/" + name + ".off"))).first;
+  return it->second;
+}
+
+/// A scan-like cloud: count points on the mesh, noise N(0, (0.33 l)²) along the normal (paper §6.1).
+PointCloud scan(const std::string& model, std::size_t count, std::uint64_t seed) {
+  iires::MeshSamplingParams sp;
+  sp.count = count;
+  sp.seed = seed;
+  PointCloud clean = iires::sampleMesh(mesh(model), sp);
+  sp.noise = 0.33 * iires::spacingStats(clean.points).mean;
+  PointCloud c = iires::sampleMesh(mesh(model), sp);
+  c.normals.clear();
+  return c;
+}
+
+Eigen::Matrix4d similarity(double s, double angleDeg, const Eigen::Vector3d& axis, const Eigen::Vector3d& t) {
+  Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
+  m.topLeftCorner<3, 3>() = s * Eigen::AngleAxisd(angleDeg * M_PI / 180, axis.normalized()).toRotationMatrix();
+  m.topRightCorner<3, 1>() = t;
+  return m;
+}
+
+PointCloud moved(const PointCloud& c, const Eigen::Matrix4d& m) { return iires::reg::transformCloud(c, m); }
+
+/// Rotation error (deg), scale error (relative), and the error of the mapped source centroid relative to
+/// the diagonal of the target: the acceptance measures of DESIGN §7.
+struct PoseError {
+  double rotDeg, scale, trans;
+};
+
+PoseError poseError(const Eigen::Matrix4d& est, const Eigen::Matrix4d& truth, const PointCloud& source,
+                    const PointCloud& target) {
+  const double se = est.topLeftCorner<3, 3>().col(0).norm(), st = truth.topLeftCorner<3, 3>().col(0).norm();
+  const Eigen::Matrix3d re = est.topLeftCorner<3, 3>() / se, rt = truth.topLeftCorner<3, 3>() / st;
+  Eigen::Vector3d c = Eigen::Vector3d::Zero();
+  for (const auto& p : source.points) c += p;
+  c /= static_cast<double>(source.size());
+  const Eigen::Vector3d ce = est.topLeftCorner<3, 3>() * c + est.topRightCorner<3, 1>();
+  const Eigen::Vector3d ct = truth.topLeftCorner<3, 3>() * c + truth.topRightCorner<3, 1>();
+  return {iires::reg::rotationAngle(re, rt) * 180 / M_PI, std::abs(se / st - 1),
+          (ce - ct).norm() / iires::bboxDiagonal(target.points)};
+}
+
+void expectRecovered(const iires::reg::RegistrationResult& r, const Eigen::Matrix4d& truth, const PointCloud& source,
+                     const PointCloud& target, const std::string& what) {
+  const PoseError e = poseError(r.T_target_source, truth, source, target);
+  EXPECT_LT(e.rotDeg, 3.0) << what;
+  EXPECT_LT(e.scale, 0.015) << what;
+  EXPECT_LT(e.trans, 0.01) << what;
+  // The result's parts agree with its matrix.
+  const Eigen::Matrix3d linear = r.T_target_source.topLeftCorner<3, 3>();
+  const Eigen::Vector3d translation = r.T_target_source.topRightCorner<3, 1>();
+  EXPECT_TRUE(linear.isApprox(r.scale * r.rotation, 1e-9)) << what;
+  EXPECT_TRUE(translation.isApprox(r.translation, 1e-9)) << what;
+}
+
+RegistrationParams fast() {
+  RegistrationParams p;
+  p.samples = 1000;  // the tests keep the runtime short; the bench uses the default M
+  return p;
+}
+
+// Known similarity transforms, forward (source → target) and inverse (target → source), from poses with
+// rotations over 90°, scales 0.2× and 5×, and translations of several object sizes.
+TEST(Registration, RecoversKnownSimilarityForwardAndInverse) {
+  const PointCloud dense = scan("bunny00", 30000, 11), sparse = scan("bunny00", 5000, 12);
+  const double d = iires::bboxDiagonal(dense.points);
+  const std::vector<Eigen::Matrix4d> poses = {
+      similarity(0.2, 150, {1, 1, 0}, Eigen::Vector3d(5, -3, 2) * d),
+      similarity(5.0, 100, {0, 0, 1}, Eigen::Vector3d(-1, 2, 0.5) * d),
+      similarity(1.7, 60, {1, -2, 3}, Eigen::Vector3d(0, 0, 3) * d),
+  };
+  for (std::size_t i = 0; i < poses.size(); ++i) {
+    const PointCloud source = moved(sparse, poses[i]);
+    const auto fwd = registerClouds(source, dense, fast());
+    expectRecovered(fwd, poses[i].inverse(), source, dense, "forward pose " + std::to_string(i));
+    EXPECT_FALSE(fwd.planar);
+    const auto inv = registerClouds(dense, source, fast());
+    expectRecovered(inv, poses[i], dense, source, "inverse pose " + std::to_string(i));
+  }
+}
+
+TEST(Registration, OtherModelsAndDensitiesAtDefaultSettings) {
+  for (const std::string model : {"armadillo", "fandisk"}) {
+    const PointCloud target = scan(model, 20000, 21), source0 = scan(model, 4000, 22);
+    const Eigen::Matrix4d pose = similarity(0.3, 170, {0.2, 1, -0.4}, Eigen::Vector3d(2, 1, -1));
+    const PointCloud source = moved(source0, pose);
+    const auto r = registerClouds(source, target);
+    expectRecovered(r, pose.inverse(), source, target, model);
+    EXPECT_EQ(r.samples, 2000u);
+    EXPECT_EQ(r.grid, "so3");
+    EXPECT_GT(r.icpIterations, 0);
+    EXPECT_GT(r.hausdorff, 0);
+    EXPECT_LT(r.rmse, 0.01 * iires::bboxDiagonal(target.points));
+  }
+}
+
+TEST(Registration, IdentityAndTheEulerGrid) {
+  const PointCloud a = scan("bunny00", 8000, 31), b = scan("bunny00", 12000, 32);
+  auto p = fast();
+  p.grid = iires::reg::RotationGridType::kEuler;
+  const auto r = registerClouds(a, b, p);
+  expectRecovered(r, Eigen::Matrix4d::Identity(), a, b, "identity");
+  EXPECT_LT(r.rotationAngleDeg, 3.0);
+  EXPECT_EQ(r.gridSize, 13824u);
+  EXPECT_EQ(r.grid, "euler");
+}
+
+TEST(Registration, PartialSourceWithTrimmedEnergy) {
+  // 25 % of the source cut off by a plane; --overlap 0.75.
+  const PointCloud target = scan("bunny00", 20000, 41), full = scan("bunny00", 8000, 42);
+  const Eigen::Vector3d n = Eigen::Vector3d(1, 0.3, -0.5).normalized();
+  std::vector<double> h;
+  for (const auto& q : full.points) h.push_back(q.dot(n));
+  std::vector<double> sorted = h;
+  std::nth_element(sorted.begin(), sorted.begin() + sorted.size() * 3 / 4, sorted.end());
+  PointCloud cut;
+  for (std::size_t i = 0; i < h.size(); ++i)
+    if (h[i] < sorted[sorted.size() * 3 / 4]) cut.points.push_back(full.points[i]);
+  const Eigen::Matrix4d pose = similarity(2.5, 120, {1, 0, 1}, Eigen::Vector3d(-0.5, 0.2, 0.4));
+  const PointCloud source = moved(cut, pose);
+  auto p = fast();
+  p.overlap = 0.75;
+  const auto r = registerClouds(source, target, p);
+  expectRecovered(r, pose.inverse(), source, target, "partial");
+  EXPECT_LE(r.hausdorffTrimmed, r.hausdorff);
+}
+
+TEST(Registration, SameResultForAnyThreadCount) {
+  const PointCloud target = scan("bunny00", 6000, 51);
+  const PointCloud source = moved(scan("bunny00", 3000, 52), similarity(0.5, 95, {0, 1, 0}, {1, 2, 3}));
+  auto p = fast();
+  p.threads = 1;
+  const auto a = registerClouds(source, target, p);
+  p.threads = 2;
+  const auto b = registerClouds(source, target, p);
+  EXPECT_EQ(a.T_target_source, b.T_target_source);
+  EXPECT_EQ(a.bestCandidate, b.bestCandidate);
+  EXPECT_EQ(a.icpIterations, b.icpIterations);
+}
+
+TEST(Registration, DegenerateInputsAreRejectedOrFlagged) {
+  const PointCloud good = scan("bunny00", 3000, 61);
+  PointCloud few;
+  for (int i = 0; i < 5; ++i) few.points.emplace_back(i, i * i, 1.0 / (i + 1));
+  EXPECT_THROW(registerClouds(few, good, fast()), iires::InputError);
+  PointCloud line;
+  for (int i = 0; i < 500; ++i) line.points.emplace_back(i, 2 * i, -i);
+  try {
+    registerClouds(good, line, fast());
+    ADD_FAILURE() << "a collinear target was accepted";
+  } catch (const iires::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("target"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(registerClouds(PointCloud{}, good, fast()), iires::InputError);
+  PointCloud nan = good;
+  nan.points[7].x() = std::nan("");
+  EXPECT_THROW(registerClouds(nan, good, fast()), iires::InputError);
+  auto bad = fast();
+  bad.overlap = 0;
+  EXPECT_THROW(registerClouds(good, good, bad), std::invalid_argument);
+  bad = fast();
+  bad.samples = 10;
+  EXPECT_THROW(registerClouds(good, good, bad), std::invalid_argument);
+
+  // A planar cloud is registered but flagged: mirrored poses fit it equally well.
+  PointCloud plane = iires::test::planeCloud(4000, 1.0, 1.0, 7);
+  for (auto& q : plane.points) q.y() *= 0.6;  // a rectangle, not a square
+  PointCloud rect2 = iires::test::planeCloud(3000, 1.0, 1.0, 8);
+  for (auto& q : rect2.points) q.y() *= 0.6;
+  const auto r = registerClouds(moved(rect2, similarity(2, 30, {0, 0, 1}, Eigen::Vector3d(1, 1, 1))), plane, fast());
+  EXPECT_TRUE(r.planar);
+  EXPECT_TRUE(r.ambiguous);
+  EXPECT_FALSE(r.ambiguityReason.empty());
+}
+
+TEST(Registration, ReportAndTransformText) {
+  iires::reg::RegistrationResult r;
+  r.T_target_source = similarity(2, 30, {0, 0, 1}, {1, 2, 3});
+  r.timings = {{"search", 0.5}, {"total", 1.0}};
+  const std::string json = r.toJson();
+  for (const char* key : {"\"transform\"", "\"scale\"", "\"rotation\"", "\"rotation_angle_deg\"", "\"translation\"",
+                          "\"rmse\"", "\"hausdorff\"", "\"best_candidate\"", "\"icp_iterations\"", "\"ambiguous\"",
+                          "\"timings\"", "\"search_s\""})
+    EXPECT_NE(json.find(key), std::string::npos) << key;
+  std::istringstream text(iires::reg::formatTransform(r.T_target_source));
+  Eigen::Matrix4d back;
+  for (int i = 0; i < 4; ++i)
+    for (int j = 0; j < 4; ++j) text >> back(i, j);
+  EXPECT_EQ(back, r.T_target_source);
+}
+
+// ------------------------------------------------------------------ the command-line tool, end to end
+
+TEST(RegisterTool, WritesTransformReportAndAlignedCloud) {
+  const std::string dir = iires::test::tempDir();
+  const PointCloud target = scan("bunny00", 10000, 71);
+  const Eigen::Matrix4d pose = similarity(4, 135, {1, 2, 2}, {10, 0, -5});
+  const PointCloud source = moved(scan("bunny00", 4000, 72), pose);
+  iires::writePointCloud(dir + "/s.ply", source);
+  iires::writePointCloud(dir + "/t.xyz", target);
+  std::string out;
+  const int code = iires::test::run(iires::test::tool("iires-register") + " " + dir + "/s.ply " + dir +
+                                        "/t.xyz -o " + dir + "/aligned.ply --transform " + dir + "/T.txt --report " +
+                                        dir + "/r.json -m 1000 --threads 2 --seed 3 --quiet",
+                                    &out);
+  ASSERT_EQ(code, 0) << out;
+  EXPECT_TRUE(out.empty()) << out;
+  // T.txt: 4 rows of 4 numbers.
+  std::ifstream in(dir + "/T.txt");
+  Eigen::Matrix4d T;
+  std::string line;
+  for (int i = 0; i < 4; ++i) {
+    ASSERT_TRUE(std::getline(in, line));
+    std::istringstream row(line);
+    for (int j = 0; j < 4; ++j) ASSERT_TRUE(row >> T(i, j)) << line;
+    double extra;
+    EXPECT_FALSE(row >> extra) << line;
+  }
+  EXPECT_FALSE(std::getline(in, line) && !line.empty());
+  const PoseError e = poseError(T, pose.inverse(), source, target);
+  EXPECT_LT(e.rotDeg, 3.0);
+  EXPECT_LT(e.scale, 0.015);
+  EXPECT_NEAR(T(3, 3), 1.0, 0);
+  const std::string json = iires::test::readText(dir + "/r.json");
+  for (const char* key : {"\"scale\"", "\"rotation\"", "\"rotation_angle_deg\"", "\"translation\"", "\"rmse\"",
+                          "\"hausdorff\"", "\"best_candidate\"", "\"icp_iterations\"", "\"timings\""})
+    EXPECT_NE(json.find(key), std::string::npos) << key;
+  const PointCloud aligned = iires::readPointCloud(dir + "/aligned.ply");
+  ASSERT_EQ(aligned.size(), source.size());
+  EXPECT_LT((aligned.points[0] - (T.topLeftCorner<3, 3>() * source.points[0] + T.topRightCorner<3, 1>())).norm(),
+            1e-9);
+}
+
+TEST(RegisterTool, BadInputsExitTwoAndWriteNothing) {
+  const std::string dir = iires::test::tempDir();
+  const std::string reg = iires::test::tool("iires-register");
+  PointCloud line;
+  for (int i = 0; i < 100; ++i) line.points.emplace_back(i, 0, 0);
+  iires::writePointCloud(dir + "/line.xyz", line);
+  iires::writePointCloud(dir + "/ok.xyz", scan("bunny00", 2000, 81));
+  const std::string outs = " -o " + dir + "/a.ply --transform " + dir + "/T.txt --report " + dir + "/r.json";
+  std::string out;
+  EXPECT_EQ(iires::test::run(reg + " " + dir + "/missing.ply " + dir + "/ok.xyz" + outs, &out), 2);
+  EXPECT_NE(out.find("missing.ply"), std::string::npos) << out;
+  EXPECT_EQ(iires::test::run(reg + " " + dir + "/ok.xyz " + dir + "/line.xyz" + outs, &out), 2);
+  EXPECT_NE(out.find("line.xyz"), std::string::npos) << out;
+  EXPECT_NE(out.find("collinear"), std::string::npos) << out;
+  EXPECT_EQ(iires::test::run(reg + " " + dir + "/ok.xyz " + dir + "/ok.xyz --overlap 0" + outs, &out), 2);
+  EXPECT_EQ(iires::test::run(reg + " " + dir + "/ok.xyz " + dir + "/ok.xyz --grid hopf" + outs, &out), 2);
+  EXPECT_EQ(iires::test::run(reg + " " + dir + "/ok.xyz " + dir + "/ok.xyz -o " + dir + "/nodir/a.ply", &out), 2);
+  EXPECT_EQ(iires::test::run(reg + " " + dir + "/ok.xyz", &out), 2);
+  for (const char* f : {"/a.ply", "/T.txt", "/r.json"}) EXPECT_FALSE(iires::test::fileExists(dir + f)) << f;
+  EXPECT_EQ(iires::test::run(reg + " --version", &out), 0);
+  EXPECT_NE(out.find("iires"), std::string::npos);
+}
+
+}  // namespace
