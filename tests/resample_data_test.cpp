@@ -1,7 +1,9 @@
 // End-to-end acceptance of the isotropic resampler on CGAL's real models (issue: foundation).
 #include <gtest/gtest.h>
 
+#include "iires/features.hpp"
 #include "iires/io.hpp"
+#include "iires/knn.hpp"
 #include "iires/metrics.hpp"
 #include "iires/resample.hpp"
 #include "iires/sampling.hpp"
@@ -121,6 +123,54 @@ TEST(ResampleTool, BadInputExitsTwoWithoutOutput) {
     EXPECT_NE(text.find(c.mention), std::string::npos) << text;
     EXPECT_FALSE(iires::test::fileExists(output)) << c.input;
   }
+}
+
+}  // namespace
+
+namespace {
+
+// Adaptively isotropic (paper §4.2): exact N, spacing falls level by level, and no abrupt jumps.
+TEST(CurvatureMode, GradesSpacingWithCurvatureWithoutJumps) {
+  const auto mesh = iires::readMesh(dataPath("meshes/bunny00.off"));
+  iires::ResampleParams p;
+  p.targetCount = 10000;
+  p.mode = iires::ResampleMode::kCurvature;
+  const auto r = iires::resample(denseSampling(mesh, 100000), p);
+  ASSERT_EQ(r.cloud.size(), 10000u);
+  ASSERT_EQ(r.spacingPerLevel.size(), 5u);
+  for (std::size_t q = 1; q < r.spacingPerLevel.size(); ++q)
+    EXPECT_LT(r.spacingPerLevel[q], r.spacingPerLevel[q - 1]) << "level " << q;
+  // Neighbouring samples (6 nearest) whose own spacings differ by more than 1.5×: under 5 %.
+  const iires::KnnIndex index(r.cloud.points);
+  std::vector<std::uint32_t> idx;
+  std::vector<double> d2;
+  std::vector<double> nn(r.cloud.size());
+  for (std::size_t i = 0; i < nn.size(); ++i) {
+    index.knn(r.cloud.points[i], 2, idx, d2);
+    nn[i] = std::sqrt(d2[1]);
+  }
+  std::size_t pairs = 0, smooth = 0;
+  for (std::size_t i = 0; i < nn.size(); ++i) {
+    index.knn(r.cloud.points[i], 7, idx, d2);
+    for (std::size_t k = 1; k < idx.size(); ++k, ++pairs)
+      smooth += std::max(nn[i], nn[idx[k]]) <= 1.5 * std::min(nn[i], nn[idx[k]]);
+  }
+  EXPECT_GE(static_cast<double>(smooth) / static_cast<double>(pairs), 0.95);
+}
+
+// Sharp edges: exact N with samples held on the detected creases, every one of them on the surface.
+// (Crease coverage is not yet better than the isotropic mode's on non-uniform input: see issue 5's note.)
+TEST(SharpEdges, KeepsExactCountWithSamplesOnTheCreases) {
+  const auto mesh = iires::readMesh(dataPath("meshes/fandisk.off"));
+  iires::ResampleParams p;
+  p.targetCount = 10000;
+  p.sharpEdges = true;
+  const auto r = iires::resample(denseSampling(mesh, 100000), p);
+  ASSERT_EQ(r.cloud.size(), 10000u);
+  EXPECT_GT(r.featurePoints, 1000u);
+  EXPECT_GT(r.featureSamples, 100u);
+  const iires::MeshDistance distance(mesh);
+  EXPECT_LE(distance.distances(r.cloud.points).mean, 0.001 * distance.diagonal());
 }
 
 }  // namespace

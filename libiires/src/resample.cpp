@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <numeric>
+#include <optional>
 #include <queue>
 #include <sstream>
 #include <stdexcept>
@@ -46,17 +47,20 @@ struct Rings {
   std::vector<Eigen::Vector3d> centroid;
   std::vector<double> nearest;  // distance to the nearest accepted neighbour
   std::vector<Eigen::Vector3d> outward;  // unit tangent pointing off the surface at boundary samples, else 0
+  std::vector<double> size;  // each sample's target size factor s (1 in isotropic mode)
 };
 
 struct Edge {
-  double length;
+  double length;  // in units of the local target size (s_a + s_b) / 2: the plain length in isotropic mode
   std::uint32_t a, b;
 };
 
-/// Clip a convex polygon (edge e runs from v[e] to v[e+1] and carries label lab[e]) by {x : x·q ≤ |q|²/2}.
+/// Clip a convex polygon (edge e runs from v[e] to v[e+1] and carries label lab[e]) by {x : x·q ≤ t·|q|²}:
+/// t = 1/2 is the bisector; t = s_i/(s_i + s_j) weights it by the target sizes (adaptive mode).
 void clipByBisector(std::vector<Eigen::Vector2d>& v, std::vector<std::uint32_t>& lab, const Eigen::Vector2d& q,
-                    std::uint32_t label, std::vector<Eigen::Vector2d>& outV, std::vector<std::uint32_t>& outL) {
-  const double c = 0.5 * q.squaredNorm();
+                    double t, std::uint32_t label, std::vector<Eigen::Vector2d>& outV,
+                    std::vector<std::uint32_t>& outL) {
+  const double c = t * q.squaredNorm();
   outV.clear();
   outL.clear();
   const std::size_t m = v.size();
@@ -95,9 +99,11 @@ Eigen::Vector2d polygonCentroid(const std::vector<Eigen::Vector2d>& v) {
 
 class Resampler {
  public:
+  /// @param size per input point target-size factor (curvature mode), or null (isotropic)
   Resampler(const std::vector<Eigen::Vector3d>& pts, const std::vector<Eigen::Vector3d>& normals,
-            const MlsSurface& surface, const ResampleParams& params, NeighbourRule& rule)
-      : pts_(pts), normals_(normals), surface_(surface), params_(params), rule_(rule) {}
+            const MlsSurface& surface, const ResampleParams& params, NeighbourRule& rule,
+            const std::vector<double>* size)
+      : pts_(pts), normals_(normals), surface_(surface), params_(params), rule_(rule), size_(size) {}
 
   Samples initialise(ResampleResult& result);
   void run(Samples& s, ResampleResult& result);
@@ -116,6 +122,7 @@ class Resampler {
   const MlsSurface& surface_;
   const ResampleParams& params_;
   NeighbourRule& rule_;
+  const std::vector<double>* size_;
 };
 
 Rings Resampler::computeRings(const Samples& s, double cellRadius, bool refreshRule) const {
@@ -127,6 +134,9 @@ Rings Resampler::computeRings(const Samples& s, double cellRadius, bool refreshR
   r.centroid.resize(s.size());
   r.nearest.assign(s.size(), 0.0);
   r.outward.assign(s.size(), Eigen::Vector3d::Zero());
+  r.size.assign(s.size(), 1.0);
+  if (size_)  // adaptive mode (eq. 10): a sample takes the size factor of its nearest input point
+    parallelFor(s.size(), params_.threads, [&](std::size_t i) { r.size[i] = (*size_)[surface_.index().nearest(s.pos[i])]; });
   KnnIndex index(s.pos);
   parallelFor(s.size(), params_.threads, [&](std::size_t i) {
     // Per-thread scratch buffers: this runs for every sample in every iteration.
@@ -153,7 +163,7 @@ Rings Resampler::computeRings(const Samples& s, double cellRadius, bool refreshR
     // The cell is bounded by a disc of radius R (for open boundaries); R follows the local spacing where the
     // samples are sparser than l (upsampling), so rings never depend on how far the count still is from N.
     const double nearest = nb.empty() ? 0.0 : nb.front().second.norm();
-    const double radius = std::max(cellRadius, nearest);
+    const double radius = std::max(cellRadius * r.size[i], nearest);
     poly.clear();
     lab.clear();
     const double rad = radius / std::cos(M_PI / 16);
@@ -163,7 +173,7 @@ Rings Resampler::computeRings(const Samples& s, double cellRadius, bool refreshR
     }
     for (const auto& [j, q] : nb) {
       if (q.norm() > 4.0 * radius) break;  // sorted by distance: the rest cannot touch the cell
-      clipByBisector(poly, lab, q, j, tmpV, tmpL);
+      clipByBisector(poly, lab, q, r.size[i] / (r.size[i] + r.size[j]), j, tmpV, tmpL);
       if (poly.size() < 3) break;
     }
     const Eigen::Vector2d c2 = poly.size() >= 3 ? polygonCentroid(poly) : Eigen::Vector2d::Zero();
@@ -206,7 +216,7 @@ std::vector<Edge> Resampler::edges(const Samples& s, const Rings& r) const {
       if (b == kNone || b <= a) continue;
       const auto* rb = &r.ring[b * k];
       if (std::find(rb, rb + k, static_cast<std::uint32_t>(a)) == rb + k) continue;
-      out.push_back({(s.pos[a] - s.pos[b]).norm(), static_cast<std::uint32_t>(a), b});
+      out.push_back({(s.pos[a] - s.pos[b]).norm() / (0.5 * (r.size[a] + r.size[b])), static_cast<std::uint32_t>(a), b});
     }
   return out;
 }
@@ -355,18 +365,23 @@ void Resampler::eliminate(Samples& s, std::size_t count) {
   const double rmax = std::sqrt(surface_.area() / (2.0 * std::sqrt(3.0) * static_cast<double>(count)));
   const double ratio = static_cast<double>(count) / static_cast<double>(s.size());
   const double rmin = rmax * (1.0 - 0.65 * std::pow(ratio, 1.5));
-  const double radius = 2.0 * rmax;
+  // Adaptive mode: the Poisson-disk radius of a pair scales with the mean size factor of its two samples.
+  std::vector<double> sz(s.size(), 1.0);
+  if (size_)
+    parallelFor(s.size(), params_.threads, [&](std::size_t i) { sz[i] = (*size_)[surface_.index().nearest(s.pos[i])]; });
+  const double maxSize = *std::max_element(sz.begin(), sz.end());
   KnnIndex index(s.pos);
   rule_.update(s.pos, s.nrm);  // only neighbours by the rule crowd each other (not across a thin gap)
   std::vector<std::vector<std::pair<std::uint32_t, double>>> nb(s.size());
   parallelFor(s.size(), params_.threads, [&](std::size_t i) {
     std::vector<std::uint32_t> idx;
     std::vector<double> d2;
-    index.radius(s.pos[i], radius, idx, d2);
+    index.radius(s.pos[i], 2.0 * rmax * 0.5 * (sz[i] + maxSize), idx, d2);
     for (std::size_t c = 0; c < idx.size(); ++c) {
       if (idx[c] == i || !rule_.accept(i, idx[c])) continue;
-      const double d = std::max(std::sqrt(d2[c]), 2.0 * rmin);
-      nb[i].emplace_back(idx[c], std::pow(1.0 - d / radius, 8.0));
+      const double scale = 0.5 * (sz[i] + sz[idx[c]]), radius = 2.0 * rmax * scale;
+      const double d = std::max(std::sqrt(d2[c]), 2.0 * rmin * scale);
+      if (d < radius) nb[i].emplace_back(idx[c], std::pow(1.0 - d / radius, 8.0));
     }
   });
   std::vector<double> weight(s.size(), 0.0);
@@ -502,6 +517,14 @@ std::string jsonNumber(double x) {
   return os.str();
 }
 
+template <typename T>
+std::string jsonArray(const std::vector<T>& values) {
+  std::string out = "[";
+  for (std::size_t i = 0; i < values.size(); ++i)
+    out += (i ? ", " : "") + jsonNumber(static_cast<double>(values[i]));
+  return out + "]";
+}
+
 }  // namespace
 
 void ResampleParams::validate() const {
@@ -516,6 +539,8 @@ void ResampleParams::validate() const {
   if (!(candidateFactor >= 1.0)) throw std::invalid_argument("candidateFactor must be >= 1");
   if (mls.k < 3) throw std::invalid_argument("mls.k must be >= 3");
   if (threads < 0) throw std::invalid_argument("threads must be >= 0 (0 = all cores)");
+  if (mode == ResampleMode::kCurvature) curvature.validate();
+  if (sharpEdges && !(edgeRatio > 0.0)) throw std::invalid_argument("edgeRatio must be > 0");
   if (fixedSamples.size() > targetCount)
     throw std::invalid_argument("more fixed samples than the requested point count");
 }
@@ -528,6 +553,9 @@ std::string ResampleResult::toJson() const {
      << ",\n  \"relax_iterations\": " << relaxIterations << ",\n  \"splits\": " << splits
      << ",\n  \"collapses\": " << collapses << ",\n  \"target_length\": " << jsonNumber(targetLength)
      << ",\n  \"components\": " << components << ",\n  \"satellites\": " << satellites
+     << ",\n  \"feature_points\": " << featurePoints << ",\n  \"feature_samples\": " << featureSamples
+     << ",\n  \"points_per_level\": " << jsonArray(pointsPerLevel)
+     << ",\n  \"spacing_per_level\": " << jsonArray(spacingPerLevel)
      << ",\n  \"preprocess\": " << preprocessing.toJson()
      << ",\n  \"spacing\": {\"mean\": " << jsonNumber(spacing.mean) << ", \"min\": " << jsonNumber(spacing.min)
      << ", \"max\": " << jsonNumber(spacing.max) << ", \"cv\": " << jsonNumber(spacing.cv) << "},\n  \"time_s\": {";
@@ -589,7 +617,35 @@ ResampleResult resample(const PointCloud& input, const ResampleParams& params) {
     stage("geodesic", t);
   }
   if (!rule) rule = std::make_shared<EuclideanRule>();
-  Resampler resampler(cloud.points, cloud.normals, surface, params, *rule);
+
+  std::optional<CurvatureResult> curvature;
+  if (params.mode == ResampleMode::kCurvature) {
+    t = Clock::now();
+    CurvatureParams cp = params.curvature;
+    cp.threads = params.threads;
+    curvature = computeCurvature(cloud.points, cloud.normals, cp);  // eq. (8)–(10)
+    stage("curvature", t);
+  }
+  ResampleParams local = params;  // sharp edges add fixed samples
+  if (params.sharpEdges) {
+    t = Clock::now();
+    FeatureParams fp = params.features;
+    fp.threads = params.threads;
+    const FeatureResult features = detectFeatures(cloud, fp);
+    const double l0 = std::sqrt(2.0 * surface.area() / (std::sqrt(3.0) * static_cast<double>(params.targetCount)));
+    std::vector<Eigen::Vector3d> onEdges = sampleFeatureChains(features.chains, params.edgeRatio * l0);
+    if (onEdges.size() + params.fixedSamples.size() > params.targetCount / 2)  // never let edges take over N
+      onEdges = sampleFeatureChains(features.chains, params.edgeRatio * l0 * 2.0 *
+                                                         static_cast<double>(onEdges.size()) /
+                                                         static_cast<double>(params.targetCount));
+    result.featurePoints = features.featureIndices.size();
+    result.featureSamples = std::min(onEdges.size(), params.targetCount - params.fixedSamples.size());
+    local.fixedSamples.insert(local.fixedSamples.end(), onEdges.begin(),
+                              onEdges.begin() + static_cast<long>(result.featureSamples));
+    stage("features", t);
+  }
+  Resampler resampler(cloud.points, cloud.normals, surface, local, *rule,
+                      curvature ? &curvature->sizeFactor : nullptr);
   t = Clock::now();
   Samples s = resampler.initialise(result);
   stage("initialise", t);
@@ -602,6 +658,21 @@ ResampleResult resample(const PointCloud& input, const ResampleParams& params) {
   result.cloud.normals = std::move(s.nrm);
   t = Clock::now();
   result.spacing = spacingStats(result.cloud.points, params.threads);
+  if (curvature) {  // points and mean spacing per level (each output point takes its nearest input's level)
+    const std::size_t levels = curvature->pointsPerLevel.size();
+    result.pointsPerLevel.assign(levels, 0);
+    result.spacingPerLevel.assign(levels, 0.0);
+    const KnnIndex out(result.cloud.points);
+    std::vector<std::uint32_t> idx;
+    std::vector<double> d2;
+    for (const Eigen::Vector3d& p : result.cloud.points) {
+      const auto level = static_cast<std::size_t>(curvature->level[surface.index().nearest(p)]);
+      ++result.pointsPerLevel[level];
+      if (out.knn(p, 2, idx, d2) == 2) result.spacingPerLevel[level] += std::sqrt(d2[1]);
+    }
+    for (std::size_t q = 0; q < levels; ++q)
+      if (result.pointsPerLevel[q]) result.spacingPerLevel[q] /= static_cast<double>(result.pointsPerLevel[q]);
+  }
   stage("report", t);
   stage("total", start);
   return result;

@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include "iires/curvature.hpp"
+#include "iires/features.hpp"
 #include "iires/geodesic.hpp"
 #include "iires/intrinsic.hpp"
 #include "iires/metrics.hpp"
@@ -19,9 +21,17 @@
 
 namespace iires {
 
+/// @brief Isotropic: one target spacing everywhere; Curvature: denser where the surface bends (paper §4.2).
+enum class ResampleMode { kIsotropic, kCurvature };
+
 /// @brief Parameters of resample(). Defaults in brackets are the paper's where it gives one.
 struct ResampleParams {
   std::size_t targetCount = 10000;  ///< N, the exact number of output points (≥ 1)
+  ResampleMode mode = ResampleMode::kIsotropic;  ///< `--mode isotropic|curvature`
+  CurvatureParams curvature;        ///< curvature mode: eq. 8–10 (levels, ratios flat → curved)
+  bool sharpEdges = false;          ///< detect sharp features and keep samples on them (`--sharp-edges`)
+  FeatureParams features;           ///< the feature detector and its chains
+  double edgeRatio = 0.5;           ///< spacing of the samples on feature lines, in units of l (`--edge-ratio`)
   int neighbours = 14;              ///< Euclidean candidates per sample for its 1-ring (≥ 6)
   double splitRatio = 1.6;          ///< split edges longer than splitRatio·l [paper 1.6; Botsch–Kobbelt 4/3]
   double collapseRatio = 0.8;       ///< collapse edges shorter than collapseRatio·l [0.8]
@@ -76,6 +86,10 @@ struct ResampleResult {
   std::vector<std::array<std::uint32_t, 2>> ringEdges;
   /// What pre-processing did (its cloud left empty: the cleaned input is not kept); all zero when skipped.
   PreprocessResult preprocessing;
+  std::vector<std::size_t> pointsPerLevel;  ///< curvature mode: output points per level, flat → curved
+  std::vector<double> spacingPerLevel;      ///< curvature mode: mean nearest-neighbour spacing per level
+  std::size_t featurePoints = 0;     ///< sharp edges: input points detected on features
+  std::size_t featureSamples = 0;    ///< sharp edges: samples held on the feature lines (part of the N)
   std::size_t components = 0;        ///< connected components of the input (intrinsic control), else 0
   std::size_t satellites = 0;        ///< geodesic satellites in all (3 per component)
   /// The geodesic coordinates of the input (intrinsic control), e.g. for writeGeodesicPly; else null.
