@@ -97,6 +97,54 @@ Eigen::Vector2d polygonCentroid(const std::vector<Eigen::Vector2d>& v) {
   return std::abs(area) < 1e-300 ? Eigen::Vector2d::Zero() : Eigen::Vector2d(c / (3.0 * area));
 }
 
+/// Voxel thinning (DESIGN §3.5): cells sized by secant steps on the cell size (from @p cell) so that about
+/// @p target are occupied; per cell the point nearest its centre, indices ascending. With normals, the normal's
+/// dominant signed axis is part of the cell key, so facing sheets of a thin part that share a cell (a gap
+/// narrower than the cell) each keep a point.
+std::vector<std::uint32_t> voxelThin(const std::vector<Eigen::Vector3d>& pts, const std::vector<Eigen::Vector3d>& normals,
+                                     std::size_t target, double cell) {
+  Eigen::Vector3d lo = pts[0];
+  for (const auto& p : pts) lo = lo.cwiseMin(p);
+  auto occupancy = [&](double size, std::vector<std::uint32_t>* chosen) {
+    std::unordered_map<std::uint64_t, std::uint32_t> best;
+    best.reserve(std::min(pts.size(), target * 4));
+    auto key = [&](const Eigen::Vector3d& p, Eigen::Vector3d& centre) {
+      const Eigen::Vector3d q = (p - lo) / size;
+      const auto ix = static_cast<std::uint64_t>(q.x()), iy = static_cast<std::uint64_t>(q.y()),
+                 iz = static_cast<std::uint64_t>(q.z());
+      centre = lo + size * Eigen::Vector3d(ix + 0.5, iy + 0.5, iz + 0.5);
+      return (ix << 42) ^ (iy << 21) ^ iz;
+    };
+    auto normalClass = [&](std::uint32_t i) -> std::uint64_t {
+      if (normals.empty()) return 0;
+      Eigen::Index axis;
+      normals[i].cwiseAbs().maxCoeff(&axis);
+      return static_cast<std::uint64_t>(2 * axis + (normals[i][axis] < 0 ? 1 : 0));
+    };
+    Eigen::Vector3d centre;
+    for (std::uint32_t i = 0; i < pts.size(); ++i) {
+      auto [it, inserted] = best.emplace(key(pts[i], centre) * 8 + normalClass(i), i);
+      if (!inserted && chosen && (pts[i] - centre).squaredNorm() < (pts[it->second] - centre).squaredNorm())
+        it->second = i;
+    }
+    if (chosen) {
+      chosen->clear();
+      for (const auto& [h, i] : best) chosen->push_back(i);
+      std::sort(chosen->begin(), chosen->end());
+    }
+    return best.size();
+  };
+  // Occupied cells scale like cell⁻² on a surface.
+  for (int step = 0; step < 8; ++step) {
+    const double ratio = static_cast<double>(occupancy(cell, nullptr)) / static_cast<double>(target);
+    if (ratio > 0.85 && ratio < 1.2) break;
+    cell *= std::sqrt(std::clamp(ratio, 0.25, 4.0));
+  }
+  std::vector<std::uint32_t> chosen;
+  occupancy(cell, &chosen);
+  return chosen;
+}
+
 class Resampler {
  public:
   /// @param size per input point target-size factor (curvature mode), or null (isotropic)
@@ -115,7 +163,6 @@ class Resampler {
   void splitAndCollapse(Samples& s, const std::vector<Edge>& sorted, std::size_t splits, double minSplit,
                         std::size_t collapses, double maxCollapse, ResampleResult& result);
   void eliminate(Samples& s, std::size_t count);
-  std::vector<std::uint32_t> voxelCandidates(std::size_t target) const;
 
   const std::vector<Eigen::Vector3d>& pts_;
   const std::vector<Eigen::Vector3d>& normals_;
@@ -308,56 +355,6 @@ void Resampler::splitAndCollapse(Samples& s, const std::vector<Edge>& sorted, st
   result.collapses += collapsed;
 }
 
-/// Voxel density initialisation (DESIGN §3.5): cells sized so that about @p target are occupied, one input
-/// point per cell — the one nearest the cell centre.
-std::vector<std::uint32_t> Resampler::voxelCandidates(std::size_t target) const {
-  Eigen::Vector3d lo = pts_[0];
-  for (const auto& p : pts_) lo = lo.cwiseMin(p);
-  auto occupancy = [&](double cell, std::vector<std::uint32_t>* chosen) {
-    std::unordered_map<std::uint64_t, std::uint32_t> best;
-    best.reserve(std::min(pts_.size(), target * 4));
-    auto key = [&](const Eigen::Vector3d& p, Eigen::Vector3d& centre) {
-      const Eigen::Vector3d q = (p - lo) / cell;
-      const auto ix = static_cast<std::uint64_t>(q.x()), iy = static_cast<std::uint64_t>(q.y()),
-                 iz = static_cast<std::uint64_t>(q.z());
-      centre = lo + cell * Eigen::Vector3d(ix + 0.5, iy + 0.5, iz + 0.5);
-      return (ix << 42) ^ (iy << 21) ^ iz;
-    };
-    // The normal's dominant signed axis is part of the key, so facing sheets of a thin part that share a cell
-    // (a gap narrower than the cell) each keep a candidate.
-    auto normalClass = [&](std::uint32_t i) {
-      Eigen::Index axis;
-      normals_[i].cwiseAbs().maxCoeff(&axis);
-      return static_cast<std::uint64_t>(2 * axis + (normals_[i][axis] < 0 ? 1 : 0));
-    };
-    Eigen::Vector3d centre;
-    for (std::uint32_t i = 0; i < pts_.size(); ++i) {
-      const std::uint64_t h = key(pts_[i], centre) * 8 + normalClass(i);
-      auto [it, inserted] = best.emplace(h, i);
-      if (!inserted && chosen) {
-        if ((pts_[i] - centre).squaredNorm() < (pts_[it->second] - centre).squaredNorm()) it->second = i;
-      }
-    }
-    if (chosen) {
-      chosen->clear();
-      for (const auto& [h, i] : best) chosen->push_back(i);
-      std::sort(chosen->begin(), chosen->end());
-    }
-    return best.size();
-  };
-  // Secant steps on log(cell) against log(count): occupied cells scale like cell⁻² on a surface.
-  double cell = std::sqrt(surface_.area() / static_cast<double>(target));
-  for (int step = 0; step < 8; ++step) {
-    const double count = static_cast<double>(occupancy(cell, nullptr));
-    const double ratio = count / static_cast<double>(target);
-    if (ratio > 0.85 && ratio < 1.2) break;
-    cell *= std::sqrt(std::clamp(ratio, 0.25, 4.0));
-  }
-  std::vector<std::uint32_t> chosen;
-  occupancy(cell, &chosen);
-  return chosen;
-}
-
 /// Weighted sample elimination (Yuksel 2015) of free samples down to @p count: repeatedly drop the sample whose
 /// neighbours within 2·r_max crowd it most. Gives a Poisson-disk-like set whatever the input density.
 void Resampler::eliminate(Samples& s, std::size_t count) {
@@ -431,7 +428,7 @@ Samples Resampler::initialise(ResampleResult& result) {
     chosen.resize(pts_.size());
     std::iota(chosen.begin(), chosen.end(), 0u);
   } else {
-    chosen = voxelCandidates(candidates);
+    chosen = voxelThin(pts_, normals_, candidates, std::sqrt(surface_.area() / static_cast<double>(candidates)));
   }
   std::vector<Eigen::Vector3d> pos(chosen.size()), nrm(chosen.size());
   parallelFor(chosen.size(), params_.threads, [&](std::size_t c) { pos[c] = surface_.project(pts_[chosen[c]], &nrm[c]); });
@@ -536,6 +533,7 @@ void ResampleParams::validate() const {
     throw std::invalid_argument("pass and iteration counts must be >= 0 (patience >= 1)");
   if (!(overRelaxation >= 1.0 && overRelaxation < 2.0)) throw std::invalid_argument("overRelaxation must be in [1, 2)");
   if (!(maxEditShare >= 0.0 && maxEditShare <= 0.5)) throw std::invalid_argument("maxEditShare must be in [0, 0.5]");
+  if (maxInputPerSample > 0 && maxInputPerSample < 4) throw std::invalid_argument("maxInputPerSample must be 0 or >= 4");
   if (!(candidateFactor >= 1.0)) throw std::invalid_argument("candidateFactor must be >= 1");
   if (mls.k < 3) throw std::invalid_argument("mls.k must be >= 3");
   if (threads < 0) throw std::invalid_argument("threads must be >= 0 (0 = all cores)");
@@ -549,7 +547,7 @@ std::string ResampleResult::toJson() const {
   std::ostringstream os;
   os << "{\n  \"input_points\": " << inputPoints << ",\n  \"duplicates_merged\": " << duplicatesMerged
      << ",\n  \"requested_points\": " << requestedPoints << ",\n  \"output_points\": " << cloud.size()
-     << ",\n  \"initial_samples\": " << initialSamples << ",\n  \"passes\": " << passes
+     << ",\n  \"working_points\": " << thinnedPoints << ",\n  \"initial_samples\": " << initialSamples << ",\n  \"passes\": " << passes
      << ",\n  \"relax_iterations\": " << relaxIterations << ",\n  \"splits\": " << splits
      << ",\n  \"collapses\": " << collapses << ",\n  \"target_length\": " << jsonNumber(targetLength)
      << ",\n  \"components\": " << components << ",\n  \"satellites\": " << satellites
@@ -578,6 +576,22 @@ ResampleResult resample(const PointCloud& input, const ResampleParams& params) {
   const ValidationReport report = validateCloud(cloud, 4, "input");
   result.duplicatesMerged = report.duplicatesMerged;
   stage("validate", t);
+
+  if (params.maxInputPerSample > 0 && cloud.size() > params.maxInputPerSample * params.targetCount) {
+    // Far denser than the output: thin first, so every O(n) stage below works on ≈ maxInputPerSample·N points.
+    t = Clock::now();
+    const std::size_t target = params.maxInputPerSample * params.targetCount;
+    const std::vector<std::uint32_t> keep =
+        voxelThin(cloud.points, cloud.normals, target, bboxDiagonal(cloud.points) / std::sqrt(static_cast<double>(target)));
+    PointCloud thin;
+    for (std::uint32_t i : keep) {
+      thin.points.push_back(cloud.points[i]);
+      if (cloud.hasNormals()) thin.normals.push_back(cloud.normals[i]);
+    }
+    cloud = std::move(thin);
+    stage("thin", t);
+  }
+  result.thinnedPoints = cloud.size();
 
   constexpr std::size_t kPreprocessMinPoints = 25;
   if (params.preprocess && cloud.size() >= kPreprocessMinPoints) {

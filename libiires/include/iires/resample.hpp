@@ -42,6 +42,9 @@ struct ResampleParams {
   int relaxPatience = 1;            ///< stop the final relaxation after this many rounds without a better CV
   double overRelaxation = 1.5;      ///< Lloyd step factor ω: move to p + ω(c − p); 1 = plain Lloyd, < 2
   double candidateFactor = 3.0;     ///< density initialisation keeps ≈ this × N voxel cells, then eliminates to N
+  /// Inputs with more than this × N points are voxel-thinned to about that many first (one point per cell, the
+  /// nearest its centre): the surface stays sampled several times finer than the output. 0 = never thin.
+  std::size_t maxInputPerSample = 16;
   /// Pre-processing of the input before anything else (paper §3.1): outliers pulled back (or removed/kept)
   /// and MLS denoising. Skipped for clouds too small for it (fewer than 25 points).
   bool preprocess = true;
@@ -76,6 +79,7 @@ struct ResampleResult {
   std::size_t inputPoints = 0;       ///< points read
   std::size_t duplicatesMerged = 0;  ///< exact duplicates merged during validation
   std::size_t requestedPoints = 0;   ///< N
+  std::size_t thinnedPoints = 0;     ///< input points the pipeline worked on (after validation and thinning)
   std::size_t initialSamples = 0;    ///< samples after density initialisation
   int passes = 0;                    ///< count-control passes run
   int relaxIterations = 0;           ///< Lloyd relaxation iterations run in total
