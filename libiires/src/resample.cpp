@@ -577,10 +577,12 @@ ResampleResult resample(const PointCloud& input, const ResampleParams& params) {
   result.duplicatesMerged = report.duplicatesMerged;
   stage("validate", t);
 
-  if (params.maxInputPerSample > 0 && cloud.size() > params.maxInputPerSample * params.targetCount) {
+  constexpr std::size_t kMinWorkingPoints = 50000;  // thinning never goes below this: small N keep a fine surface
+  const std::size_t workingTarget = std::max(kMinWorkingPoints, params.maxInputPerSample * params.targetCount);
+  if (params.maxInputPerSample > 0 && cloud.size() > workingTarget) {
     // Far denser than the output: thin first, so every O(n) stage below works on ≈ maxInputPerSample·N points.
     t = Clock::now();
-    const std::size_t target = params.maxInputPerSample * params.targetCount;
+    const std::size_t target = workingTarget;
     const std::vector<std::uint32_t> keep =
         voxelThin(cloud.points, cloud.normals, target, bboxDiagonal(cloud.points) / std::sqrt(static_cast<double>(target)));
     PointCloud thin;
