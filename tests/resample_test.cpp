@@ -91,6 +91,24 @@ TEST(Resample, FixedSamplesStayPut) {
     EXPECT_NE(std::find(r.cloud.points.begin(), r.cloud.points.end(), f), r.cloud.points.end());
 }
 
+// Two objects 0.01 apart (radii 0.5 and 0.35, input spacing ≈ 0.009): two components, never linked by a
+// 1-ring edge, and the samples shared in proportion to area (0.25 : 0.1225).
+TEST(Resample, TwoNearlyTouchingSpheresSplitByArea) {
+  const Eigen::Vector3d smallCentre(0.86, 0, 0);
+  auto cloud = iires::test::sphereCloud(20000, 0.5, 31);
+  const auto small = iires::test::sphereCloud(9800, 0.35, 32, smallCentre);
+  cloud.points.insert(cloud.points.end(), small.points.begin(), small.points.end());
+  cloud.normals.insert(cloud.normals.end(), small.normals.begin(), small.normals.end());
+  const auto r = iires::resample(cloud, paramsFor(2000));
+  ASSERT_EQ(r.cloud.size(), 2000u);
+  EXPECT_EQ(r.components, 2u);
+  auto onSmall = [&](std::uint32_t i) { return (r.cloud.points[i] - smallCentre).norm() < 0.355; };
+  std::size_t count = 0;
+  for (std::uint32_t i = 0; i < 2000; ++i) count += onSmall(i);
+  EXPECT_NEAR(static_cast<double>(count) / 2000.0, 0.1225 / 0.3725, 0.02);
+  for (const auto& e : r.ringEdges) EXPECT_EQ(onSmall(e[0]), onSmall(e[1])) << "a 1-ring edge links the spheres";
+}
+
 TEST(Resample, RejectsBadInputAndParameters) {
   iires::PointCloud empty;
   EXPECT_THROW(iires::resample(empty, paramsFor(10)), iires::InputError);

@@ -44,7 +44,8 @@ PreprocessResult preprocess(const PointCloud& input, const PreprocessParams& par
   if (params.runDenoise) {
     // eq. (1)–(3). The first sweep doubles as a noise probe: when it moves points by less than
     // cleanDisplacement input spacings on average, the cloud is already clean and further sweeps would only
-    // erode tight curvature (folds, thin parts, sparse clouds) — keep the positions, take the fitted normals.
+    // erode tight curvature (folds, thin parts, sparse clouds) — keep the positions (and the given normals, else
+    // take the fitted ones).
     DenoiseParams first = dp;
     first.iterations = std::min(1, dp.iterations);
     DenoiseResult denoised = denoise(outliers.cloud, first);
@@ -53,6 +54,7 @@ PreprocessResult preprocess(const PointCloud& input, const PreprocessParams& par
     result.cleanInput = denoised.meanDisplacement < params.cleanDisplacement * spacing;
     if (result.cleanInput) {
       denoised.cloud.points = std::move(outliers.cloud.points);
+      if (outliers.cloud.hasNormals()) denoised.cloud.normals = std::move(outliers.cloud.normals);
     } else if (dp.iterations > 1) {
       DenoiseParams rest = dp;
       rest.iterations = dp.iterations - 1;
