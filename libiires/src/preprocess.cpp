@@ -53,8 +53,8 @@ PreprocessResult preprocess(const PointCloud& input, const PreprocessParams& par
     result.denoiseSeconds = denoised.seconds;
     result.cleanInput = denoised.meanDisplacement < params.cleanDisplacement * spacing;
     if (result.cleanInput) {
-      denoised.cloud.points = std::move(outliers.cloud.points);
       if (outliers.cloud.hasNormals()) denoised.cloud.normals = std::move(outliers.cloud.normals);
+      denoised.cloud.points = std::move(outliers.cloud.points);
     } else if (dp.iterations > 1) {
       DenoiseParams rest = dp;
       rest.iterations = dp.iterations - 1;
