@@ -15,6 +15,7 @@
 
 #include "iires/knn.hpp"
 #include "iires/parallel.hpp"
+#include "iires/tangent_cell.hpp"
 #include "iires/validate.hpp"
 
 namespace iires {
@@ -54,48 +55,6 @@ struct Edge {
   double length;  // in units of the local target size (s_a + s_b) / 2: the plain length in isotropic mode
   std::uint32_t a, b;
 };
-
-/// Clip a convex polygon (edge e runs from v[e] to v[e+1] and carries label lab[e]) by {x : x·q ≤ t·|q|²}:
-/// t = 1/2 is the bisector; t = s_i/(s_i + s_j) weights it by the target sizes (adaptive mode).
-void clipByBisector(std::vector<Eigen::Vector2d>& v, std::vector<std::uint32_t>& lab, const Eigen::Vector2d& q,
-                    double t, std::uint32_t label, std::vector<Eigen::Vector2d>& outV,
-                    std::vector<std::uint32_t>& outL) {
-  const double c = t * q.squaredNorm();
-  outV.clear();
-  outL.clear();
-  const std::size_t m = v.size();
-  for (std::size_t e = 0; e < m; ++e) {
-    const Eigen::Vector2d& a = v[e];
-    const Eigen::Vector2d& b = v[(e + 1) % m];
-    const double sa = a.dot(q) - c, sb = b.dot(q) - c;
-    if (sa <= 0) {
-      outV.push_back(a);
-      outL.push_back(lab[e]);
-      if (sb > 0) {
-        outV.push_back(a + (b - a) * (sa / (sa - sb)));
-        outL.push_back(label);
-      }
-    } else if (sb <= 0) {
-      outV.push_back(a + (b - a) * (sa / (sa - sb)));
-      outL.push_back(lab[e]);
-    }
-  }
-  v.swap(outV);
-  lab.swap(outL);
-}
-
-Eigen::Vector2d polygonCentroid(const std::vector<Eigen::Vector2d>& v) {
-  double area = 0;
-  Eigen::Vector2d c = Eigen::Vector2d::Zero();
-  for (std::size_t e = 0; e < v.size(); ++e) {
-    const Eigen::Vector2d& a = v[e];
-    const Eigen::Vector2d& b = v[(e + 1) % v.size()];
-    const double cross = a.x() * b.y() - a.y() * b.x();
-    area += cross;
-    c += cross * (a + b);
-  }
-  return std::abs(area) < 1e-300 ? Eigen::Vector2d::Zero() : Eigen::Vector2d(c / (3.0 * area));
-}
 
 /// Voxel thinning (DESIGN §3.5): cells sized by secant steps on the cell size (from @p cell) so that about
 /// @p target are occupied; per cell the point nearest its centre, indices ascending. With normals, the normal's

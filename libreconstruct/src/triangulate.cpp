@@ -9,6 +9,7 @@
 #include <unordered_set>
 
 #include "iires/knn.hpp"
+#include "iires/tangent_cell.hpp"
 #include "iires/parallel.hpp"
 #include "iires/reconstruct/mesh_quality.hpp"
 #include "iires/reconstruct/mesh_repair.hpp"
@@ -18,34 +19,6 @@ namespace {
 
 constexpr std::uint32_t kNone = 0xffffffffu;
 constexpr int kDiscSides = 16;
-
-/// Clip a convex polygon (edge e runs from v[e] to v[e+1] and carries label lab[e]) by {x : x·q ≤ |q|²/2},
-/// the half-plane of the bisector between the origin and q. The new edge carries @p label.
-void clipByBisector(std::vector<Eigen::Vector2d>& v, std::vector<std::uint32_t>& lab, const Eigen::Vector2d& q,
-                    std::uint32_t label, std::vector<Eigen::Vector2d>& outV, std::vector<std::uint32_t>& outL) {
-  const double c = 0.5 * q.squaredNorm();
-  outV.clear();
-  outL.clear();
-  const std::size_t m = v.size();
-  for (std::size_t e = 0; e < m; ++e) {
-    const Eigen::Vector2d& a = v[e];
-    const Eigen::Vector2d& b = v[(e + 1) % m];
-    const double sa = a.dot(q) - c, sb = b.dot(q) - c;
-    if (sa <= 0) {
-      outV.push_back(a);
-      outL.push_back(lab[e]);
-      if (sb > 0) {
-        outV.push_back(a + (b - a) * (sa / (sa - sb)));
-        outL.push_back(label);
-      }
-    } else if (sb <= 0) {
-      outV.push_back(a + (b - a) * (sa / (sa - sb)));
-      outL.push_back(lab[e]);
-    }
-  }
-  v.swap(outV);
-  lab.swap(outL);
-}
 
 /// A proposed triangle, rotated so that its smallest vertex comes first (orientation kept).
 struct Proposal {
@@ -142,7 +115,7 @@ TriangulateResult triangulateLocal(const PointCloud& cloud, const TriangulatePar
       const double qn = q.norm(), len = std::sqrt(d2[c]);
       if (qn < 1e-9 * len) continue;
       q *= len / qn;
-      clipByBisector(poly, lab, q, j, tmpV, tmpL);
+      clipByBisector(poly, lab, q, 0.5, j, tmpV, tmpL);
       if (poly.size() < 3) break;
     }
     if (poly.size() < 3) return;

@@ -1,0 +1,23 @@
+#pragma once
+/// @file tangent_cell.hpp
+/// @brief A sample's cell in its tangent plane: a convex polygon around the origin (the sample) clipped by the
+/// bisectors of its neighbours. Each polygon edge carries the label of the neighbour that made it, so the labels
+/// left on the final polygon are the sample's Delaunay 1-ring. Shared by the resampler and the reconstruction.
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <vector>
+
+namespace iires {
+
+/// @brief Clip the convex polygon @p v (edge e runs from v[e] to v[e+1] and carries lab[e]) by the half-plane
+/// {x : x·q ≤ t·|q|²} — with t = 1/2 the bisector between the origin and q; other t weight it (adaptive sizes).
+/// The new edge carries @p label. @p outV / @p outL are scratch buffers (swapped in).
+void clipByBisector(std::vector<Eigen::Vector2d>& v, std::vector<std::uint32_t>& lab, const Eigen::Vector2d& q,
+                    double t, std::uint32_t label, std::vector<Eigen::Vector2d>& outV,
+                    std::vector<std::uint32_t>& outL);
+
+/// @brief Area centroid of a simple polygon (the origin for a degenerate one).
+Eigen::Vector2d polygonCentroid(const std::vector<Eigen::Vector2d>& v);
+
+}  // namespace iires
