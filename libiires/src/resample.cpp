@@ -441,6 +441,7 @@ void Resampler::run(Samples& s, ResampleResult& result) {
   // change always moves |S| towards N without overshooting; at N every collapse is paired with a split of
   // one of the longest edges, so close pairs and holes that Lloyd alone cannot undo are replaced.
   for (int pass = 0; pass < params_.maxPasses; ++pass) {
+    if (params_.progress) params_.progress("resample", 0.8 * pass / params_.maxPasses);
     const std::vector<Edge> e = sortedEdges(computeRings(s, 1.5 * l));
     l = targetLength(e);
     ++result.passes;
@@ -478,6 +479,7 @@ void Resampler::run(Samples& s, ResampleResult& result) {
   // Lloyd relaxation until the spacing CV has not improved for relaxPatience iterations.
   double best = std::numeric_limits<double>::max();
   for (int it = 0, stale = 0; it < params_.maxRelaxIterations && stale < params_.relaxPatience; ++it) {
+    if (params_.progress) params_.progress("resample", 0.8 + 0.2 * it / params_.maxRelaxIterations);
     const double cv = relax(s, l, 1);
     ++result.relaxIterations;
     stale = cv < best - 1e-5 ? 0 : stale + 1;
@@ -536,9 +538,16 @@ ResampleResult resample(const PointCloud& input, const ResampleParams& params) {
   ResampleResult result;
   result.requestedPoints = params.targetCount;
   result.inputPoints = input.size();
-  auto stage = [&](const char* name, Clock::time_point t) { result.timings.push_back({name, secondsSince(t)}); };
+  auto stage = [&](const char* name, Clock::time_point t) {
+    result.timings.push_back({name, secondsSince(t)});
+    if (params.progress && std::string(name) != "total") params.progress(name, 1.0);
+  };
+  auto begin = [&](const char* name) {
+    if (params.progress) params.progress(name, 0.0);
+    return Clock::now();
+  };
 
-  auto t = Clock::now();
+  auto t = begin("validate");
   PointCloud cloud = input;
   const ValidationReport report = validateCloud(cloud, 4, "input");
   result.duplicatesMerged = report.duplicatesMerged;
@@ -546,7 +555,7 @@ ResampleResult resample(const PointCloud& input, const ResampleParams& params) {
 
   constexpr std::size_t kPreprocessMinPoints = 25;
   if (params.preprocess && cloud.size() >= kPreprocessMinPoints) {
-    t = Clock::now();
+    t = begin("preprocess");
     PreprocessParams pp = params.preprocessing;
     pp.threads = params.threads;
     result.preprocessing = iires::preprocess(cloud, pp);
@@ -555,7 +564,7 @@ ResampleResult resample(const PointCloud& input, const ResampleParams& params) {
     stage("preprocess", t);
   }
 
-  t = Clock::now();
+  t = begin("normals");
   if (!cloud.hasNormals()) {
     NormalParams np = params.normals;
     np.threads = params.threads;
@@ -565,13 +574,13 @@ ResampleResult resample(const PointCloud& input, const ResampleParams& params) {
   }
   stage("normals", t);
 
-  t = Clock::now();
+  t = begin("surface");
   const MlsSurface surface(cloud.points, cloud.normals, params.mls);
   stage("surface", t);
 
   std::shared_ptr<NeighbourRule> rule = params.neighbourRule;
   if (!rule && params.intrinsic) {
-    t = Clock::now();
+    t = begin("geodesic");
     GeodesicParams gp = params.geodesic;
     IntrinsicParams ip = params.intrinsicRule;
     gp.threads = ip.threads = params.threads;
@@ -583,11 +592,11 @@ ResampleResult resample(const PointCloud& input, const ResampleParams& params) {
   }
   if (!rule) rule = std::make_shared<EuclideanRule>();
   Resampler resampler(cloud.points, cloud.normals, surface, params, *rule);
-  t = Clock::now();
+  t = begin("initialise");
   Samples s = resampler.initialise(result);
   stage("initialise", t);
 
-  t = Clock::now();
+  t = begin("resample");
   resampler.run(s, result);
   stage("resample", t);
 
