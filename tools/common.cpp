@@ -1,14 +1,49 @@
 #include "common.hpp"
 
-#include <CLI/CLI.hpp>
+#include <unistd.h>
+
 #include <exception>
+#include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <new>
+#include <sstream>
 #include <stdexcept>
 
 #include "iires/types.hpp"
 
 namespace iires::tools {
+namespace {
+
+namespace fs = std::filesystem;
+
+[[noreturn]] void failWrite(const std::string& path, const std::string& problem) {
+  throw InputError("cannot write " + path + ": " + problem);
+}
+
+/// True when @p a and @p b name the same file: the same inode if both exist, else the same canonical path.
+bool sameFile(const fs::path& a, const fs::path& b) {
+  std::error_code ec;
+  if (fs::exists(a, ec) && fs::exists(b, ec)) {
+    const bool same = fs::equivalent(a, b, ec);
+    if (!ec) return same;
+  }
+  const fs::path ca = fs::weakly_canonical(fs::absolute(a, ec), ec);
+  const fs::path cb = fs::weakly_canonical(fs::absolute(b, ec), ec);
+  return !ec && ca == cb;
+}
+
+std::string humanBytes(double bytes) {
+  const char* units[] = {"B", "KiB", "MiB", "GiB", "TiB", "PiB"};
+  int u = 0;
+  while (bytes >= 1024 && u < 5) bytes /= 1024, ++u;
+  std::ostringstream os;
+  os.precision(3);
+  os << bytes << " " << units[u];
+  return os.str();
+}
+
+}  // namespace
 
 int guardedMain(const std::string& toolName, const std::function<int()>& body) {
   try {
@@ -25,7 +60,61 @@ int guardedMain(const std::string& toolName, const std::function<int()>& body) {
   } catch (const std::exception& e) {
     std::cerr << toolName << ": error: " << e.what() << "\n";
     return kComputeFailure;
+  } catch (...) {
+    std::cerr << toolName << ": error: unknown failure\n";
+    return kComputeFailure;
   }
+}
+
+int parseArgs(CLI::App& app, int argc, char** argv) {
+  try {
+    app.parse(argc, argv);
+    return kContinue;
+  } catch (const CLI::Success& e) {  // --help, --version (CallForHelp etc. derive from Success)
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    const std::string name = app.get_name().empty() ? std::string(argc > 0 ? argv[0] : "iires") : app.get_name();
+    std::cerr << fs::path(name).filename().string() << ": error: " << e.what() << "\n"
+              << "Run with --help for more information.\n";
+    return kBadInput;
+  }
+}
+
+void checkOutputPath(const std::string& output, const std::vector<std::string>& inputs) {
+  if (output.empty()) return;
+  const fs::path target(output);
+  for (const std::string& input : inputs)
+    if (!input.empty() && sameFile(target, fs::path(input)))
+      failWrite(output, "refusing to overwrite the input " + input);
+  const fs::path directory = target.has_parent_path() ? target.parent_path() : fs::path(".");
+  std::error_code ec;
+  if (!fs::exists(directory, ec)) failWrite(output, "directory " + directory.string() + " does not exist");
+  if (!fs::is_directory(directory, ec)) failWrite(output, directory.string() + " is not a directory");
+  if (::access(directory.c_str(), W_OK | X_OK) != 0)
+    failWrite(output, "directory " + directory.string() + " is not writable");
+  if (fs::is_directory(target, ec)) failWrite(output, "it is a directory");
+}
+
+std::size_t availableMemory() {
+  std::ifstream meminfo("/proc/meminfo");
+  std::string key;
+  std::size_t kib = 0;
+  std::string unit;
+  while (meminfo >> key >> kib >> unit)
+    if (key == "MemAvailable:") return kib * 1024;
+  const long pages = ::sysconf(_SC_AVPHYS_PAGES), pageSize = ::sysconf(_SC_PAGESIZE);
+  return pages > 0 && pageSize > 0 ? static_cast<std::size_t>(pages) * static_cast<std::size_t>(pageSize) : 0;
+}
+
+void checkCount(const std::string& flag, long long count, std::size_t bytesPerPoint) {
+  if (count > kMaxCount)
+    throw InputError(flag + " " + std::to_string(count) + " is absurdly large: at most " +
+                     std::to_string(kMaxCount) + " points are supported");
+  const double need = static_cast<double>(count) * static_cast<double>(bytesPerPoint);
+  const std::size_t available = availableMemory();
+  if (available > 0 && need > static_cast<double>(available))
+    throw InputError(flag + " " + std::to_string(count) + " needs about " + humanBytes(need) +
+                     " of memory, but only " + humanBytes(static_cast<double>(available)) + " is available");
 }
 
 std::string versionString() { return std::string("iires ") + IIRES_VERSION; }

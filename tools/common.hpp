@@ -1,16 +1,50 @@
 #pragma once
-// Shared plumbing of the iires command-line tools: error → exit-code mapping and version string.
+// Shared plumbing of the iires command-line tools: error → exit-code mapping, argument parsing, the
+// input/output guards every tool runs before any work, and the version string.
+#include <CLI/CLI.hpp>
+#include <cstddef>
 #include <functional>
 #include <string>
+#include <vector>
 
 namespace iires::tools {
 
 /// Exit codes of every tool (DESIGN §6).
 enum ExitCode : int { kOk = 0, kComputeFailure = 1, kBadInput = 2 };
 
-/// Run a tool's body. iires::InputError, std::invalid_argument and CLI11 usage errors print
-/// "<tool>: error: <message>" and return 2; any other exception prints the same and returns 1.
+/// Sentinel returned by parseArgs() when the tool should go on.
+constexpr int kContinue = -1;
+
+/// Largest point count any tool accepts for -n (the memory guard's hard limit).
+constexpr long long kMaxCount = 100'000'000;
+
+/// @brief Run a tool's body. iires::InputError and std::invalid_argument print "<tool>: error: <message>"
+/// and return 2; std::bad_alloc prints "out of memory" and returns 1; any other exception prints the same
+/// "<tool>: error: ..." line and returns 1. Never lets an exception escape.
 int guardedMain(const std::string& toolName, const std::function<int()>& body);
+
+/// @brief Parse the command line with CLI11.
+/// @return kContinue when the tool should run; 0 after --help or --version (printed on stdout); 2 after a usage
+/// error, printed on stderr as "<tool>: error: <CLI11 message>" followed by "Run with --help ...".
+int parseArgs(CLI::App& app, int argc, char** argv);
+
+/// @brief Guards on an output path, checked before any computation.
+/// @throws InputError "cannot write OUTPUT: refusing to overwrite the input INPUT" when @p output names the
+/// same file as one of @p inputs (after resolving symlinks, `.`/`..` and hard links); "cannot write OUTPUT:
+/// directory D does not exist" (or "is not a directory", "is not writable") for a bad directory; "cannot
+/// write OUTPUT: it is a directory" when OUTPUT itself is a directory. An empty @p output is not checked.
+void checkOutputPath(const std::string& output, const std::vector<std::string>& inputs);
+
+/// @brief Bytes of memory available to this process: MemAvailable from /proc/meminfo, else
+/// sysconf(_SC_AVPHYS_PAGES) · page size; 0 when unknown.
+std::size_t availableMemory();
+
+/// @brief The memory guard for a requested point count.
+/// @param flag how the option is spelled in messages, e.g. "-n"
+/// @param count the requested count (already checked to be >= the tool's minimum)
+/// @param bytesPerPoint a generous estimate of the memory one output point costs in the tool's pipeline
+/// @throws InputError when @p count exceeds kMaxCount, or count · bytesPerPoint exceeds availableMemory().
+void checkCount(const std::string& flag, long long count, std::size_t bytesPerPoint);
 
 /// "iires <version>" for --version.
 std::string versionString();

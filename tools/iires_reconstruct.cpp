@@ -5,8 +5,17 @@
 #include <iostream>
 
 #include "common.hpp"
+#include "progress.hpp"
 #include "iires/io.hpp"
 #include "iires/reconstruct/reconstruct.hpp"
+
+namespace {
+
+/// Memory one mesh vertex costs in the pipeline, generously (the resampler's share plus triangulation,
+/// ~2 triangles per vertex, hole filling and the quality report): the memory guard's estimate.
+constexpr std::size_t kBytesPerVertex = 4096;
+
+}  // namespace
 
 int main(int argc, char** argv) {
   return iires::tools::guardedMain("iires-reconstruct", [&]() -> int {
@@ -14,7 +23,7 @@ int main(int argc, char** argv) {
                  "report its quality."};
     std::string input, output, reportPath, qualityOnly, method = "local";
     long long count = 10000;
-    bool noResample = false, noHoles = false, quiet = false;
+    bool noResample = false, noHoles = false, quiet = false, showProgress = false;
     iires::ReconstructParams params;
     app.add_option("INPUT", input, "input cloud (.ply .pcd .xyz .xyzn .pts, or mesh vertices .obj .off .stl)")
         ->required();
@@ -30,16 +39,17 @@ int main(int argc, char** argv) {
     app.add_option("--report", reportPath, "write the report as JSON to this file");
     app.add_option("--threads", params.threads, "threads (0 = all cores); the output does not depend on it");
     app.add_option("--seed", params.seed, "seed; same seed -> same mesh");
-    app.add_flag("-q,--quiet", quiet, "print nothing on success");
+    app.add_flag("-q,--quiet", quiet, "print nothing on success (no report, no progress)");
+    app.add_flag("--progress", showProgress, "progress on stderr even when it is not a terminal");
     app.set_version_flag("--version", iires::tools::versionString());
-    try {
-      app.parse(argc, argv);
-    } catch (const CLI::Success& e) {
-      return app.exit(e);
-    } catch (const CLI::ParseError& e) {
-      app.exit(e);
-      return iires::tools::kBadInput;
-    }
+    if (const int code = iires::tools::parseArgs(app, argc, argv); code != iires::tools::kContinue) return code;
+    // Everything that can be checked before the work is checked here: no output is written on failure.
+    iires::tools::checkOutputPath(output, {input, qualityOnly});
+    iires::tools::checkOutputPath(reportPath, {input, qualityOnly});
+    if (!reportPath.empty() && reportPath == output)
+      throw iires::InputError("OUTPUT_MESH and --report must be different files");
+    iires::tools::Progress progress("iires-reconstruct", showProgress, quiet);
+    params.resampling.progress = progress.callback();
 
     if (!qualityOnly.empty()) {
       if (!output.empty()) throw iires::InputError("--quality-only takes no OUTPUT_MESH (got " + output + ")");
@@ -55,6 +65,7 @@ int main(int argc, char** argv) {
     }
     if (output.empty()) throw iires::InputError("OUTPUT_MESH is required (or use --quality-only MESH)");
     if (count < 4) throw iires::InputError("-n must be at least 4 (got " + std::to_string(count) + ")");
+    if (!noResample) iires::tools::checkCount("-n", count, kBytesPerVertex);
     // Fail on a bad output extension before the work, not after it.
     const std::string ext = iires::extensionOf(output);
     if (ext != ".ply" && ext != ".obj" && ext != ".off")
@@ -64,14 +75,19 @@ int main(int argc, char** argv) {
     params.fillHoles = !noHoles;
     params.method = iires::parseReconstructMethod(method);
 
+    progress.update("read", 0.0);
     const iires::PointCloud cloud = iires::readPointCloud(input);
+    if (noResample) iires::tools::checkCount("the input's point count", static_cast<long long>(cloud.size()),
+                                             kBytesPerVertex);
     iires::ReconstructResult result;
     try {
       result = iires::reconstruct(cloud, params);
     } catch (const iires::InputError& e) {
       throw iires::InputError(input + ": " + e.what());
     }
+    progress.update("write", 0.0);
     iires::writeMesh(output, result.mesh);
+    progress.finish();
     if (!reportPath.empty()) iires::writeTextFile(reportPath, result.toJson());
     if (!quiet) {
       std::cout << "mesh " << output << " (" << result.method << ", " << result.mesh.vertices.size()

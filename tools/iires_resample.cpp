@@ -4,10 +4,19 @@
 #include <iostream>
 
 #include "common.hpp"
+#include "progress.hpp"
 #include "iires/geodesic.hpp"
 #include "iires/io.hpp"
 #include "iires/preprocess.hpp"
 #include "iires/resample.hpp"
+
+namespace {
+
+/// Memory one output point costs in the pipeline, generously (samples, 1-rings, ~3N candidates with their
+/// elimination neighbour lists, k-d trees): the memory guard's estimate.
+constexpr std::size_t kBytesPerOutputPoint = 2048;
+
+}  // namespace
 
 int main(int argc, char** argv) {
   return iires::tools::guardedMain("iires-resample", [&]() -> int {
@@ -15,7 +24,7 @@ int main(int argc, char** argv) {
     std::string input, output, reportPath;
     long long count = 0;
     iires::ResampleParams params;
-    bool quiet = false, noIntrinsic = false, noDenoise = false, denoiseOnly = false;
+    bool quiet = false, noIntrinsic = false, noDenoise = false, denoiseOnly = false, showProgress = false;
     std::string outlierMode = "pull";
     std::string geodesicPath;
     app.add_option("INPUT", input, "input cloud (.ply .pcd .xyz .xyzn .pts, or mesh vertices .obj .off .stl)")
@@ -34,19 +43,24 @@ int main(int argc, char** argv) {
                  "Euclidean neighbours only (default: intrinsic control, never across thin gaps or objects)");
     app.add_option("--export-geodesic", geodesicPath,
                    "write the input with geodesic coordinates g1 g2 g3 and component id (.ply)");
-    app.add_flag("-q,--quiet", quiet, "print nothing on success");
+    app.add_flag("-q,--quiet", quiet, "print nothing on success (no report, no progress)");
+    app.add_flag("--progress", showProgress, "progress on stderr even when it is not a terminal");
     app.set_version_flag("--version", iires::tools::versionString());
-    try {
-      app.parse(argc, argv);
-    } catch (const CLI::Success& e) {
-      return app.exit(e);
-    } catch (const CLI::ParseError& e) {
-      app.exit(e);
-      return iires::tools::kBadInput;
-    }
+    if (const int code = iires::tools::parseArgs(app, argc, argv); code != iires::tools::kContinue) return code;
+    // Everything that can be checked before the work is checked here: no output is written on failure.
+    for (const std::string& path : {output, reportPath, geodesicPath})
+      iires::tools::checkOutputPath(path, {input});
+    if (output == reportPath || output == geodesicPath || (!reportPath.empty() && reportPath == geodesicPath))
+      throw iires::InputError("OUTPUT, --report and --export-geodesic must be different files");
+    if (const std::string ext = iires::extensionOf(output); ext != ".ply" && ext != ".xyz" && ext != ".xyzn")
+      throw iires::InputError("cannot write " + output + ": unknown point cloud extension \"" + ext +
+                              "\" (supported: .ply .xyz .xyzn)");
+    iires::tools::Progress progress("iires-resample", showProgress, quiet);
+    params.progress = progress.callback();
     params.preprocessing.outliers.mode = iires::parseOutlierMode(outlierMode);
     params.preprocessing.runDenoise = !noDenoise;
     if (denoiseOnly) {
+      progress.update("read", 0.0);
       const iires::PointCloud cloud = iires::readPointCloud(input);
       iires::PreprocessResult cleaned;
       try {
@@ -61,12 +75,14 @@ int main(int argc, char** argv) {
       return iires::tools::kOk;
     }
     if (count < 1) throw iires::InputError("-n must be at least 1 (got " + std::to_string(count) + ")");
+    iires::tools::checkCount("-n", count, kBytesPerOutputPoint);
     params.targetCount = static_cast<std::size_t>(count);
     params.intrinsic = !noIntrinsic;
     if (!geodesicPath.empty() && noIntrinsic)
       throw iires::InputError("--export-geodesic needs intrinsic control (drop --no-intrinsic)");
     if (!geodesicPath.empty() && iires::extensionOf(geodesicPath) != ".ply")
       throw iires::InputError(geodesicPath + ": --export-geodesic writes .ply only");
+    progress.update("read", 0.0);
     const iires::PointCloud cloud = iires::readPointCloud(input);
     iires::ResampleResult result;
     try {
@@ -74,7 +90,9 @@ int main(int argc, char** argv) {
     } catch (const iires::InputError& e) {
       throw iires::InputError(input + ": " + e.what());
     }
+    progress.update("write", 0.0);
     iires::writePointCloud(output, result.cloud);
+    progress.finish();
     if (!geodesicPath.empty()) iires::writeGeodesicPly(geodesicPath, *result.geodesic);
     if (!reportPath.empty()) iires::writeTextFile(reportPath, result.toJson());
     if (!quiet) std::cout << result.toJson();

@@ -30,6 +30,9 @@ double meanSixNeighbourSpacing(const std::vector<Eigen::Vector3d>& points) {
   return sum / static_cast<double>(points.size());
 }
 
+/// Memory one sample costs (position, normal, triangle id, k-NN index for l, the written buffer), generously.
+constexpr std::size_t kBytesPerPoint = 512;
+
 int run(int argc, char** argv) {
   CLI::App app{
       "Sample points on a triangle mesh: uniform or non-uniform density, noise along the normal, "
@@ -69,12 +72,10 @@ int run(int argc, char** argv) {
                         ->check(CLI::NonNegativeNumber)
                         ->excludes(outMax);
   app.add_option("--seed", params.seed, "random seed; same seed, same cloud")->capture_default_str();
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e) == 0 ? iires::tools::kOk : iires::tools::kBadInput;
-  }
+  if (const int code = iires::tools::parseArgs(app, argc, argv); code != iires::tools::kContinue) return code;
   if (count < 1) throw std::invalid_argument("-n/--count must be at least 1, got " + std::to_string(count));
+  iires::tools::checkCount("-n/--count", count, kBytesPerPoint);
+  iires::tools::checkOutputPath(outputPath, {meshPath});
   params.count = static_cast<std::size_t>(count);
   if (*fraction && params.outlierFraction > 0 && !*outMax && !*outMaxRel)
     throw std::invalid_argument("--outliers needs --outlier-max or --outlier-max-spacing");

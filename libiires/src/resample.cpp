@@ -419,6 +419,7 @@ void Resampler::run(Samples& s, ResampleResult& result) {
   // change always moves |S| towards N without overshooting; at N every collapse is paired with a split of
   // one of the longest edges, so close pairs and holes that Lloyd alone cannot undo are replaced.
   for (int pass = 0; pass < params_.maxPasses; ++pass) {
+    if (params_.progress) params_.progress("resample", 0.8 * pass / params_.maxPasses);
     const std::vector<Edge> e = sortedEdges(computeRings(s, 1.5 * l));
     l = targetLength(e);
     ++result.passes;
@@ -456,6 +457,7 @@ void Resampler::run(Samples& s, ResampleResult& result) {
   // Lloyd relaxation in rounds of 4 iterations until the spacing CV has not improved for relaxPatience rounds.
   double best = std::numeric_limits<double>::max();
   for (int it = 0, stale = 0; it < params_.maxRelaxIterations && stale < params_.relaxPatience; it += 4) {
+    if (params_.progress) params_.progress("resample", 0.8 + 0.2 * it / params_.maxRelaxIterations);
     const double cv = relax(s, l, std::min(4, params_.maxRelaxIterations - it));
     result.relaxIterations += std::min(4, params_.maxRelaxIterations - it);
     stale = cv < best - 1e-5 ? 0 : stale + 1;
@@ -528,9 +530,16 @@ ResampleResult resample(const PointCloud& input, const ResampleParams& params) {
   ResampleResult result;
   result.requestedPoints = params.targetCount;
   result.inputPoints = input.size();
-  auto stage = [&](const char* name, Clock::time_point t) { result.timings.push_back({name, secondsSince(t)}); };
+  auto stage = [&](const char* name, Clock::time_point t) {
+    result.timings.push_back({name, secondsSince(t)});
+    if (params.progress && std::string(name) != "total") params.progress(name, 1.0);
+  };
+  auto begin = [&](const char* name) {
+    if (params.progress) params.progress(name, 0.0);
+    return Clock::now();
+  };
 
-  auto t = Clock::now();
+  auto t = begin("validate");
   PointCloud cloud = input;
   const ValidationReport report = validateCloud(cloud, 4, "input");
   result.duplicatesMerged = report.duplicatesMerged;
@@ -540,7 +549,7 @@ ResampleResult resample(const PointCloud& input, const ResampleParams& params) {
   const std::size_t workingTarget = std::max(kMinWorkingPoints, params.maxInputPerSample * params.targetCount);
   if (params.maxInputPerSample > 0 && cloud.size() > workingTarget) {
     // Far denser than the output: thin first, so every O(n) stage below works on ≈ maxInputPerSample·N points.
-    t = Clock::now();
+    t = begin("thin");
     const std::size_t target = workingTarget;
     const std::vector<std::uint32_t> keep =
         voxelThin(cloud.points, cloud.normals, target, bboxDiagonal(cloud.points) / std::sqrt(static_cast<double>(target)));
@@ -556,7 +565,7 @@ ResampleResult resample(const PointCloud& input, const ResampleParams& params) {
 
   constexpr std::size_t kPreprocessMinPoints = 25;
   if (params.preprocess && cloud.size() >= kPreprocessMinPoints) {
-    t = Clock::now();
+    t = begin("preprocess");
     PreprocessParams pp = params.preprocessing;
     pp.threads = params.threads;
     result.preprocessing = iires::preprocess(cloud, pp);
@@ -565,7 +574,7 @@ ResampleResult resample(const PointCloud& input, const ResampleParams& params) {
     stage("preprocess", t);
   }
 
-  t = Clock::now();
+  t = begin("normals");
   if (!cloud.hasNormals()) {
     NormalParams np = params.normals;
     np.threads = params.threads;
@@ -575,13 +584,13 @@ ResampleResult resample(const PointCloud& input, const ResampleParams& params) {
   }
   stage("normals", t);
 
-  t = Clock::now();
+  t = begin("surface");
   const MlsSurface surface(cloud.points, cloud.normals, params.mls);
   stage("surface", t);
 
   std::shared_ptr<NeighbourRule> rule = params.neighbourRule;
   if (!rule && params.intrinsic) {
-    t = Clock::now();
+    t = begin("geodesic");
     GeodesicParams gp = params.geodesic;
     IntrinsicParams ip = params.intrinsicRule;
     gp.threads = ip.threads = params.threads;
@@ -595,7 +604,7 @@ ResampleResult resample(const PointCloud& input, const ResampleParams& params) {
 
   std::optional<CurvatureResult> curvature;
   if (params.mode == ResampleMode::kCurvature) {
-    t = Clock::now();
+    t = begin("curvature");
     CurvatureParams cp = params.curvature;
     cp.threads = params.threads;
     curvature = computeCurvature(cloud.points, cloud.normals, cp);  // eq. (8)–(10)
@@ -603,7 +612,7 @@ ResampleResult resample(const PointCloud& input, const ResampleParams& params) {
   }
   ResampleParams local = params;  // sharp edges add fixed samples
   if (params.sharpEdges) {
-    t = Clock::now();
+    t = begin("features");
     FeatureParams fp = params.features;
     fp.threads = params.threads;
     const FeatureResult features = detectFeatures(cloud, fp);
@@ -621,17 +630,17 @@ ResampleResult resample(const PointCloud& input, const ResampleParams& params) {
   }
   Resampler resampler(cloud.points, cloud.normals, surface, local, *rule,
                       curvature ? &curvature->sizeFactor : nullptr);
-  t = Clock::now();
+  t = begin("initialise");
   Samples s = resampler.initialise(result);
   stage("initialise", t);
 
-  t = Clock::now();
+  t = begin("resample");
   resampler.run(s, result);
   stage("resample", t);
 
   result.cloud.points = std::move(s.pos);
   result.cloud.normals = std::move(s.nrm);
-  t = Clock::now();
+  t = begin("report");
   result.spacing = spacingStats(result.cloud.points, params.threads);
   if (curvature) {  // points and mean spacing per level (each output point takes its nearest input's level)
     const std::size_t levels = curvature->pointsPerLevel.size();

@@ -3,6 +3,7 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <numeric>
+#include <sstream>
 #include <tuple>
 #include <vector>
 
@@ -58,9 +59,18 @@ ValidationReport validateCloud(PointCloud& cloud, std::size_t minPoints, const s
   ValidationReport report;
   report.inputPoints = cloud.size();
   if (cloud.empty()) throw InputError(what + ": the cloud is empty");
-  for (std::size_t i = 0; i < cloud.size(); ++i)
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
     if (!cloud.points[i].allFinite())
       throw InputError(what + ": point " + std::to_string(i) + " has a non-finite coordinate (NaN or Inf)");
+    // Finite but so large that squared distances, covariances and MLS moments overflow to Inf/NaN (a fuzzer
+    // find: one point at 5e244 turned the whole output into NaN).
+    if (cloud.points[i].cwiseAbs().maxCoeff() > kMaxCoordinate) {
+      std::ostringstream os;
+      os << what << ": point " << i << " has a coordinate of magnitude " << cloud.points[i].cwiseAbs().maxCoeff()
+         << ", beyond the supported " << kMaxCoordinate << " (squared distances would overflow)";
+      throw InputError(os.str());
+    }
+  }
   const bool normalsUsable =
       cloud.hasNormals() && std::all_of(cloud.normals.begin(), cloud.normals.end(),
                                         [](const Vector3d& n) { return n.allFinite(); });

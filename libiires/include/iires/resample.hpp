@@ -4,6 +4,7 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -63,6 +64,10 @@ struct ResampleParams {
   std::shared_ptr<NeighbourRule> neighbourRule;
   /// Samples that are kept exactly as given (never moved or removed) and count towards N (DESIGN §9).
   std::vector<Eigen::Vector3d> fixedSamples;
+  /// Optional progress report: called with a stage name ("validate", "preprocess", "normals", "surface",
+  /// "geodesic", "initialise", "resample") and the fraction of that stage done, in [0, 1]; from the calling
+  /// thread only. Empty = no reports. Does not affect the output.
+  std::function<void(const std::string& stage, double fraction)> progress;
 
   /// @throws std::invalid_argument with a readable message when a field is out of range.
   void validate() const;

@@ -16,10 +16,14 @@ struct ValidationReport {
   std::size_t outputPoints = 0;      ///< points after validation
 };
 
+/// @brief Largest coordinate magnitude validateCloud accepts: beyond it squared distances and moments overflow.
+constexpr double kMaxCoordinate = 1e30;
+
 /// @brief Check a cloud and merge exact duplicates (keeps the first occurrence; normals follow their points).
 /// @param minPoints fewest distinct points the caller's method needs (>= 1)
 /// @param what how to name the cloud in messages (usually the file path)
-/// @throws InputError when the cloud is empty, holds NaN/Inf coordinates (the first bad index is named),
+/// @throws InputError when the cloud is empty, holds NaN/Inf coordinates (the first bad index is named) or a
+/// coordinate beyond ±kMaxCoordinate,
 /// has fewer than @p minPoints distinct points, or all its points are collinear (the second eigenvalue of
 /// the covariance is at most 1e-12 times the first; one or two distinct points are collinear too).
 /// @note Normals holding NaN/Inf, or not one per point, are dropped (cleared) rather than rejected.

@@ -1,0 +1,86 @@
+// Regression tests for inputs the libFuzzer targets (tests/fuzz/) found. Each test rebuilds the crashing input
+// the way the harness decodes it and checks the fixed behaviour.
+#include <gtest/gtest.h>
+
+#include <Eigen/Core>
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "iires/resample.hpp"
+#include "iires/validate.hpp"
+
+namespace iires::test {
+namespace {
+
+/// fuzz_resample-crash-1126177256 (raw-double mode, N = 10, Euclidean, no pre-processing): 14 points of which
+/// most are denormal (~1e-312) plus one at 5e244. The point's square overflows, and the resampler returned 10
+/// NaN points without an error. Now validation rejects coordinates beyond kMaxCoordinate.
+PointCloud fuzzCloud(bool withHugePoint) {
+  PointCloud cloud;
+  cloud.points = {{-500.0, -500.0, 250.0},
+                  {-500.0, -300.0, 4.074231918653e-312},
+                  {4.081609169645e-312, 1.36605551305e-312, 4.084779729763e-312},
+                  {1.36545455721e-312, 1.36605551305e-312, 4.084779729763e-312},
+                  {1.36758898657e-312, 1.36646996535e-312, 4.084779729763e-312},
+                  {1.368625117327e-312, 1.36729886996e-312, 4.083743599005e-312},
+                  {4.084779729763e-312, 1.36646996535e-312, 4.083743599005e-312},
+                  {4.083743599005e-312, 1.36524733106e-312, 4.083743599005e-312},
+                  {4.081609169645e-312, 1.36412830984e-312, 4.083743599005e-312},
+                  {1.36545455721e-312, 1.36412830984e-312, 1.33228334907999e-309},
+                  {1.36758898657e-312, 1.36524733106e-312, 4.083743599005e-312},
+                  {1.368625117327e-312, 1.36646996535e-312, 4.081609169645e-312},
+                  {4.084779729763e-312, 1.36605551305e-312, 4.081609169645e-312},
+                  {4.083743599005e-312, 1.367526818724e-312, 4.083743599005e-312}};
+  if (withHugePoint) cloud.points.emplace_back(5.164816636419451e+120, 4.460149039706188e+43, 5.462437423415254e+244);
+  return cloud;
+}
+
+ResampleParams fuzzParams() {
+  ResampleParams params;
+  params.targetCount = 10;
+  params.intrinsic = false;
+  params.preprocess = false;
+  params.threads = 1;
+  params.maxPasses = 4;
+  params.maxRelaxIterations = 8;
+  return params;
+}
+
+TEST(FuzzRegression, HugeFiniteCoordinateIsRejectedNotTurnedIntoNaN) {
+  try {
+    const ResampleResult result = resample(fuzzCloud(true), fuzzParams());
+    FAIL() << "accepted a point at 5e244 and returned " << result.cloud.size() << " points";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("magnitude"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("point 14"), std::string::npos) << e.what();
+  }
+}
+
+TEST(FuzzRegression, ValidateRejectsCoordinatesBeyondTheLimitOnly) {
+  PointCloud ok;
+  const double m = kMaxCoordinate;
+  ok.points = {{m, 0, 0}, {0, m, 0}, {0, 0, -m}, {-m, -m, m}};
+  EXPECT_NO_THROW(validateCloud(ok, 4));
+  PointCloud bad = ok;
+  bad.points[2].y() = -2 * m;
+  EXPECT_THROW(validateCloud(bad, 4, "cloud.ply"), InputError);
+}
+
+TEST(FuzzRegression, DenormalClusterGivesAnErrorOrFiniteOutput) {
+  // The same cloud without the huge point: a cluster of denormal coordinates next to two ordinary points. The
+  // contract: either an InputError or exactly N finite points with unit normals.
+  try {
+    const ResampleResult result = resample(fuzzCloud(false), fuzzParams());
+    ASSERT_EQ(result.cloud.size(), 10u);
+    ASSERT_TRUE(result.cloud.hasNormals());
+    for (std::size_t i = 0; i < result.cloud.size(); ++i) {
+      EXPECT_TRUE(result.cloud.points[i].allFinite()) << i;
+      EXPECT_NEAR(result.cloud.normals[i].norm(), 1.0, 1e-6) << i;
+    }
+  } catch (const InputError&) {
+  }
+}
+
+}  // namespace
+}  // namespace iires::test
