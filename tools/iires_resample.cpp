@@ -1,5 +1,6 @@
 // iires-resample: resample a point cloud to exactly N points, uniformly spaced on its surface.
 #include <CLI/CLI.hpp>
+#include <cmath>
 #include <cstdio>
 #include <iostream>
 
@@ -43,6 +44,18 @@ int main(int argc, char** argv) {
                  "Euclidean neighbours only (default: intrinsic control, never across thin gaps or objects)");
     app.add_option("--export-geodesic", geodesicPath,
                    "write the input with geodesic coordinates g1 g2 g3 and component id (.ply)");
+    std::string mode = "isotropic";
+    int levels = 0;
+    std::vector<double> ratios;
+    app.add_option("--mode", mode, "isotropic (uniform spacing) or curvature (denser where the surface bends)")
+        ->check(CLI::IsMember({"isotropic", "curvature"}));
+    app.add_option("--levels", levels, "curvature mode: number of levels t (default 5); ratios default to a ramp")
+        ->check(CLI::Range(2, 16));
+    app.add_option("--ratios", ratios, "curvature mode: length ratios flat -> curved, e.g. 2,1.5,1,0.8,0.6")
+        ->delimiter(',');
+    app.add_flag("--sharp-edges", params.sharpEdges, "keep samples on sharp feature lines");
+    app.add_option("--edge-ratio", params.edgeRatio, "spacing on feature lines, in units of the target length")
+        ->check(CLI::PositiveNumber);
     app.add_flag("-q,--quiet", quiet, "print nothing on success (no report, no progress)");
     app.add_flag("--progress", showProgress, "progress on stderr even when it is not a terminal");
     app.set_version_flag("--version", iires::tools::versionString());
@@ -78,6 +91,17 @@ int main(int argc, char** argv) {
     iires::tools::checkCount("-n", count, kBytesPerOutputPoint);
     params.targetCount = static_cast<std::size_t>(count);
     params.intrinsic = !noIntrinsic;
+    if (mode == "curvature") {
+      params.mode = iires::ResampleMode::kCurvature;
+      if (!ratios.empty()) {
+        params.curvature.ratios = ratios;
+      } else if (levels > 0) {  // a geometric ramp from 2 (flattest) to 0.6 (most curved)
+        params.curvature.ratios.clear();
+        for (int q = 0; q < levels; ++q) params.curvature.ratios.push_back(2.0 * std::pow(0.3, q / (levels - 1.0)));
+      }
+    } else if (levels > 0 || !ratios.empty()) {
+      throw iires::InputError("--levels and --ratios need --mode curvature");
+    }
     if (!geodesicPath.empty() && noIntrinsic)
       throw iires::InputError("--export-geodesic needs intrinsic control (drop --no-intrinsic)");
     if (!geodesicPath.empty() && iires::extensionOf(geodesicPath) != ".ply")
