@@ -545,7 +545,7 @@ ResampleResult resample(const PointCloud& input, const ResampleParams& params) {
   result.duplicatesMerged = report.duplicatesMerged;
   stage("validate", t);
 
-  constexpr std::size_t kMinWorkingPoints = 50000;  // thinning never goes below this: small N keep a fine surface
+  constexpr std::size_t kMinWorkingPoints = 100000;  // thinning never goes below this: small N keep a fine surface
   const std::size_t workingTarget = std::max(kMinWorkingPoints, params.maxInputPerSample * params.targetCount);
   if (params.maxInputPerSample > 0 && cloud.size() > workingTarget) {
     // Far denser than the output: thin first, so every O(n) stage below works on ≈ maxInputPerSample·N points.

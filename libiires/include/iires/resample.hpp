@@ -44,7 +44,7 @@ struct ResampleParams {
   double overRelaxation = 1.5;      ///< Lloyd step factor ω: move to p + ω(c − p); 1 = plain Lloyd, < 2
   double candidateFactor = 3.0;     ///< density initialisation keeps ≈ this × N voxel cells, then eliminates to N
   /// Inputs with more than this × N points are voxel-thinned to about that many first (one point per cell, the
-  /// nearest its centre; never below 50,000): the surface stays sampled several times finer than the output.
+  /// nearest its centre; never below 100,000): the surface stays sampled several times finer than the output.
   /// 0 = never thin.
   std::size_t maxInputPerSample = 16;
   /// Pre-processing of the input before anything else (paper §3.1): outliers pulled back (or removed/kept)
