@@ -82,5 +82,33 @@ TEST(FuzzRegression, DenormalClusterGivesAnErrorOrFiniteOutput) {
   }
 }
 
+/// fuzz_resample-crash-e278560 (raw-double mode, N = 10, Euclidean): a 6×6 paraboloid grid of which 24 points
+/// were overwritten with denormal coordinates (1e-317 .. 1e-309), i.e. a cluster of near-coincident points.
+/// Differences inside the cluster have squared norms that underflow to 0 and the output held NaN. Validation
+/// now sets coordinates below kTinyCoordinate to 0, so the cluster merges into one point.
+TEST(FuzzRegression, DenormalNearDuplicatesDoNotProduceNaN) {
+  PointCloud cloud;
+  for (int i = 0; i < 6; ++i)
+    for (int j = 0; j < 6; ++j) {
+      const double x = i * 200.0 - 500.0, y = j * 200.0 - 500.0;
+      cloud.points.emplace_back(x, y, std::floor((x * x + y * y) / 2000.0));
+    }
+  const double tiny[] = {4.07e-312, 1.37e-312, 2.08e-317, 3.50e-310, 1.05e-309, 7.4e-315};
+  for (int i = 9; i < 33; ++i)
+    cloud.points[i] = Eigen::Vector3d(tiny[i % 6], tiny[(i + 1) % 6], tiny[(i + 3) % 6]);
+  try {
+    const ResampleResult result = resample(cloud, fuzzParams());
+    ASSERT_EQ(result.cloud.size(), 10u);
+    for (std::size_t i = 0; i < result.cloud.size(); ++i) {
+      EXPECT_TRUE(result.cloud.points[i].allFinite()) << i;
+      EXPECT_TRUE(result.cloud.normals[i].allFinite()) << i;
+    }
+  } catch (const InputError&) {
+  }
+  PointCloud single;
+  single.points = {{1e-200, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {0, 0, 0}};
+  EXPECT_EQ(validateCloud(single, 4).duplicatesMerged, 1u);  // 1e-200 is 0
+}
+
 }  // namespace
 }  // namespace iires::test

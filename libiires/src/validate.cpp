@@ -2,6 +2,7 @@
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
+#include <cmath>
 #include <numeric>
 #include <sstream>
 #include <tuple>
@@ -71,6 +72,11 @@ ValidationReport validateCloud(PointCloud& cloud, std::size_t minPoints, const s
       throw InputError(os.str());
     }
   }
+  // Denormal-scale coordinates (a fuzzer find: a cluster of points ~1e-310 apart) make differences whose
+  // squares underflow to 0, and normalising them gives NaN; below kTinyCoordinate a coordinate is 0.
+  for (Vector3d& p : cloud.points)
+    for (int k = 0; k < 3; ++k)
+      if (std::abs(p[k]) < kTinyCoordinate) p[k] = 0.0;
   const bool normalsUsable =
       cloud.hasNormals() && std::all_of(cloud.normals.begin(), cloud.normals.end(),
                                         [](const Vector3d& n) { return n.allFinite(); });

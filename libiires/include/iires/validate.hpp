@@ -18,6 +18,8 @@ struct ValidationReport {
 
 /// @brief Largest coordinate magnitude validateCloud accepts: beyond it squared distances and moments overflow.
 constexpr double kMaxCoordinate = 1e30;
+/// @brief Coordinates of smaller magnitude are set to 0 by validateCloud (their squares would underflow).
+constexpr double kTinyCoordinate = 1e-150;
 
 /// @brief Check a cloud and merge exact duplicates (keeps the first occurrence; normals follow their points).
 /// @param minPoints fewest distinct points the caller's method needs (>= 1)
@@ -27,6 +29,7 @@ constexpr double kMaxCoordinate = 1e30;
 /// has fewer than @p minPoints distinct points, or all its points are collinear (the second eigenvalue of
 /// the covariance is at most 1e-12 times the first; one or two distinct points are collinear too).
 /// @note Normals holding NaN/Inf, or not one per point, are dropped (cleared) rather than rejected.
+/// Coordinates of magnitude below kTinyCoordinate are set to 0 before duplicates are merged.
 /// O(n log n): duplicates are found by sorting. The order of the kept points is unchanged.
 ValidationReport validateCloud(PointCloud& cloud, std::size_t minPoints, const std::string& what = "input");
 
