@@ -20,27 +20,7 @@
 namespace iires {
 namespace {
 
-/// The U-shaped strip of issue 3 (see geodesic_test.cpp): squares z = 0 and z = gap over [0,1]², joined at
-/// x = 1 by a half-cylinder of radius gap/2; outward normals.
-PointCloud uStrip(std::size_t perSquare, double gap, std::uint64_t seed) {
-  std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<double> u(0.0, 1.0);
-  PointCloud c;
-  const double r = gap / 2;
-  for (int sheet = 0; sheet < 2; ++sheet)
-    for (std::size_t i = 0; i < perSquare; ++i) {
-      const double x = u(rng), y = u(rng);
-      c.points.emplace_back(x, y, sheet ? gap : 0.0);
-      c.normals.emplace_back(0, 0, sheet ? 1 : -1);
-    }
-  const auto nc = static_cast<std::size_t>(std::lround(M_PI * r * static_cast<double>(perSquare)));
-  for (std::size_t i = 0; i < nc; ++i) {
-    const double th = M_PI * u(rng), y = u(rng);
-    c.points.emplace_back(1 + r * std::sin(th), y, r - r * std::cos(th));
-    c.normals.emplace_back(std::sin(th), 0, -std::cos(th));
-  }
-  return c;
-}
+using test::uStrip;
 
 /// Distance from @p p to the U-strip with gap 0.02 (squares [0,1]², fold radius 0.01 at x = 1).
 double stripDistance(const Eigen::Vector3d& p, double gap = 0.02) {

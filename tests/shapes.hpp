@@ -50,4 +50,27 @@ inline std::vector<Eigen::Vector3d> fibonacciSphere(std::size_t n, double radius
   return p;
 }
 
+/// The U-shaped strip of issue 3: bottom square z = 0 and top square z = gap over [0,1]², joined at x = 1 by
+/// a half-cylinder of radius gap/2 (axis along y). Uniform random points, perSquare per square and the same
+/// density on the cylinder; outward normals (bottom −z, top +z, cylinder radial).
+inline PointCloud uStrip(std::size_t perSquare, double gap, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  PointCloud c;
+  const double r = gap / 2;
+  for (int sheet = 0; sheet < 2; ++sheet)
+    for (std::size_t i = 0; i < perSquare; ++i) {
+      const double x = u(rng), y = u(rng);
+      c.points.emplace_back(x, y, sheet ? gap : 0.0);
+      c.normals.emplace_back(0, 0, sheet ? 1 : -1);
+    }
+  const auto nc = static_cast<std::size_t>(std::lround(M_PI * r * static_cast<double>(perSquare)));
+  for (std::size_t i = 0; i < nc; ++i) {
+    const double th = M_PI * u(rng), y = u(rng);
+    c.points.emplace_back(1 + r * std::sin(th), y, r - r * std::cos(th));
+    c.normals.emplace_back(std::sin(th), 0, -std::cos(th));
+  }
+  return c;
+}
+
 }  // namespace iires::test
