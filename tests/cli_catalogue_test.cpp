@@ -41,9 +41,9 @@ std::ostream& operator<<(std::ostream& os, const ToolSpec& spec) { return os << 
 
 const ToolSpec kResample{"iires-resample", ".ply", "-n", 200, 1, true, true, true};
 const ToolSpec kReconstruct{"iires-reconstruct", ".ply", "-n", 200, 4, true, true, true};
-// iires-register (tools/iires_register.cpp, owned by the registration work) checks the output directory but
-// has neither the memory guard nor the OUTPUT == INPUT guard yet: those two entries are skipped for it.
-const ToolSpec kRegister{"iires-register", ".ply", "-m", 60, 50, false, false, false};
+// iires-register's output (the aligned source) is not a resampling of its input: the planar / offset entries,
+// which check that the output lies on the input surface, do not apply to it.
+const ToolSpec kRegister{"iires-register", ".ply", "-m", 60, 50, true, true, false};
 
 std::string quote(const std::string& s) { return "'" + s + "'"; }
 

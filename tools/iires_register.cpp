@@ -1,6 +1,5 @@
 // iires-register: align SOURCE to TARGET (any rotation, scale, translation, density) without features.
 #include <CLI/CLI.hpp>
-#include <filesystem>
 #include <iostream>
 
 #include "common.hpp"
@@ -8,19 +7,7 @@
 #include "iires/register/registration.hpp"
 
 namespace {
-
-/// Fail before any work when an output could not be written (so no output is left half-done).
-void checkOutput(const std::string& path, bool cloud) {
-  if (path.empty()) return;
-  const std::filesystem::path p(path);
-  const auto dir = p.has_parent_path() ? p.parent_path() : std::filesystem::path(".");
-  if (!std::filesystem::is_directory(dir)) throw iires::InputError("cannot write " + path + ": no such directory");
-  if (std::filesystem::is_directory(p)) throw iires::InputError("cannot write " + path + ": is a directory");
-  const std::string ext = iires::extensionOf(path);
-  if (cloud && ext != ".ply" && ext != ".xyz" && ext != ".xyzn")
-    throw iires::InputError("cannot write " + path + ": unknown extension (use .ply, .xyz or .xyzn)");
-}
-
+constexpr std::size_t kBytesPerSample = 4096;  // generous: two resampled clouds, k-d trees, the rotation search
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -45,23 +32,19 @@ int main(int argc, char** argv) {
     app.add_option("--threads", params.threads, "threads (0 = all cores); the result does not depend on it");
     app.add_flag("-q,--quiet", quiet, "print nothing on success");
     app.set_version_flag("--version", iires::tools::versionString());
-    try {
-      app.parse(argc, argv);
-    } catch (const CLI::Success& e) {
-      return app.exit(e);
-    } catch (const CLI::ParseError& e) {
-      app.exit(e);
-      return iires::tools::kBadInput;
-    }
+    if (const int code = iires::tools::parseArgs(app, argc, argv); code != iires::tools::kContinue) return code;
     if (samples < 50) throw iires::InputError("-m/--samples must be at least 50 (got " + std::to_string(samples) + ")");
+    iires::tools::checkCount("-m", samples, kBytesPerSample);
     if (!(params.overlap > 0.0 && params.overlap <= 1.0))
       throw iires::InputError("--overlap must be in (0, 1] (got " + std::to_string(params.overlap) + ")");
     params.samples = static_cast<std::size_t>(samples);
     params.grid = iires::reg::parseRotationGridType(grid);
     params.estimateScale = !noScale;
-    checkOutput(alignedPath, true);
-    checkOutput(transformPath, false);
-    checkOutput(reportPath, false);
+    for (const std::string& out : {alignedPath, transformPath, reportPath})
+      iires::tools::checkOutputPath(out, {sourcePath, targetPath});
+    if (!alignedPath.empty() && iires::extensionOf(alignedPath) != ".ply" && iires::extensionOf(alignedPath) != ".xyz" &&
+        iires::extensionOf(alignedPath) != ".xyzn")
+      throw iires::InputError("cannot write " + alignedPath + ": unknown extension (use .ply, .xyz or .xyzn)");
 
     const iires::PointCloud source = iires::readPointCloud(sourcePath);
     const iires::PointCloud target = iires::readPointCloud(targetPath);
