@@ -71,14 +71,14 @@ TEST(Validate, MergesExactDuplicatesKeepingFirstOccurrenceAndItsNormal) {
   cloud.normals.insert(cloud.normals.begin(), Vector3d(0, 0, -1));
   cloud.points.push_back({1, 0, 0});
   cloud.normals.push_back({0, 1, 0});
-  cloud.points.push_back({1, 0, 1e-300});  // close but not equal: kept
+  cloud.points.push_back({1, 0, 1e-12});  // close but not equal: kept
   cloud.normals.push_back({0, 0, 1});
   const ValidationReport report = validateCloud(cloud, 1);
   EXPECT_EQ(report.inputPoints, 7u);
   EXPECT_EQ(report.duplicatesMerged, 2u);
   EXPECT_EQ(report.outputPoints, 5u);
   EXPECT_EQ(cloud.points,
-            (std::vector<Vector3d>{{0, 0, 1}, {0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 0, 1e-300}}));
+            (std::vector<Vector3d>{{0, 0, 1}, {0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 0, 1e-12}}));
   EXPECT_EQ(cloud.normals, (std::vector<Vector3d>{{0, 0, -1}, {-1, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}}));
 }
 
