@@ -69,21 +69,6 @@ std::vector<std::string> split(const std::string& s) {
   return out;
 }
 
-/// Mean distance from each point to its 6 nearest neighbours, averaged (paper §6.1's l).
-double meanSpacing6(const std::vector<Eigen::Vector3d>& pts, int threads) {
-  iires::KnnIndex index(pts);
-  std::vector<double> s(pts.size());
-  iires::parallelFor(pts.size(), threads, [&](std::size_t i) {
-    std::vector<std::uint32_t> idx;
-    std::vector<double> d2;
-    const std::size_t f = index.knn(pts[i], 7, idx, d2);
-    double sum = 0;
-    for (std::size_t j = 1; j < f; ++j) sum += std::sqrt(d2[j]);
-    s[i] = sum / static_cast<double>(f - 1);
-  });
-  return std::accumulate(s.begin(), s.end(), 0.0) / static_cast<double>(s.size());
-}
-
 /// Points sampled every @p step along the mesh edges whose dihedral angle exceeds @p degrees.
 std::vector<Eigen::Vector3d> sharpEdgeSamples(const iires::TriangleMesh& mesh, double degrees, double step) {
   std::map<std::pair<int, int>, std::vector<int>> faces;
@@ -206,7 +191,7 @@ int main(int argc, char** argv) {
     sp.count = opt.count;
     sp.seed = 7;
     const iires::PointCloud clean = iires::sampleMesh(mesh, sp);
-    const double l = meanSpacing6(clean.points, T);
+    const double l = iires::meanNeighbourSpacing(clean.points, 6, T);
     const std::size_t n = clean.size();
 
     // Points within 2·l of a sharp edge (dihedral > 45°), judged from their clean positions.
@@ -328,7 +313,7 @@ int main(int argc, char** argv) {
     sp.count = opt.speedCount;
     sp.seed = 9;
     const iires::PointCloud clean = iires::sampleMesh(mesh, sp);
-    const double l = meanSpacing6(clean.points, T);
+    const double l = iires::meanNeighbourSpacing(clean.points, 6, T);
     sp.noise = 0.33 * l;
     sp.gaussianNoise = false;
     sp.outlierFraction = 0.02;

@@ -18,19 +18,6 @@ namespace {
 using iires::DenoiseParams;
 using iires::PointCloud;
 
-/// Mean distance to the 6 nearest neighbours (paper §6.1's l).
-double spacing6(const std::vector<Eigen::Vector3d>& pts) {
-  iires::KnnIndex index(pts);
-  double sum = 0;
-  std::vector<std::uint32_t> idx;
-  std::vector<double> d2;
-  for (const auto& p : pts) {
-    index.knn(p, 7, idx, d2);
-    for (int j = 1; j < 7; ++j) sum += std::sqrt(d2[j]) / 6.0;
-  }
-  return sum / static_cast<double>(pts.size());
-}
-
 TEST(Denoise, KernelIsTheGaussianOfEq2) {
   EXPECT_DOUBLE_EQ(iires::mlsKernel(0.0, 0.5), 1.0);
   EXPECT_NEAR(iires::mlsKernel(0.5, 0.5), std::exp(-1.0), 1e-15);
@@ -90,7 +77,7 @@ TEST(Denoise, BilateralTermIgnoresTheOtherSideOfAnEdge) {
 TEST(Denoise, NoisyPlaneBecomesFlat) {
   PointCloud cloud = iires::test::planeCloud(20000);
   std::mt19937_64 rng(5);
-  const double l = spacing6(cloud.points);
+  const double l = iires::meanNeighbourSpacing(cloud.points);
   std::uniform_real_distribution<double> u(-0.66 * l, 0.66 * l);
   double before = 0;
   for (auto& p : cloud.points) p.z() = u(rng), before += std::abs(p.z());
@@ -117,7 +104,7 @@ TEST(Denoise, NoisyPlaneBecomesFlat) {
 
 TEST(Denoise, SphereRadiusErrorDropsTwoAndAHalfFold) {
   PointCloud cloud = iires::test::sphereCloud(30000, 1.0, 3);
-  const double l = spacing6(cloud.points);
+  const double l = iires::meanNeighbourSpacing(cloud.points);
   std::mt19937_64 rng(8);
   std::uniform_real_distribution<double> u(-0.66 * l, 0.66 * l);
   double before = 0;
@@ -192,7 +179,7 @@ TEST(Denoise, BunnyWithNoiseAndOutliersEndToEnd) {
   iires::MeshSamplingParams sp;
   sp.count = 60000;
   sp.seed = 3;
-  const double l = spacing6(iires::sampleMesh(mesh, sp).points);
+  const double l = iires::meanNeighbourSpacing(iires::sampleMesh(mesh, sp).points);
   sp.noise = 0.33 * l;
   sp.gaussianNoise = true;  // zero-mean noise, σ = 0.33·l (sampleMesh's uniform noise is one-sided: a bias)
   sp.outlierFraction = 0.02;

@@ -19,18 +19,6 @@ using iires::OutlierMode;
 using iires::OutlierParams;
 using iires::PointCloud;
 
-double spacing6(const std::vector<Eigen::Vector3d>& pts) {
-  iires::KnnIndex index(pts);
-  double sum = 0;
-  std::vector<std::uint32_t> idx;
-  std::vector<double> d2;
-  for (const auto& p : pts) {
-    index.knn(p, 7, idx, d2);
-    for (int j = 1; j < 7; ++j) sum += std::sqrt(d2[j]) / 6.0;
-  }
-  return sum / static_cast<double>(pts.size());
-}
-
 /// A unit plane (z = 0) with noise uniform in ±noise·l and a share of points moved ±[3, 6]·l along z.
 struct Noisy {
   PointCloud cloud;
@@ -42,7 +30,7 @@ struct Noisy {
 Noisy noisyPlane(std::size_t n, double ratio, double noise, double fraction, std::uint64_t seed) {
   Noisy out;
   out.cloud = iires::test::planeCloud(n, 1.0, ratio, seed);
-  out.l = spacing6(out.cloud.points);
+  out.l = iires::meanNeighbourSpacing(out.cloud.points);
   std::mt19937_64 rng(seed + 100);
   std::uniform_real_distribution<double> u(0.0, 1.0);
   out.injected.assign(n, 0);
@@ -180,7 +168,7 @@ TEST(Outliers, NonUniformBunnyWithOutliers) {
   sp.densityRatio = 5.0;
   sp.seed = 21;
   const PointCloud clean = iires::sampleMesh(mesh, sp);
-  const double l = spacing6(clean.points);
+  const double l = iires::meanNeighbourSpacing(clean.points);
   sp.noise = 0.33 * l;
   sp.gaussianNoise = false;
   sp.outlierFraction = 0.02;

@@ -8,27 +8,13 @@
 #include <vector>
 
 #include "common.hpp"
+#include "iires/metrics.hpp"
 #include "iires/io.hpp"
 #include "iires/knn.hpp"
 #include "iires/parallel.hpp"
 #include "iires/sampling.hpp"
 
 namespace {
-
-/// The paper's §6.1 unit l: mean distance from a point to its 6 nearest neighbours.
-double meanSixNeighbourSpacing(const std::vector<Eigen::Vector3d>& points) {
-  const iires::KnnIndex index(points);
-  std::vector<double> perPoint(points.size(), 0.0);
-  iires::parallelFor(points.size(), 0, [&](std::size_t i) {
-    std::vector<std::uint32_t> ids;
-    std::vector<double> sq;
-    const std::size_t found = index.knn(points[i], 7, ids, sq);  // the point itself comes first
-    for (std::size_t k = 1; k < found; ++k) perPoint[i] += std::sqrt(sq[k]) / static_cast<double>(found - 1);
-  });
-  double sum = 0;
-  for (double d : perPoint) sum += d;
-  return sum / static_cast<double>(points.size());
-}
 
 /// Memory one sample costs (position, normal, triangle id, k-NN index for l, the written buffer), generously.
 constexpr std::size_t kBytesPerPoint = 512;
@@ -86,7 +72,7 @@ int run(int argc, char** argv) {
   if (*noiseRel || *outMinRel || *outMaxRel) {
     iires::MeshSamplingParams clean = params;  // same seed: the surface samples below are these ones
     clean.noise = clean.outlierFraction = 0;
-    l = meanSixNeighbourSpacing(iires::sampleMesh(mesh, clean).points);
+    l = iires::meanNeighbourSpacing(iires::sampleMesh(mesh, clean).points);
     if (*noiseRel) params.noise = noiseSpacing * l;
     if (*outMinRel) params.outlierMin = outlierMinSpacing * l;
     if (*outMaxRel) params.outlierMax = outlierMaxSpacing * l;

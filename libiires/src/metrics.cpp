@@ -132,4 +132,19 @@ double bboxDiagonal(const std::vector<Eigen::Vector3d>& points) {
   return box.diagonal().norm();
 }
 
+double meanNeighbourSpacing(const std::vector<Eigen::Vector3d>& points, int k, int threads) {
+  if (points.size() < 2) return 0.0;
+  const KnnIndex index(points);
+  std::vector<double> perPoint(points.size(), 0.0);
+  parallelFor(points.size(), threads, [&](std::size_t i) {
+    std::vector<std::uint32_t> ids;
+    std::vector<double> sq;
+    const std::size_t found = index.knn(points[i], static_cast<std::size_t>(k) + 1, ids, sq);  // itself first
+    for (std::size_t j = 1; j < found; ++j) perPoint[i] += std::sqrt(sq[j]) / static_cast<double>(found - 1);
+  });
+  double sum = 0;
+  for (double d : perPoint) sum += d;
+  return sum / static_cast<double>(points.size());
+}
+
 }  // namespace iires

@@ -19,6 +19,10 @@ struct SpacingStats {
 /// @brief Nearest-neighbour spacing statistics (brute force below 64 points, k-d tree above).
 SpacingStats spacingStats(const std::vector<Eigen::Vector3d>& points, int threads = 0);
 
+/// @brief The paper's §6.1 length unit l: each point's mean distance to its @p k nearest neighbours (6 in the
+/// paper), averaged over the points (0 for fewer than 2 points). Deterministic for any thread count.
+double meanNeighbourSpacing(const std::vector<Eigen::Vector3d>& points, int k = 6, int threads = 0);
+
 /// @brief Mean, max and 99th percentile of a set of distances.
 struct DistanceStats {
   double mean = 0, max = 0, p99 = 0;
