@@ -6,3 +6,23 @@ function(iires_target_options target)
     target_link_options(${target} PRIVATE -fsanitize=address,undefined)
   endif()
 endfunction()
+
+# A library built on libiires (libregister, libreconstruct): sources globbed from src/, public headers in
+# include/, target iires_<short> with alias and export name iires::<short>; third-party types stay private.
+function(iires_add_dependent_library short)
+  file(GLOB sources CONFIGURE_DEPENDS ${CMAKE_CURRENT_SOURCE_DIR}/src/*.cpp)
+  if(NOT sources)
+    return()
+  endif()
+  add_library(iires_${short} SHARED ${sources})
+  add_library(iires::${short} ALIAS iires_${short})
+  set_target_properties(iires_${short} PROPERTIES EXPORT_NAME ${short})
+  target_include_directories(iires_${short} PUBLIC
+    $<BUILD_INTERFACE:${CMAKE_CURRENT_SOURCE_DIR}/include>
+    $<INSTALL_INTERFACE:${CMAKE_INSTALL_INCLUDEDIR}>)
+  target_link_libraries(iires_${short} PUBLIC iires::iires PRIVATE ${ARGN})
+  iires_target_options(iires_${short})
+  install(TARGETS iires_${short} EXPORT iiresTargets
+    ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR} LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR})
+  install(DIRECTORY include/ DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
+endfunction()

@@ -15,6 +15,7 @@
 #include <stdexcept>
 #include <unistd.h>
 
+#include "iires/disjoint_sets.hpp"
 #include "iires/knn.hpp"
 #include "iires/parallel.hpp"
 
@@ -129,22 +130,6 @@ class Sweep {
   std::vector<float> upScore_;
   std::vector<std::uint32_t> touched_;
   std::vector<Item> heap_;
-};
-
-/// Union-find with path halving and union by index (the smaller index becomes the root: deterministic).
-struct DisjointSets {
-  explicit DisjointSets(std::size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0u); }
-  std::uint32_t find(std::uint32_t x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  }
-  void unite(std::uint32_t a, std::uint32_t b) {
-    a = find(a), b = find(b);
-    if (a == b) return;
-    if (a < b) std::swap(a, b);
-    parent[a] = b;
-  }
-  std::vector<std::uint32_t> parent;
 };
 
 /// Spreads the low 21 bits of @p v to every third bit (Morton / Z-order encoding).

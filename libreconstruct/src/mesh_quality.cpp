@@ -9,6 +9,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "iires/disjoint_sets.hpp"
 #include "iires/knn.hpp"
 #include "iires/metrics.hpp"
 #include "iires/parallel.hpp"
@@ -25,20 +26,6 @@ std::string num(double x) {
   os << std::setprecision(10) << x;
   return os.str();
 }
-
-/// Union-find with path halving; deterministic (union by smaller index).
-struct DisjointSets {
-  std::vector<std::uint32_t> parent;
-  explicit DisjointSets(std::size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0u); }
-  std::uint32_t find(std::uint32_t x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  }
-  void unite(std::uint32_t a, std::uint32_t b) {
-    a = find(a), b = find(b);
-    if (a != b) parent[std::max(a, b)] = std::min(a, b);
-  }
-};
 
 /// One face's directed edge a→b, keyed by its undirected vertex pair.
 struct HalfEdge {
