@@ -132,37 +132,6 @@ class Sweep {
   std::vector<Item> heap_;
 };
 
-/// Spreads the low 21 bits of @p v to every third bit (Morton / Z-order encoding).
-std::uint64_t spreadBits(std::uint64_t v) {
-  v &= 0x1fffff;
-  v = (v | v << 32) & 0x1f00000000ffffULL;
-  v = (v | v << 16) & 0x1f0000ff0000ffULL;
-  v = (v | v << 8) & 0x100f00f00f00f00fULL;
-  v = (v | v << 4) & 0x10c30c30c30c30c3ULL;
-  v = (v | v << 2) & 0x1249249249249249ULL;
-  return v;
-}
-
-/// Points in Z-order (ties by index): neighbours in space become neighbours in memory, which makes the k-NN
-/// queries and the sweeps several times faster on large random-order clouds.
-std::vector<std::uint32_t> mortonOrder(const std::vector<Eigen::Vector3d>& pts) {
-  Eigen::Vector3d lo = pts.front(), hi = pts.front();
-  for (const auto& p : pts) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
-  const double extent = std::max((hi - lo).maxCoeff(), 1e-300);
-  const double scale = static_cast<double>((1u << 21) - 1) / extent;
-  std::vector<std::pair<std::uint64_t, std::uint32_t>> key(pts.size());
-  for (std::size_t i = 0; i < pts.size(); ++i) {
-    const Eigen::Vector3d q = (pts[i] - lo) * scale;
-    key[i] = {spreadBits(static_cast<std::uint64_t>(q.x())) | spreadBits(static_cast<std::uint64_t>(q.y())) << 1 |
-                  spreadBits(static_cast<std::uint64_t>(q.z())) << 2,
-              static_cast<std::uint32_t>(i)};
-  }
-  std::sort(key.begin(), key.end());
-  std::vector<std::uint32_t> order(pts.size());
-  for (std::size_t i = 0; i < pts.size(); ++i) order[i] = key[i].second;
-  return order;
-}
-
 }  // namespace
 
 void GeodesicParams::validate() const {

@@ -1,5 +1,6 @@
 #include "iires/knn.hpp"
 
+#include <algorithm>
 #include <nanoflann.hpp>
 
 namespace iires {
@@ -73,6 +74,38 @@ std::int64_t KnnIndex::nearest(const Eigen::Vector3d& query, double* sqDist) con
   impl_->tree.knnSearch(query.data(), 1, &index, &d2);
   if (sqDist) *sqDist = d2;
   return index;
+}
+
+namespace {
+/// The 21 low bits of @p x spread to every third bit.
+std::uint64_t spreadBits(std::uint64_t x) {
+  x &= 0x1fffff;
+  x = (x | x << 32) & 0x1f00000000ffffull;
+  x = (x | x << 16) & 0x1f0000ff0000ffull;
+  x = (x | x << 8) & 0x100f00f00f00f00full;
+  x = (x | x << 4) & 0x10c30c30c30c30c3ull;
+  x = (x | x << 2) & 0x1249249249249249ull;
+  return x;
+}
+}  // namespace
+
+std::vector<std::uint32_t> mortonOrder(const std::vector<Eigen::Vector3d>& points) {
+  std::vector<std::uint32_t> order(points.size());
+  if (points.empty()) return order;
+  Eigen::Vector3d lo = points[0], hi = points[0];
+  for (const auto& p : points) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
+  const double extent = (hi - lo).maxCoeff();
+  const double scale = extent > 0 ? 2097151.0 / extent : 0.0;
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const Eigen::Vector3d q = (points[i] - lo) * scale;
+    keyed[i] = {spreadBits(static_cast<std::uint64_t>(q.x())) | spreadBits(static_cast<std::uint64_t>(q.y())) << 1 |
+                    spreadBits(static_cast<std::uint64_t>(q.z())) << 2,
+                static_cast<std::uint32_t>(i)};
+  }
+  std::sort(keyed.begin(), keyed.end());
+  for (std::size_t i = 0; i < keyed.size(); ++i) order[i] = keyed[i].second;
+  return order;
 }
 
 }  // namespace iires

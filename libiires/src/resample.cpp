@@ -104,6 +104,28 @@ std::vector<std::uint32_t> voxelThin(const std::vector<Eigen::Vector3d>& pts, co
   return chosen;
 }
 
+/// The points (and normals) of @p cloud at @p indices, in that order.
+PointCloud select(const PointCloud& cloud, const std::vector<std::uint32_t>& indices) {
+  PointCloud out;
+  out.points.reserve(indices.size());
+  for (std::uint32_t i : indices) out.points.push_back(cloud.points[i]);
+  if (cloud.hasNormals()) {
+    out.normals.reserve(indices.size());
+    for (std::uint32_t i : indices) out.normals.push_back(cloud.normals[i]);
+  }
+  return out;
+}
+
+/// The samples of @p s not marked in @p removed, in Morton order (loops over samples and their k-NN queries then
+/// stay in cache).
+Samples spatiallySorted(Samples& s, const std::vector<char>& removed) {
+  std::vector<std::uint32_t> order = mortonOrder(s.pos);
+  Samples out;
+  for (std::uint32_t i : order)
+    if (!removed[i]) out.add(s.pos[i], s.nrm[i], s.fixed[i], std::move(s.cache[i]));
+  return out;
+}
+
 class Resampler {
  public:
   /// @param size per input point target-size factor (curvature mode), or null (isotropic)
@@ -305,11 +327,9 @@ void Resampler::splitAndCollapse(Samples& s, const std::vector<Edge>& sorted, st
     removed[drop] = 1;
     ++collapsed;
   }
-  Samples kept;
-  for (std::size_t i = 0; i < s.size(); ++i)
-    if (!removed[i]) kept.add(s.pos[i], s.nrm[i], s.fixed[i], std::move(s.cache[i]));
-  for (std::size_t c = 0; c < newPos.size(); ++c) kept.add(newPos[c], newNrm[c], false);
-  s = std::move(kept);
+  for (std::size_t c = 0; c < newPos.size(); ++c) s.add(newPos[c], newNrm[c], false);
+  removed.resize(s.size(), 0);
+  s = spatiallySorted(s, removed);
   result.splits += newPos.size();
   result.collapses += collapsed;
 }
@@ -367,10 +387,7 @@ void Resampler::eliminate(Samples& s, std::size_t count) {
       if (!s.fixed[j]) heap.emplace(weight[j], tie(j), j);
     }
   }
-  Samples kept;
-  for (std::size_t i = 0; i < s.size(); ++i)
-    if (!removed[i]) kept.add(s.pos[i], s.nrm[i], s.fixed[i]);
-  s = std::move(kept);
+  s = spatiallySorted(s, removed);
 }
 
 Samples Resampler::initialise(ResampleResult& result) {
@@ -551,17 +568,13 @@ ResampleResult resample(const PointCloud& input, const ResampleParams& params) {
     // Far denser than the output: thin first, so every O(n) stage below works on ≈ maxInputPerSample·N points.
     t = begin("thin");
     const std::size_t target = workingTarget;
-    const std::vector<std::uint32_t> keep =
-        voxelThin(cloud.points, cloud.normals, target, bboxDiagonal(cloud.points) / std::sqrt(static_cast<double>(target)));
-    PointCloud thin;
-    for (std::uint32_t i : keep) {
-      thin.points.push_back(cloud.points[i]);
-      if (cloud.hasNormals()) thin.normals.push_back(cloud.normals[i]);
-    }
-    cloud = std::move(thin);
+    cloud = select(cloud, voxelThin(cloud.points, cloud.normals, target,
+                                    bboxDiagonal(cloud.points) / std::sqrt(static_cast<double>(target))));
     stage("thin", t);
   }
   result.thinnedPoints = cloud.size();
+  // Every stage below loops over the points querying their neighbours: in Morton order those stay in cache.
+  cloud = select(cloud, mortonOrder(cloud.points));
 
   constexpr std::size_t kPreprocessMinPoints = 25;
   if (params.preprocess && cloud.size() >= kPreprocessMinPoints) {
