@@ -1,6 +1,7 @@
 // The intrinsic neighbour rule: paper §3.2 ("efficient intrinsic control"), DESIGN §3 step 6.
 #include "iires/intrinsic.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -29,12 +30,15 @@ IntrinsicRule::IntrinsicRule(std::shared_ptr<const GeodesicCoordinates> geo, con
 void IntrinsicRule::update(const std::vector<Eigen::Vector3d>& samples, const std::vector<Eigen::Vector3d>&) {
   const std::size_t n = samples.size();
   pos_ = samples;
+  const std::size_t dims = static_cast<std::size_t>(geo_->dimensions());
   dense_.assign(n, 0);
   comp_.assign(n, 0);
+  coords_.assign(n * dims, 0.0f);
   parallelFor(n, params_.threads, [&](std::size_t i) {
     const std::int64_t d = geo_->nearest(samples[i]);
     dense_[i] = static_cast<std::uint32_t>(d < 0 ? 0 : d);
     comp_[i] = geo_->component(dense_[i]);
+    std::copy_n(&geo_->coordinates()[dense_[i] * dims], dims, &coords_[i * dims]);
   });
   // Sample spacing estimate: the dense cloud covers about size()·(2·spacing)² of surface (a random sampling's
   // mean nearest-neighbour distance is half its hexagonal spacing); N samples on it are about
@@ -48,25 +52,28 @@ void IntrinsicRule::update(const std::vector<Eigen::Vector3d>& samples, const st
   }
 }
 
-bool IntrinsicRule::consistent(std::uint32_t a, std::uint32_t b, double d) const {
-  if (geo_->component(a) != geo_->component(b)) return false;
+bool IntrinsicRule::consistent(const float* ga, const float* gb, double d) const {
   if (maxDistance_ > 0 && d > maxDistance_) return false;
   // |gₛ(p) − gₛ(q)| ≤ d_geo(p, q) ≈ |p − q| for true neighbours (paper §3.2).
   const double limit = params_.slope * d + tolerance_;
   for (int s = 0; s < geo_->dimensions(); ++s)
-    if (std::abs(static_cast<double>(geo_->coordinate(a, s)) - geo_->coordinate(b, s)) > limit) return false;
+    if (std::abs(static_cast<double>(ga[s]) - gb[s]) > limit) return false;
   return true;
 }
 
 bool IntrinsicRule::accept(std::size_t i, std::size_t j) const {
   if (i == j) return true;
-  return consistent(dense_[i], dense_[j], (pos_[i] - pos_[j]).norm());
+  const std::size_t dims = static_cast<std::size_t>(geo_->dimensions());
+  return comp_[i] == comp_[j] && consistent(&coords_[i * dims], &coords_[j * dims], (pos_[i] - pos_[j]).norm());
 }
 
 bool IntrinsicRule::acceptPoints(const Eigen::Vector3d& p, const Eigen::Vector3d& q) const {
   const std::int64_t a = geo_->nearest(p), b = geo_->nearest(q);
-  if (a < 0 || b < 0) return false;
-  return consistent(static_cast<std::uint32_t>(a), static_cast<std::uint32_t>(b), (p - q).norm());
+  if (a < 0 || b < 0 || geo_->component(static_cast<std::size_t>(a)) != geo_->component(static_cast<std::size_t>(b)))
+    return false;
+  const std::size_t dims = static_cast<std::size_t>(geo_->dimensions());
+  return consistent(&geo_->coordinates()[static_cast<std::size_t>(a) * dims],
+                    &geo_->coordinates()[static_cast<std::size_t>(b) * dims], (p - q).norm());
 }
 
 }  // namespace iires

@@ -10,6 +10,7 @@
 namespace iires {
 namespace {
 constexpr std::size_t kKernelNeighbour = 8;  // paper: h from the 8th neighbour
+constexpr double kConverged = 0.02;  // projection steps shorter than this many kernel widths end the iteration
 }
 
 MlsSurface::MlsSurface(const std::vector<Eigen::Vector3d>& points, const std::vector<Eigen::Vector3d>& normals,
@@ -46,14 +47,15 @@ MlsSurface::~MlsSurface() = default;
 
 Eigen::Vector3d MlsSurface::project(const Eigen::Vector3d& x0, Eigen::Vector3d* normalOut, double* offSurface,
                                     const Eigen::Vector3d* hint, MlsCache* cache) const {
-  std::vector<std::uint32_t> idx;
-  std::vector<double> d2;
+  // Per-thread scratch: this runs for every sample in every relaxation iteration.
+  thread_local std::vector<std::uint32_t> idx;
+  thread_local std::vector<double> d2, w;
   Eigen::Vector3d x = x0, normal = Eigen::Vector3d::UnitZ();
   double off = 0;
   Eigen::Vector3d queried = x;
   double lastH = 0;
   if (cache && cache->h > 0 && (x - cache->centre).squaredNorm() <= 0.0625 * cache->h * cache->h) {
-    idx = cache->indices;
+    idx.assign(cache->indices.begin(), cache->indices.end());
     queried = cache->centre;
     lastH = cache->h;
     d2.resize(idx.size());
@@ -82,7 +84,7 @@ Eigen::Vector3d MlsSurface::project(const Eigen::Vector3d& x0, Eigen::Vector3d* 
     // eq. (2): Gaussian weights; eq. (1): weighted average a(x) and averaged oriented normal n_a.
     double wsum = 0;
     Eigen::Vector3d a = Eigen::Vector3d::Zero(), nsum = Eigen::Vector3d::Zero();
-    std::vector<double> w(found);
+    w.resize(found);
     for (std::size_t j = 0; j < found; ++j) {
       w[j] = normals_[idx[j]].dot(reference) > 0.0 ? std::exp(-d2[j] * inv) + 1e-12 : 0.0;
       wsum += w[j];
@@ -103,8 +105,10 @@ Eigen::Vector3d MlsSurface::project(const Eigen::Vector3d& x0, Eigen::Vector3d* 
         Eigen::Matrix<double, 6, 1> row;
         const double pu = d.dot(u), pv = d.dot(v);
         row << 1, pu, pv, pu * pu, pu * pv, pv * pv;
-        ata += w[j] * row * row.transpose();
-        atb += w[j] * row * d.dot(normal);
+        const Eigen::Matrix<double, 6, 1> wrow = w[j] * row;
+        for (int r = 0; r < 6; ++r)
+          for (int q = 0; q <= r; ++q) ata(r, q) += wrow[r] * row[q];  // lower triangle: ldlt reads only it
+        atb += wrow * d.dot(normal);
       }
       for (int r = 3; r < 6; ++r) ata(r, r) += 1e-3 * wsum;  // mild ridge: flat when under-determined
       const Eigen::Matrix<double, 6, 1> c = ata.ldlt().solve(atb);
@@ -117,6 +121,7 @@ Eigen::Vector3d MlsSurface::project(const Eigen::Vector3d& x0, Eigen::Vector3d* 
         normal = (normal - fu * u - fv * v).normalized();
       }
     }
+    const double step2 = (next - x).squaredNorm();
     x = next;
     double best = std::numeric_limits<double>::max();
     std::size_t bestJ = 0;
@@ -126,6 +131,7 @@ Eigen::Vector3d MlsSurface::project(const Eigen::Vector3d& x0, Eigen::Vector3d* 
       if (dd < best) best = dd, bestJ = j;
     }
     off = std::sqrt(best) / h_[idx[bestJ]];
+    if (step2 < kConverged * kConverged * h * h) break;  // a refit here would move it by far less
   }
   if (normalOut) *normalOut = normal;
   if (offSurface) *offSurface = off;

@@ -1,6 +1,7 @@
 #include "iires/resample.hpp"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <numeric>
@@ -49,6 +50,14 @@ struct Rings {
   std::vector<double> nearest;  // distance to the nearest accepted neighbour
   std::vector<Eigen::Vector3d> outward;  // unit tangent pointing off the surface at boundary samples, else 0
   std::vector<double> size;  // each sample's target size factor s (1 in isotropic mode)
+  std::vector<std::uint32_t> candidates;  // per sample the stride + 1 nearest samples its ring was built from
+};
+
+/// Lloyd relaxation state carried across iterations on one sample set (no splits or collapses in between).
+struct Relaxation {
+  std::optional<Rings> rings;  // the last iteration's rings
+  std::vector<char> active;    // samples whose cell may have changed since (they or a ring neighbour moved)
+  int sinceQuery = 0;          // iterations since the candidate lists came from a k-d tree
 };
 
 struct Edge {
@@ -138,9 +147,10 @@ class Resampler {
   void run(Samples& s, ResampleResult& result);
 
  private:
-  Rings computeRings(const Samples& s, double cellRadius, bool refreshRule = true) const;
+  Rings computeRings(const Samples& s, double cellRadius, const Relaxation* relaxation = nullptr,
+                     bool requery = true) const;
   std::vector<Edge> edges(const Samples& s, const Rings& r) const;
-  double relax(Samples& s, double l, int iterations);
+  double relax(Samples& s, double l, int iterations, Relaxation& state);
   void splitAndCollapse(Samples& s, const std::vector<Edge>& sorted, std::size_t splits, double minSplit,
                         std::size_t collapses, double maxCollapse, ResampleResult& result);
   void eliminate(Samples& s, std::size_t count);
@@ -153,26 +163,77 @@ class Resampler {
   const std::vector<double>* size_;
 };
 
-Rings Resampler::computeRings(const Samples& s, double cellRadius, bool refreshRule) const {
-  if (refreshRule) rule_.update(s.pos, s.nrm);
+/// Neighbours are filtered by the neighbour rule as of its last update, which follows every change of the
+/// sample set (relaxation moves samples by a fraction of a spacing and keeps their order).
+/// @param relaxation with the rings of the previous iteration on the same samples: samples it marks inactive
+/// keep their ring and cell, and unless @p requery the others re-sort their previous candidate lists by the
+/// current distances instead of querying a new k-d tree (samples moved by a fraction of a spacing, so the few
+/// neighbours that shape a cell stay among the nearest of a step ago). Without it every ring is computed from
+/// scratch.
+Rings Resampler::computeRings(const Samples& s, double cellRadius, const Relaxation* relaxation,
+                              bool requery) const {
+  const Rings* previous = relaxation && relaxation->rings ? &*relaxation->rings : nullptr;
+  if (!previous) requery = true;
+  auto active = [&](std::size_t i) { return !previous || relaxation->active[i]; };
   const int k = params_.neighbours;
+  const std::size_t stride = static_cast<std::size_t>(k) + 1;
   Rings r;
-  r.stride = k;
-  r.ring.assign(s.size() * static_cast<std::size_t>(k), kNone);
-  r.centroid.resize(s.size());
-  r.nearest.assign(s.size(), 0.0);
-  r.outward.assign(s.size(), Eigen::Vector3d::Zero());
-  r.size.assign(s.size(), 1.0);
+  if (previous) {  // inactive samples keep everything; the rest is overwritten below
+    r = *previous;
+  } else {
+    r.stride = k;
+    r.ring.assign(s.size() * static_cast<std::size_t>(k), kNone);
+    r.candidates.assign(s.size() * stride, kNone);
+    r.centroid.resize(s.size());
+    r.nearest.assign(s.size(), 0.0);
+    r.outward.assign(s.size(), Eigen::Vector3d::Zero());
+    r.size.assign(s.size(), 1.0);
+  }
   if (size_)  // adaptive mode (eq. 10): a sample takes the size factor of its nearest input point
-    parallelFor(s.size(), params_.threads, [&](std::size_t i) { r.size[i] = (*size_)[surface_.index().nearest(s.pos[i])]; });
-  KnnIndex index(s.pos);
+    parallelFor(s.size(), params_.threads, [&](std::size_t i) {
+      if (active(i)) r.size[i] = (*size_)[surface_.index().nearest(s.pos[i])];
+    });
+  std::optional<KnnIndex> index;
+  if (requery) index.emplace(s.pos);
+  // The disc bounding each cell, as a polygon circumscribing the unit circle.
+  constexpr int kDiscEdges = 16;
+  std::array<Eigen::Vector2d, kDiscEdges> unitDisc;
+  for (int e = 0; e < kDiscEdges; ++e)
+    unitDisc[static_cast<std::size_t>(e)] = {std::cos(2 * M_PI * e / kDiscEdges), std::sin(2 * M_PI * e / kDiscEdges)};
   parallelFor(s.size(), params_.threads, [&](std::size_t i) {
-    // Per-thread scratch buffers: this runs for every sample in every iteration.
-    thread_local std::vector<std::uint32_t> idx, lab, tmpL;
-    thread_local std::vector<double> d2, angles;
-    thread_local std::vector<std::pair<std::uint32_t, Eigen::Vector2d>> nb;
-    thread_local std::vector<Eigen::Vector2d> poly, tmpV;
-    index.knn(s.pos[i], static_cast<std::size_t>(k) + 1, idx, d2);
+    if (!active(i)) return;
+    // Per-thread scratch buffers (one thread-local lookup): this runs for every sample in every iteration.
+    struct Scratch {
+      std::vector<std::uint32_t> idx, lab, tmpL;
+      std::vector<double> d2, angles;
+      std::vector<std::pair<double, std::uint32_t>> byDistance;
+      std::vector<std::pair<std::uint32_t, Eigen::Vector2d>> nb;
+      std::vector<Eigen::Vector2d> poly, tmpV;
+    };
+    thread_local Scratch scratch;
+    Scratch& sc = scratch;
+    auto &idx = sc.idx, &lab = sc.lab, &tmpL = sc.tmpL;
+    auto &d2 = sc.d2, &angles = sc.angles;
+    auto &poly = sc.poly, &tmpV = sc.tmpV;
+    auto& byDistance = sc.byDistance;
+    auto& nb = sc.nb;
+    const auto candidates = r.candidates.begin() + static_cast<long>(i * stride);
+    if (index) {
+      index->knn(s.pos[i], stride, idx, d2);
+    } else {
+      byDistance.clear();
+      for (std::size_t c = 0; c < stride; ++c)
+        if (const std::uint32_t j = candidates[static_cast<long>(c)]; j != kNone)
+          byDistance.emplace_back((s.pos[j] - s.pos[i]).squaredNorm(), j);
+      std::sort(byDistance.begin(), byDistance.end());
+      idx.clear();
+      d2.clear();
+      for (const auto& [d, j] : byDistance) idx.push_back(j), d2.push_back(d);
+    }
+    std::fill_n(candidates, stride, kNone);
+    std::copy(idx.begin(), idx.end(), candidates);
+    std::fill_n(r.ring.begin() + static_cast<long>(i * static_cast<std::size_t>(k)), k, kNone);
+    r.outward[i].setZero();
     const Eigen::Vector3d& n = s.nrm[i];
     const Eigen::Vector3d u = n.unitOrthogonal(), v = n.cross(u);
     // Accepted neighbours in tangent coordinates. Log-map approximation: the tangent direction of the neighbour
@@ -194,9 +255,9 @@ Rings Resampler::computeRings(const Samples& s, double cellRadius, bool refreshR
     const double radius = std::max(cellRadius * r.size[i], nearest);
     poly.clear();
     lab.clear();
-    const double rad = radius / std::cos(M_PI / 16);
-    for (int e = 0; e < 16; ++e) {
-      poly.emplace_back(rad * std::cos(2 * M_PI * e / 16), rad * std::sin(2 * M_PI * e / 16));
+    const double rad = radius / std::cos(M_PI / kDiscEdges);
+    for (const Eigen::Vector2d& corner : unitDisc) {
+      poly.push_back(rad * corner);
       lab.push_back(kNone);
     }
     for (const auto& [j, q] : nb) {
@@ -252,37 +313,57 @@ std::vector<Edge> Resampler::edges(const Samples& s, const Rings& r) const {
 /// Lloyd relaxation: move each free sample to the centroid of its tangent-plane Voronoi cell, projected onto
 /// the MLS surface (halving the step if the move would leave the cloud). Returns the spacing CV after the last
 /// iteration (from the 1-rings, so it costs nothing extra).
-double Resampler::relax(Samples& s, double l, int iterations) {
+/// Only active samples are recomputed: a sample whose cell neighbours and itself all moved by less than
+/// kStillMove·l last time has (nearly) the same cell and centroid, and keeps them. Late in the relaxation most
+/// samples are still, so an iteration costs a fraction of the first ones.
+double Resampler::relax(Samples& s, double l, int iterations, Relaxation& state) {
+  constexpr double kStillMove = 0.01;  // in units of l
+  constexpr int kRequeryEvery = 4;     // iterations between fresh k-d tree candidate lists
+  const std::size_t n = s.size(), k = static_cast<std::size_t>(params_.neighbours);
   double cv = 0;
   for (int it = 0; it < iterations; ++it) {
-    // Relaxation moves samples by a fraction of a spacing and keeps their order: the neighbour rule's view of
-    // them is refreshed on the first iteration of each call only.
-    const Rings r = computeRings(s, l, it == 0);
+    const bool requery = !state.rings || state.sinceQuery >= kRequeryEvery;
+    Rings r = computeRings(s, l, &state, requery);
+    state.sinceQuery = requery ? 1 : state.sinceQuery + 1;
+    if (!state.rings) state.active.assign(n, 1);
     std::vector<Eigen::Vector3d> pos(s.pos), nrm(s.nrm);
-    parallelFor(s.size(), params_.threads, [&](std::size_t i) {
-      if (s.fixed[i]) return;
+    parallelFor(n, params_.threads, [&](std::size_t i) {
+      if (s.fixed[i] || !state.active[i]) return;
       Eigen::Vector3d step = params_.overRelaxation * (r.centroid[i] - s.pos[i]);
       // Boundary samples may slide along the boundary or move inwards, never off the surface.
       step -= std::max(0.0, step.dot(r.outward[i])) * r.outward[i];
       Eigen::Vector3d target = s.pos[i] + step;
       for (int attempt = 0; attempt < 3; ++attempt) {
-        Eigen::Vector3d n;
+        Eigen::Vector3d nn;
         double off = 0;
-        const Eigen::Vector3d p = surface_.project(target, &n, &off, &s.nrm[i], &s.cache[i]);
+        const Eigen::Vector3d p = surface_.project(target, &nn, &off, &s.nrm[i], &s.cache[i]);
         if (off <= kOffSurfaceLimit) {
           pos[i] = p;
-          nrm[i] = n;
+          nrm[i] = nn;
           return;
         }
         target = 0.5 * (target + s.pos[i]);
       }
     });
+    // Next iteration's active set: samples that moved and the 1-ring neighbours of those (both directions).
+    std::vector<char> moved(n, 0), next(n, 0);
+    const double still2 = kStillMove * kStillMove * l * l;
+    for (std::size_t i = 0; i < n; ++i) moved[i] = (pos[i] - s.pos[i]).squaredNorm() > still2;
+    for (std::size_t i = 0; i < n; ++i)
+      for (std::size_t x = 0; x < k; ++x) {
+        const std::uint32_t j = r.ring[i * k + x];
+        if (j == kNone) break;
+        if (moved[i] || moved[j]) next[i] = next[j] = 1;
+      }
+    for (std::size_t i = 0; i < n; ++i) next[i] |= moved[i];
     s.pos.swap(pos);
     s.nrm.swap(nrm);
     double sum = 0, sq = 0;
     for (double d : r.nearest) sum += d, sq += d * d;
-    const double mean = sum / static_cast<double>(r.nearest.size());
-    cv = mean > 0 ? std::sqrt(std::max(0.0, sq / static_cast<double>(r.nearest.size()) - mean * mean)) / mean : 0;
+    const double mean = sum / static_cast<double>(n);
+    cv = mean > 0 ? std::sqrt(std::max(0.0, sq / static_cast<double>(n) - mean * mean)) / mean : 0;
+    state.rings = std::move(r);
+    state.active = std::move(next);
   }
   return cv;
 }
@@ -330,6 +411,7 @@ void Resampler::splitAndCollapse(Samples& s, const std::vector<Edge>& sorted, st
   for (std::size_t c = 0; c < newPos.size(); ++c) s.add(newPos[c], newNrm[c], false);
   removed.resize(s.size(), 0);
   s = spatiallySorted(s, removed);
+  rule_.update(s.pos, s.nrm);
   result.splits += newPos.size();
   result.collapses += collapsed;
 }
@@ -410,6 +492,7 @@ Samples Resampler::initialise(ResampleResult& result) {
   parallelFor(chosen.size(), params_.threads, [&](std::size_t c) { pos[c] = surface_.project(pts_[chosen[c]], &nrm[c]); });
   for (std::size_t c = 0; c < chosen.size(); ++c) s.add(pos[c], nrm[c], false);
   eliminate(s, n);
+  rule_.update(s.pos, s.nrm);
   result.initialSamples = s.size();
   return s;
 }
@@ -458,7 +541,8 @@ void Resampler::run(Samples& s, ResampleResult& result) {
       splits = std::min(splits, collapses + deficit);
     }
     splitAndCollapse(s, e, splits, minSplit, collapses, maxCollapse, result);
-    relax(s, l, params_.relaxPerPass);
+    Relaxation relaxation;
+    relax(s, l, params_.relaxPerPass, relaxation);
     result.relaxIterations += params_.relaxPerPass;
   }
   // Exact-count finish: collapse the shortest or split the longest edges until |S| == N.
@@ -467,15 +551,17 @@ void Resampler::run(Samples& s, ResampleResult& result) {
     const std::size_t excess = s.size() > n ? s.size() - n : 0, deficit = n > s.size() ? n - s.size() : 0;
     splitAndCollapse(s, e, deficit, 0.0, excess, std::numeric_limits<double>::max(), result);
     l = targetLength(e);
-    relax(s, l, 1);
+    Relaxation relaxation;
+    relax(s, l, 1, relaxation);
     ++result.relaxIterations;
   }
   if (s.size() != n) throw std::runtime_error("resample: could not reach the requested count");
   // Lloyd relaxation in rounds of 4 iterations until the spacing CV has not improved for relaxPatience rounds.
   double best = std::numeric_limits<double>::max();
+  Relaxation relaxation;
   for (int it = 0, stale = 0; it < params_.maxRelaxIterations && stale < params_.relaxPatience; it += 4) {
     if (params_.progress) params_.progress("resample", 0.8 + 0.2 * it / params_.maxRelaxIterations);
-    const double cv = relax(s, l, std::min(4, params_.maxRelaxIterations - it));
+    const double cv = relax(s, l, std::min(4, params_.maxRelaxIterations - it), relaxation);
     result.relaxIterations += std::min(4, params_.maxRelaxIterations - it);
     stale = cv < best - 1e-5 ? 0 : stale + 1;
     best = std::min(best, cv);

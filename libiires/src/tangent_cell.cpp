@@ -1,5 +1,6 @@
 #include "iires/tangent_cell.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 namespace iires {
@@ -8,12 +9,13 @@ void clipByBisector(std::vector<Eigen::Vector2d>& v, std::vector<std::uint32_t>&
                     double t, std::uint32_t label, std::vector<Eigen::Vector2d>& outV,
                     std::vector<std::uint32_t>& outL) {
   const double c = t * q.squaredNorm();
+  const std::size_t m = v.size();
+  if (std::none_of(v.begin(), v.end(), [&](const Eigen::Vector2d& a) { return a.dot(q) > c; })) return;
   outV.clear();
   outL.clear();
-  const std::size_t m = v.size();
   for (std::size_t e = 0; e < m; ++e) {
     const Eigen::Vector2d& a = v[e];
-    const Eigen::Vector2d& b = v[(e + 1) % m];
+    const Eigen::Vector2d& b = v[e + 1 < m ? e + 1 : 0];
     const double sa = a.dot(q) - c, sb = b.dot(q) - c;
     if (sa <= 0) {
       outV.push_back(a);

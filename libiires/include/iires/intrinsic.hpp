@@ -64,14 +64,16 @@ class IntrinsicRule final : public NeighbourRule {
   const GeodesicCoordinates& geodesic() const { return *geo_; }
 
  private:
-  bool consistent(std::uint32_t a, std::uint32_t b, double d) const;
+  /// The distance and coordinate bounds between two points of one component with coordinates @p ga, @p gb.
+  bool consistent(const float* ga, const float* gb, double d) const;
 
   std::shared_ptr<const GeodesicCoordinates> geo_;
   IntrinsicParams params_;
   double tolerance_ = 0;
   double maxDistance_ = 0;
   std::vector<Eigen::Vector3d> pos_;
-  std::vector<std::uint32_t> dense_, comp_;
+  std::vector<std::uint32_t> dense_, comp_;  // per sample: its nearest dense point and that point's component
+  std::vector<float> coords_;        // per sample: that point's geodesic coordinates, sample-major
 };
 
 }  // namespace iires
