@@ -10,7 +10,6 @@
 namespace iires {
 namespace {
 constexpr std::size_t kKernelNeighbour = 8;  // paper: h from the 8th neighbour
-constexpr double kConverged = 0.02;  // projection steps shorter than this many kernel widths end the iteration
 }
 
 MlsSurface::MlsSurface(const std::vector<Eigen::Vector3d>& points, const std::vector<Eigen::Vector3d>& normals,
@@ -121,7 +120,6 @@ Eigen::Vector3d MlsSurface::project(const Eigen::Vector3d& x0, Eigen::Vector3d* 
         normal = (normal - fu * u - fv * v).normalized();
       }
     }
-    const double step2 = (next - x).squaredNorm();
     x = next;
     double best = std::numeric_limits<double>::max();
     std::size_t bestJ = 0;
@@ -131,7 +129,6 @@ Eigen::Vector3d MlsSurface::project(const Eigen::Vector3d& x0, Eigen::Vector3d* 
       if (dd < best) best = dd, bestJ = j;
     }
     off = std::sqrt(best) / h_[idx[bestJ]];
-    if (step2 < kConverged * kConverged * h * h) break;  // a refit here would move it by far less
   }
   if (normalOut) *normalOut = normal;
   if (offSurface) *offSurface = off;

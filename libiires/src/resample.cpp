@@ -27,6 +27,7 @@ double secondsSince(Clock::time_point t) { return std::chrono::duration<double>(
 
 constexpr std::uint32_t kNone = 0xffffffffu;
 constexpr double kOffSurfaceLimit = 0.6;  // MlsSurface::project's offSurface beyond which a move left the cloud
+constexpr double kCarryShare = 0.05;     // edits touching more than this share of samples restart the relaxation
 
 /// The working sample set S.
 struct Samples {
@@ -51,6 +52,14 @@ struct Rings {
   std::vector<Eigen::Vector3d> outward;  // unit tangent pointing off the surface at boundary samples, else 0
   std::vector<double> size;  // each sample's target size factor s (1 in isotropic mode)
   std::vector<std::uint32_t> candidates;  // per sample the stride + 1 nearest samples its ring was built from
+  std::vector<char> open;                 // the sample's cell reaches its bounding disc (boundary, sparse region)
+};
+
+/// What one round of splits and collapses did to the sample indices.
+struct EditMap {
+  std::vector<std::uint32_t> newIndex;  // old index → new index, kNone for a removed sample
+  std::vector<std::uint32_t> touched;   // old indices of removed samples, moved collapse ends and split ends
+  std::size_t added = 0;                // split samples, appended after the kept ones
 };
 
 /// Lloyd relaxation state carried across iterations on one sample set (no splits or collapses in between).
@@ -151,8 +160,10 @@ class Resampler {
                      bool requery = true) const;
   std::vector<Edge> edges(const Samples& s, const Rings& r) const;
   double relax(Samples& s, double l, int iterations, Relaxation& state);
-  void splitAndCollapse(Samples& s, const std::vector<Edge>& sorted, std::size_t splits, double minSplit,
-                        std::size_t collapses, double maxCollapse, ResampleResult& result);
+  EditMap splitAndCollapse(Samples& s, const std::vector<Edge>& sorted, std::size_t splits, double minSplit,
+                           std::size_t collapses, double maxCollapse, ResampleResult& result);
+  void carry(Relaxation& state, const EditMap& edits, std::size_t count) const;
+  Rings edgeRings(const Samples& s, double l, const Relaxation& state) const;
   void eliminate(Samples& s, std::size_t count);
 
   const std::vector<Eigen::Vector3d>& pts_;
@@ -188,6 +199,7 @@ Rings Resampler::computeRings(const Samples& s, double cellRadius, const Relaxat
     r.nearest.assign(s.size(), 0.0);
     r.outward.assign(s.size(), Eigen::Vector3d::Zero());
     r.size.assign(s.size(), 1.0);
+    r.open.assign(s.size(), 0);
   }
   if (size_)  // adaptive mode (eq. 10): a sample takes the size factor of its nearest input point
     parallelFor(s.size(), params_.threads, [&](std::size_t i) {
@@ -270,6 +282,7 @@ Rings Resampler::computeRings(const Samples& s, double cellRadius, const Relaxat
     r.nearest[i] = nearest;
     std::sort(lab.begin(), lab.end());
     lab.erase(std::unique(lab.begin(), lab.end()), lab.end());
+    r.open[i] = !lab.empty() && lab.back() == kNone;
     int w = 0;
     angles.clear();
     for (std::uint32_t j : lab) {
@@ -317,7 +330,7 @@ std::vector<Edge> Resampler::edges(const Samples& s, const Rings& r) const {
 /// kStillMove·l last time has (nearly) the same cell and centroid, and keeps them. Late in the relaxation most
 /// samples are still, so an iteration costs a fraction of the first ones.
 double Resampler::relax(Samples& s, double l, int iterations, Relaxation& state) {
-  constexpr double kStillMove = 0.01;  // in units of l
+  constexpr double kStillMove = 0.005;  // in units of l
   constexpr int kRequeryEvery = 4;     // iterations between fresh k-d tree candidate lists
   const std::size_t n = s.size(), k = static_cast<std::size_t>(params_.neighbours);
   double cv = 0;
@@ -373,9 +386,10 @@ double Resampler::relax(Samples& s, double l, int iterations, Relaxation& state)
 ///   the surface (a point cloud has no connectivity to keep, so a sample may take part in several splits);
 /// - collapse the shortest edges shorter than @p maxCollapse, at most @p collapses, each sample in at most one
 ///   collapse: both ends are replaced by their midpoint on the surface (a fixed end stays put).
-void Resampler::splitAndCollapse(Samples& s, const std::vector<Edge>& sorted, std::size_t splits,
-                                 double minSplit, std::size_t collapses, double maxCollapse,
-                                 ResampleResult& result) {
+EditMap Resampler::splitAndCollapse(Samples& s, const std::vector<Edge>& sorted, std::size_t splits,
+                                    double minSplit, std::size_t collapses, double maxCollapse,
+                                    ResampleResult& result) {
+  EditMap map;
   // Longest first; midpoints are projected in parallel batches and an edge spanning a hole of the cloud (its
   // midpoint leaves the surface) is not split.
   std::vector<Eigen::Vector3d> newPos, newNrm;
@@ -393,7 +407,10 @@ void Resampler::splitAndCollapse(Samples& s, const std::vector<Edge>& sorted, st
       pos[c] = surface_.project(0.5 * (s.pos[e.a] + s.pos[e.b]), &nrm[c], &off[c], &s.nrm[e.a]);
     });
     for (std::size_t c = 0; c < batch.size() && newPos.size() < splits; ++c)
-      if (off[c] <= kOffSurfaceLimit) newPos.push_back(pos[c]), newNrm.push_back(nrm[c]);
+      if (off[c] <= kOffSurfaceLimit) {
+        newPos.push_back(pos[c]), newNrm.push_back(nrm[c]);
+        map.touched.push_back(batch[c]->a), map.touched.push_back(batch[c]->b);
+      }
   }
   std::vector<char> touched(s.size(), 0), removed(s.size(), 0);
   std::size_t collapsed = 0;
@@ -406,14 +423,82 @@ void Resampler::splitAndCollapse(Samples& s, const std::vector<Edge>& sorted, st
     if (!s.fixed[keep])
       s.pos[keep] = surface_.project(0.5 * (s.pos[e.a] + s.pos[e.b]), &s.nrm[keep], nullptr, &s.nrm[keep]);
     removed[drop] = 1;
+    map.touched.push_back(keep), map.touched.push_back(drop);
     ++collapsed;
   }
-  for (std::size_t c = 0; c < newPos.size(); ++c) s.add(newPos[c], newNrm[c], false);
-  removed.resize(s.size(), 0);
-  s = spatiallySorted(s, removed);
+  // Kept samples stay in order (the Morton order of the initialisation degrades only by the few edits), split
+  // samples follow.
+  map.newIndex.assign(s.size(), kNone);
+  Samples kept;
+  for (std::size_t i = 0; i < s.size(); ++i)
+    if (!removed[i]) {
+      map.newIndex[i] = static_cast<std::uint32_t>(kept.size());
+      kept.add(s.pos[i], s.nrm[i], s.fixed[i], std::move(s.cache[i]));
+    }
+  for (std::size_t c = 0; c < newPos.size(); ++c) kept.add(newPos[c], newNrm[c], false);
+  s = std::move(kept);
+  map.added = newPos.size();
   rule_.update(s.pos, s.nrm);
   result.splits += newPos.size();
   result.collapses += collapsed;
+  return map;
+}
+
+/// Carries a relaxation across a few edits: kept samples keep their rings (indices renumbered), and only the
+/// samples whose cell an edit can change — the split samples, the edited ones and their old neighbourhoods —
+/// are active, with fresh k-d tree candidates. @p count is the new number of samples.
+void Resampler::carry(Relaxation& state, const EditMap& edits, std::size_t count) const {
+  if (!state.rings) return;
+  const Rings& old = *state.rings;
+  const std::size_t k = static_cast<std::size_t>(old.stride), stride = k + 1;
+  Rings r;
+  r.stride = old.stride;
+  r.ring.assign(count * k, kNone);
+  r.candidates.assign(count * stride, kNone);
+  r.centroid.assign(count, Eigen::Vector3d::Zero());
+  r.nearest.assign(count, 0.0);
+  r.outward.assign(count, Eigen::Vector3d::Zero());
+  r.size.assign(count, 1.0);
+  r.open.assign(count, 0);
+  std::vector<char> active(count, 0);
+  for (std::size_t i = 0; i < edits.newIndex.size(); ++i) {
+    const std::uint32_t to = edits.newIndex[i];
+    if (to == kNone) continue;
+    std::size_t w = 0;
+    for (std::size_t x = 0; x < k; ++x)
+      if (const std::uint32_t j = old.ring[i * k + x]; j != kNone && edits.newIndex[j] != kNone)
+        r.ring[to * k + w++] = edits.newIndex[j];
+    for (std::size_t x = 0; x < stride; ++x)
+      if (const std::uint32_t j = old.candidates[i * stride + x]; j != kNone)
+        r.candidates[to * stride + x] = edits.newIndex[j];
+    r.centroid[to] = old.centroid[i];
+    r.nearest[to] = old.nearest[i];
+    r.outward[to] = old.outward[i];
+    r.size[to] = old.size[i];
+    r.open[to] = old.open[i];
+    active[to] = state.active[i];
+  }
+  for (std::size_t a = count - edits.added; a < count; ++a) active[a] = 1;
+  for (std::uint32_t e : edits.touched) {
+    if (edits.newIndex[e] != kNone) active[edits.newIndex[e]] = 1;
+    for (std::size_t x = 0; x < stride; ++x)
+      if (const std::uint32_t j = old.candidates[e * stride + x]; j != kNone && edits.newIndex[j] != kNone)
+        active[edits.newIndex[j]] = 1;
+  }
+  state.rings = std::move(r);
+  state.active = std::move(active);
+  state.sinceQuery = std::numeric_limits<int>::max() / 2;  // the next iteration queries a fresh k-d tree
+}
+
+/// Rings for the edge operations, from a relaxation's last rings: cells bounded by their neighbours alone are
+/// the same with a wider bounding disc, so only the cells the last moves made stale (the active ones) and the
+/// open ones (boundaries, sparse regions) are recomputed, with the disc of radius 1.5·l that lets long edges
+/// — across holes — show.
+Rings Resampler::edgeRings(const Samples& s, double l, const Relaxation& state) const {
+  if (!state.rings) return computeRings(s, 1.5 * l);
+  Relaxation wide{state.rings, state.active, 0};
+  for (std::size_t i = 0; i < s.size(); ++i) wide.active[i] |= state.rings->open[i];
+  return computeRings(s, 1.5 * l, &wide, true);
 }
 
 /// Weighted sample elimination (Yuksel 2015) of free samples down to @p count: repeatedly drop the sample whose
@@ -518,9 +603,18 @@ void Resampler::run(Samples& s, ResampleResult& result) {
   // Passes: split edges > splitRatio·l, collapse edges < collapseRatio·l, then relax. Away from N the net
   // change always moves |S| towards N without overshooting; at N every collapse is paired with a split of
   // one of the longest edges, so close pairs and holes that Lloyd alone cannot undo are replaced.
+  // One relaxation state throughout: a round of edits renumbers it and activates the cells around the edits
+  // (a large round, away from N, starts it afresh).
+  Relaxation relaxation;
+  auto edit = [&](const std::vector<Edge>& e, std::size_t splits, double minSplit, std::size_t collapses,
+                  double maxCollapse) {
+    const EditMap map = splitAndCollapse(s, e, splits, minSplit, collapses, maxCollapse, result);
+    if (static_cast<double>(map.touched.size()) > kCarryShare * static_cast<double>(s.size())) relaxation = {};
+    carry(relaxation, map, s.size());
+  };
   for (int pass = 0; pass < params_.maxPasses; ++pass) {
     if (params_.progress) params_.progress("resample", 0.8 * pass / params_.maxPasses);
-    const std::vector<Edge> e = sortedEdges(computeRings(s, 1.5 * l));
+    const std::vector<Edge> e = sortedEdges(edgeRings(s, l, relaxation));
     l = targetLength(e);
     ++result.passes;
     const auto longCount = static_cast<std::size_t>(
@@ -540,25 +634,22 @@ void Resampler::run(Samples& s, ResampleResult& result) {
       collapses = std::min(collapses, splits + excess);
       splits = std::min(splits, collapses + deficit);
     }
-    splitAndCollapse(s, e, splits, minSplit, collapses, maxCollapse, result);
-    Relaxation relaxation;
+    edit(e, splits, minSplit, collapses, maxCollapse);
     relax(s, l, params_.relaxPerPass, relaxation);
     result.relaxIterations += params_.relaxPerPass;
   }
   // Exact-count finish: collapse the shortest or split the longest edges until |S| == N.
   for (int guard = 0; s.size() != n && guard < 64; ++guard) {
-    const std::vector<Edge> e = sortedEdges(computeRings(s, 1.5 * l));
+    const std::vector<Edge> e = sortedEdges(edgeRings(s, l, relaxation));
     const std::size_t excess = s.size() > n ? s.size() - n : 0, deficit = n > s.size() ? n - s.size() : 0;
-    splitAndCollapse(s, e, deficit, 0.0, excess, std::numeric_limits<double>::max(), result);
+    edit(e, deficit, 0.0, excess, std::numeric_limits<double>::max());
     l = targetLength(e);
-    Relaxation relaxation;
     relax(s, l, 1, relaxation);
     ++result.relaxIterations;
   }
   if (s.size() != n) throw std::runtime_error("resample: could not reach the requested count");
   // Lloyd relaxation in rounds of 4 iterations until the spacing CV has not improved for relaxPatience rounds.
   double best = std::numeric_limits<double>::max();
-  Relaxation relaxation;
   for (int it = 0, stale = 0; it < params_.maxRelaxIterations && stale < params_.relaxPatience; it += 4) {
     if (params_.progress) params_.progress("resample", 0.8 + 0.2 * it / params_.maxRelaxIterations);
     const double cv = relax(s, l, std::min(4, params_.maxRelaxIterations - it), relaxation);
