@@ -20,14 +20,15 @@ namespace {
 double now() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
 
 void report(const std::string& prefix, const std::string& method, const std::vector<Eigen::Vector3d>& pts,
-            double seconds, const iires::MeshDistance& mesh, const std::vector<Eigen::Vector3d>& reference) {
+            double seconds, const iires::MeshDistance& mesh, const std::vector<Eigen::Vector3d>& reference,
+            const std::string& extra = "") {
   const auto spacing = iires::spacingStats(pts);
   const auto err = mesh.distances(pts);
   const auto cover = iires::coverage(reference, pts);
   std::printf(
-      "%s method=%s points=%zu time_s=%.3f cv=%.4f err_mean_pct=%.4f err_max_pct=%.4f cov99_per_spacing=%.3f\n",
+      "%s method=%s points=%zu time_s=%.3f cv=%.4f err_mean_pct=%.4f err_max_pct=%.4f cov99_per_spacing=%.3f%s\n",
       prefix.c_str(), method.c_str(), pts.size(), seconds, spacing.cv, 100 * err.mean / mesh.diagonal(),
-      100 * err.max / mesh.diagonal(), cover.p99 / spacing.mean);
+      100 * err.max / mesh.diagonal(), cover.p99 / spacing.mean, extra.c_str());
   std::fflush(stdout);
 }
 
@@ -82,7 +83,11 @@ int main(int argc, char** argv) {
     p.threads = threads;
     double t = now();
     const auto r = iires::resample(cloud, p);
-    report(prefix, "iires", r.cloud.points, now() - t, distance, reference);
+    const double seconds = now() - t;
+    std::string stages;  // time per stage, from the result
+    for (const auto& s : r.timings)
+      if (s.name != "total") stages += " t_" + s.name + "=" + std::to_string(s.seconds).substr(0, 6);
+    report(prefix, "iires", r.cloud.points, seconds, distance, reference, stages);
     if (!peers) continue;
     if (static_cast<double>(n) * static_cast<double>(inputCount) <= fpsLimit) {
       t = now();
