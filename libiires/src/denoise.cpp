@@ -16,6 +16,7 @@ namespace iires {
 namespace {
 
 using Clock = std::chrono::steady_clock;
+constexpr std::size_t kMaxNeighbours = 128;  // DenoiseParams::neighbours is at most this
 
 void checkCloud(const PointCloud& cloud, std::size_t minPoints) {
   if (cloud.empty()) throw InputError("denoise: the cloud is empty");
@@ -37,8 +38,8 @@ double quantile(std::vector<double> values, double q) {
 }
 
 /// Degree-2 correction: θ-weighted least squares height field f(u,v) = c0 + c1 u + c2 v + c3 u² + c4 uv + c5
-/// v² over the plane (a, n); p moves along n onto it. Returns false (keep the plane) when under-determined.
-/// @p w: the θ weights of eq. (2) of the neighbours.
+/// v² over the plane (a, n); p moves along n onto it. @p weights: the neighbours' θ_j. Returns false (keep the
+/// plane) when under-determined.
 bool projectOntoQuadric(const Eigen::Vector3d& p, const std::vector<Eigen::Vector3d>& points,
                         const std::uint32_t* nbr, std::size_t count, const double* weights, double h,
                         const MlsPlane& plane, Eigen::Vector3d& out, Eigen::Vector3d& normal) {
@@ -64,10 +65,12 @@ bool projectOntoQuadric(const Eigen::Vector3d& p, const std::vector<Eigen::Vecto
   const Eigen::Vector3d d = (p - plane.centre) / h;
   const double pu = d.dot(u), pv = d.dot(v);
   const double f = c[0] + c[1] * pu + c[2] * pv + c[3] * pu * pu + c[4] * pu * pv + c[5] * pv * pv;
-  out = p + h * (f - d.dot(n)) * n;  // along n only, as eq. (3)
   const double fu = c[1] + 2 * c[3] * pu + c[4] * pv, fv = c[2] + c[4] * pu + 2 * c[5] * pv;
-  normal = (n - fu * u - fv * v).normalized();
-  return normal.allFinite();
+  const Eigen::Vector3d m = (n - fu * u - fv * v).normalized();
+  if (!m.allFinite()) return false;
+  out = p + h * (f - d.dot(n)) * n;  // along n only, as eq. (3)
+  normal = m;
+  return true;
 }
 
 /// eq. (1) with given θ weights @p w (eq. 2) for the centre and @p wn for the covariance (nullptr: @p w); @p w
@@ -119,7 +122,7 @@ void DenoiseParams::validate() const {
   if (!(kernelQuantile > 0.0 && kernelQuantile <= 1.0)) fail("kernelQuantile must lie in (0, 1]");
   if (iterations < 0) fail("iterations must be >= 0");
   if (degree != 1 && degree != 2) fail("degree must be 1 (plane) or 2 (quadric)");
-  if (neighbours > 128) fail("neighbours must be at most 128");
+  if (neighbours > static_cast<int>(kMaxNeighbours)) fail("neighbours must be at most 128");
   if (!(sharpnessAngle >= 0.0 && sharpnessAngle <= 90.0)) fail("sharpnessAngle must lie in [0, 90] degrees");
   if (!(convergence >= 0) || !std::isfinite(convergence)) fail("convergence must be a finite value >= 0");
   if (!(cleanDisplacement >= 0) || !std::isfinite(cleanDisplacement))
@@ -193,6 +196,7 @@ DenoiseResult denoise(const PointCloud& input, const DenoiseParams& params) {
   std::vector<Eigen::Vector3d> cur = in, next(n), nextNormals(n);
   std::vector<double> moved(n);
   const double sharp = params.sharpnessAngle > 0 ? 1.0 - std::cos(params.sharpnessAngle * M_PI / 180.0) : 0.0;
+  const double invSharp2 = sharp > 0 ? 1.0 / (sharp * sharp) : 0.0;
   const int sweeps = std::max(1, params.iterations);  // at least one fit, for the normals
   for (int it = 0; it < sweeps; ++it) {
     const bool useBilateral = sharp > 0 && (given || it > 0);
@@ -200,18 +204,21 @@ DenoiseResult denoise(const PointCloud& input, const DenoiseParams& params) {
       const std::uint32_t* nb = nbr.data() + i * K;
       const std::size_t count = found[i];
       // eq. (2): θ_j = exp(−|p_j − p|²/h²); the covariance uses the wider exp(−|p_j − p|²/(2h)²) = θ_j^¼ (one
-      // exp per neighbour).
-      double w[128], wn[128];
+      // exp per neighbour). The bilateral normal term, when on, multiplies all of them (centre, normal, quadric).
+      double w[kMaxNeighbours], wn[kMaxNeighbours];
       const double invN2 = 0.25 / (h[i] * h[i]);
       for (std::size_t j = 0; j < count; ++j) {
         wn[j] = std::exp(-(cur[nb[j]] - cur[i]).squaredNorm() * invN2);
+        if (useBilateral) {
+          const double c = 1.0 - std::abs(normals[nb[j]].dot(normals[i]));
+          wn[j] *= std::exp(-c * c * invSharp2);
+        }
         const double w2 = wn[j] * wn[j];
         w[j] = w2 * w2;
       }
-      double theta[128];
-      if (params.degree == 2) std::copy(w, w + count, theta);  // the quadric's weights: plain eq. (2)
-      const MlsPlane plane = fitWeightedPlane(cur, nb, count, w, wn, &normals, normals[i],
-                                              useBilateral ? sharp : 0.0);
+      double theta[kMaxNeighbours];
+      if (params.degree == 2) std::copy(w, w + count, theta);  // the quadric's weights
+      const MlsPlane plane = fitWeightedPlane(cur, nb, count, w, wn, nullptr, normals[i], 0.0);
       Eigen::Vector3d p = projectOntoPlane(cur[i], plane), normal = plane.normal;  // eq. (3)
       if (params.degree == 2) projectOntoQuadric(cur[i], cur, nb, count, theta, h[i], plane, p, normal);
       next[i] = params.iterations > 0 ? p : cur[i];
