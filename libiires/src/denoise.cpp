@@ -124,7 +124,6 @@ void DenoiseParams::validate() const {
   if (degree != 1 && degree != 2) fail("degree must be 1 (plane) or 2 (quadric)");
   if (neighbours > static_cast<int>(kMaxNeighbours)) fail("neighbours must be at most 128");
   if (!(sharpnessAngle >= 0.0 && sharpnessAngle <= 90.0)) fail("sharpnessAngle must lie in [0, 90] degrees");
-  if (!(convergence >= 0) || !std::isfinite(convergence)) fail("convergence must be a finite value >= 0");
   if (!(cleanDisplacement >= 0) || !std::isfinite(cleanDisplacement))
     fail("cleanDisplacement must be a finite value >= 0");
   if (orientNeighbours < 1 || orientNeighbours > 128) fail("orientNeighbours must lie in [1, 128]");
@@ -230,18 +229,15 @@ DenoiseResult denoise(const PointCloud& input, const DenoiseParams& params) {
     // once at the end.
     normals.swap(nextNormals);
     if (params.iterations == 0) break;
-    const double meanMove = std::accumulate(moved.begin(), moved.end(), 0.0) / static_cast<double>(n);
-    if (it == 0 && meanMove < params.cleanDisplacement * spacing) {
+    if (it == 0 && params.cleanDisplacement > 0 &&
+        std::accumulate(moved.begin(), moved.end(), 0.0) / static_cast<double>(n) <
+            params.cleanDisplacement * spacing) {
       result.cleanInput = true;  // noise probe: keep the input positions
       if (given) normals = std::move(nextNormals);
       break;
     }
     std::swap(cur, next);
     ++result.iterations;
-    if (meanMove < params.convergence * spacing) {
-      result.converged = it + 1 < sweeps;
-      break;
-    }
   }
   const auto orientStart = Clock::now();
   result.sweepSeconds = std::chrono::duration<double>(orientStart - sweepStart).count();

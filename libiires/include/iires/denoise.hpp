@@ -63,10 +63,8 @@ struct DenoiseParams {
   /// the term off. 45: fandisk (100k points, noise 0.33·l) error within 2·l of the sharp edges 3.95 → 2.75
   /// ×10⁻⁴ diagonal (CGAL bilateral 3.08), mean error 2.00 → 1.85; bunny00 1.70 → 1.71.
   double sharpnessAngle = 45.0;
-  /// Sweeps stop early once a sweep moves the points by less than this many input spacings (mean distance
-  /// to the nearest neighbour) on average: the cloud has settled. 0 = always run every sweep.
-  double convergence = 0.0;
-  /// Noise probe: when the first sweep moves the points by less than this many input spacings on average,
+  /// Noise probe: when the first sweep moves the points by less than this many input spacings (mean distance to
+  /// the nearest neighbour) on average,
   /// the input is already clean; its positions are kept (the fitted normals are still returned) and no
   /// further sweep runs, since smoothing a clean cloud only erodes tight curvature. 0 = off.
   double cleanDisplacement = 0.0;
@@ -81,8 +79,7 @@ struct DenoiseParams {
 /// @brief What denoise() produced.
 struct DenoiseResult {
   PointCloud cloud;             ///< same size and order as the input, with unit normals from the fit
-  int iterations = 0;           ///< sweeps whose moves were kept (fewer than asked when converged or clean)
-  bool converged = false;       ///< stopped early: a sweep moved less than `convergence` spacings
+  int iterations = 0;           ///< sweeps whose moves were kept (0 when the noise probe found the input clean)
   bool cleanInput = false;      ///< the noise probe found the input clean (positions kept)
   double meanDisplacement = 0;  ///< mean |p_out − p_in|, input units
   double maxDisplacement = 0;   ///< max |p_out − p_in|
