@@ -8,6 +8,7 @@
 #include "iires/io.hpp"
 #include "iires/knn.hpp"
 #include "iires/metrics.hpp"
+#include "iires/normals.hpp"
 #include "iires/preprocess.hpp"
 #include "iires/sampling.hpp"
 #include "shapes.hpp"
@@ -171,6 +172,42 @@ TEST(Denoise, DegenerateInputs) {
   EXPECT_EQ(r.cloud.points, plane.points);
   EXPECT_EQ(r.cloud.normals.size(), plane.size());
   EXPECT_EQ(r.meanDisplacement, 0.0);
+}
+
+TEST(Denoise, NinetyDegreeEdgeStaysSharpWithTheBilateralTerm) {
+  // Two unit faces meeting at a right angle along the y axis: z = 0 (x ≥ 0) and x = 0 (z ≥ 0), noise uniform in
+  // ±0.33·l along each face's normal, PCA + MST normals as a scan would have. Known answer: the distance of a
+  // point to the L-shaped surface; measured on the band within 2·l of the edge (away from the y borders).
+  const PointCloud a = iires::test::planeCloud(20000, 1.0, 1.0, 31), b = iires::test::planeCloud(20000, 1.0, 1.0, 32);
+  PointCloud cloud;
+  for (const auto& p : a.points) cloud.points.emplace_back(p.x(), p.y(), 0.0);
+  for (const auto& p : b.points) cloud.points.emplace_back(0.0, p.y(), p.x());
+  const double l = iires::meanNeighbourSpacing(cloud.points);
+  std::mt19937_64 rng(33);
+  std::uniform_real_distribution<double> u(-0.33 * l, 0.33 * l);
+  for (std::size_t i = 0; i < cloud.size(); ++i) (i < a.size() ? cloud.points[i].z() : cloud.points[i].x()) += u(rng);
+  cloud.normals = iires::estimateNormals(cloud.points);
+  auto bandError = [&](const std::vector<Eigen::Vector3d>& pts) {
+    double sum = 0;
+    std::size_t count = 0;
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+      const Eigen::Vector3d& c = cloud.points[i];  // band membership from the input position
+      if (std::max(std::abs(c.x()), std::abs(c.z())) > 2 * l || c.y() < 0.2 || c.y() > 0.8) continue;
+      const Eigen::Vector3d& p = pts[i];
+      sum += std::min(std::hypot(p.z(), std::min(p.x(), 0.0)), std::hypot(p.x(), std::min(p.z(), 0.0)));
+      ++count;
+    }
+    return sum / static_cast<double>(count);
+  };
+  DenoiseParams plain;
+  plain.sharpnessAngle = 0;
+  DenoiseParams sharp;
+  sharp.sharpnessAngle = 45;
+  const double input = bandError(cloud.points);
+  const double without = bandError(iires::denoise(cloud, plain).cloud.points);
+  const double with = bandError(iires::denoise(cloud, sharp).cloud.points);
+  EXPECT_LT(with, 0.75 * without) << "input/l " << input / l << " plain/l " << without / l << " bilateral/l " << with / l;
+  EXPECT_LT(with, 0.6 * input) << "input/l " << input / l << " bilateral/l " << with / l;
 }
 
 TEST(Denoise, BunnyWithNoiseAndOutliersEndToEnd) {

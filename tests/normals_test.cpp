@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include "iires/knn.hpp"
+
 #include "shapes.hpp"
 
 namespace {
@@ -29,6 +31,25 @@ TEST(Normals, TwoSpheresEachOrientedOutward) {
     const Eigen::Vector3d c = i < 3000 ? Eigen::Vector3d::Zero() : Eigen::Vector3d(5, 0, 0);
     EXPECT_GT(n[i].dot((a.points[i] - c).normalized()), 0.95) << "point " << i;
   }
+}
+
+TEST(Normals, OrientationOverAGivenGraphMakesASphereOutward) {
+  // Radial normals with random signs, oriented over a k-NN graph given by the caller (no search of its own):
+  // all must end up facing one way, outward (the root at the largest x faces +x).
+  const auto cloud = iires::test::sphereCloud(5000, 1.0, 6);
+  const std::size_t n = cloud.size(), stride = 10;
+  const iires::KnnIndex index(cloud.points);
+  std::vector<std::uint32_t> graph(n * stride);
+  std::vector<std::uint32_t> idx;
+  std::vector<double> d2;
+  for (std::size_t i = 0; i < n; ++i) {
+    index.knn(cloud.points[i], stride, idx, d2);
+    std::copy(idx.begin(), idx.end(), graph.begin() + static_cast<long>(i * stride));
+  }
+  std::vector<Eigen::Vector3d> normals(n);
+  for (std::size_t i = 0; i < n; ++i) normals[i] = (i * 7919 % 3 == 0 ? -1.0 : 1.0) * cloud.points[i].normalized();
+  iires::orientNormals(cloud.points, normals, graph, stride, 7);  // 6 neighbours + the point itself
+  for (std::size_t i = 0; i < n; ++i) EXPECT_GT(normals[i].dot(cloud.points[i]), 0.99) << "point " << i;
 }
 
 TEST(Normals, DeterministicAcrossThreadCounts) {

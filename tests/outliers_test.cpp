@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <random>
 
 #include "iires/io.hpp"
@@ -98,6 +99,34 @@ TEST(Outliers, DensityChangeIsNotAnOutlier) {
       EXPECT_GT(lit.found, 10 * std::max<std::size_t>(r.found, 10));
     }
   }
+}
+
+TEST(Outliers, NearPlaneFindsOutliersBetweenTwoSheets) {
+  // Two noisy parallel sheets 5·l apart (a thin part) with 3 % of the first sheet's points moved to mid-height.
+  // The 16 nearest trusted points of such an outlier come from both sheets, so their plane passes near it;
+  // the small plane of its nearest trusted point (on one sheet) is 2.5·l away.
+  Noisy data = noisyPlane(15000, 1.0, 0.33, 0.0, 16);
+  const std::size_t half = data.cloud.size();
+  const Noisy top = noisyPlane(15000, 1.0, 0.33, 0.0, 17);
+  const double gap = 5.0 * data.l;
+  for (Eigen::Vector3d p : top.cloud.points) data.cloud.points.push_back(p + Eigen::Vector3d(0, 0, gap));
+  data.injected.assign(data.cloud.size(), 0);
+  std::mt19937_64 rng(18);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  for (std::size_t i = 0; i < half; ++i) {
+    const Eigen::Vector2d xy = data.cloud.points[i].head<2>();
+    if (u(rng) >= 0.03 || xy.minCoeff() < 0.1 || xy.maxCoeff() > 0.9) continue;  // away from the borders
+    data.injected[i] = 1, ++data.count;
+    data.cloud.points[i].z() = 0.5 * gap + (2 * u(rng) - 1) * 0.3 * data.l;
+  }
+  OutlierParams p;
+  p.mode = OutlierMode::kKeep;
+  const Rates with = rates(data, iires::processOutliers(data.cloud, p).outliers);
+  EXPECT_GE(with.recall, 0.95);
+  EXPECT_LT(with.falsePositive, 0.01);
+  p.nearPlaneThreshold = std::numeric_limits<double>::infinity();  // the 16-point plane alone
+  const Rates without = rates(data, iires::processOutliers(data.cloud, p).outliers);
+  EXPECT_LT(without.recall, 0.5);
 }
 
 TEST(Outliers, PullBringsOutliersWithinOneSpacing) {

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <numeric>
 #include <stdexcept>
 #include <string>
 
@@ -15,6 +16,7 @@ namespace iires {
 namespace {
 
 using Clock = std::chrono::steady_clock;
+constexpr std::size_t kMaxNeighbours = 128;  // DenoiseParams::neighbours is at most this
 
 void checkCloud(const PointCloud& cloud, std::size_t minPoints) {
   if (cloud.empty()) throw InputError("denoise: the cloud is empty");
@@ -36,21 +38,20 @@ double quantile(std::vector<double> values, double q) {
 }
 
 /// Degree-2 correction: θ-weighted least squares height field f(u,v) = c0 + c1 u + c2 v + c3 u² + c4 uv + c5
-/// v² over the plane (a, n); p moves along n onto it. Returns false (keep the plane) when under-determined.
+/// v² over the plane (a, n); p moves along n onto it. @p weights: the neighbours' θ_j. Returns false (keep the
+/// plane) when under-determined.
 bool projectOntoQuadric(const Eigen::Vector3d& p, const std::vector<Eigen::Vector3d>& points,
-                        const std::uint32_t* nbr, std::size_t count, double h, const MlsPlane& plane,
-                        Eigen::Vector3d& out, Eigen::Vector3d& normal) {
+                        const std::uint32_t* nbr, std::size_t count, const double* weights, double h,
+                        const MlsPlane& plane, Eigen::Vector3d& out, Eigen::Vector3d& normal) {
   if (count < 6) return false;
   const Eigen::Vector3d& n = plane.normal;
   const Eigen::Vector3d u = n.unitOrthogonal(), v = n.cross(u);
-  const double invH2 = 1.0 / (h * h);
   Eigen::Matrix<double, 6, 6> ata = Eigen::Matrix<double, 6, 6>::Zero();
   Eigen::Matrix<double, 6, 1> atb = Eigen::Matrix<double, 6, 1>::Zero();
   double wsum = 0;
   for (std::size_t j = 0; j < count; ++j) {
-    const Eigen::Vector3d& q = points[nbr[j]];
-    const double w = std::exp(-(q - p).squaredNorm() * invH2);  // eq. (2)
-    const Eigen::Vector3d d = (q - plane.centre) / h;           // scaled, for conditioning
+    const double w = weights[j];
+    const Eigen::Vector3d d = (points[nbr[j]] - plane.centre) / h;  // scaled, for conditioning
     const double pu = d.dot(u), pv = d.dot(v);
     Eigen::Matrix<double, 6, 1> row;
     row << 1, pu, pv, pu * pu, pu * pv, pv * pv;
@@ -64,65 +65,42 @@ bool projectOntoQuadric(const Eigen::Vector3d& p, const std::vector<Eigen::Vecto
   const Eigen::Vector3d d = (p - plane.centre) / h;
   const double pu = d.dot(u), pv = d.dot(v);
   const double f = c[0] + c[1] * pu + c[2] * pv + c[3] * pu * pu + c[4] * pu * pv + c[5] * pv * pv;
-  out = p + h * (f - d.dot(n)) * n;  // along n only, as eq. (3)
   const double fu = c[1] + 2 * c[3] * pu + c[4] * pv, fv = c[2] + c[4] * pu + 2 * c[5] * pv;
-  normal = (n - fu * u - fv * v).normalized();
-  return normal.allFinite();
+  const Eigen::Vector3d m = (n - fu * u - fv * v).normalized();
+  if (!m.allFinite()) return false;
+  out = p + h * (f - d.dot(n)) * n;  // along n only, as eq. (3)
+  normal = m;
+  return true;
 }
 
-}  // namespace
-
-void DenoiseParams::validate() const {
-  auto fail = [](const std::string& what) { throw std::invalid_argument("DenoiseParams: " + what); };
-  if (neighbours < 3) fail("neighbours must be at least 3 (a plane needs 3 points)");
-  if (kernelNeighbour < 1) fail("kernelNeighbour must be at least 1");
-  if (!(kernelQuantile > 0.0 && kernelQuantile <= 1.0)) fail("kernelQuantile must lie in (0, 1]");
-  if (iterations < 0) fail("iterations must be >= 0");
-  if (degree != 1 && degree != 2) fail("degree must be 1 (plane) or 2 (quadric)");
-  if (neighbours > 128) fail("neighbours must be at most 128");
-  if (!(sharpnessAngle >= 0.0 && sharpnessAngle <= 90.0)) fail("sharpnessAngle must lie in [0, 90] degrees");
-  if (threads < 0) fail("threads must be >= 0 (0 = all cores)");
-}
-
-MlsPlane fitMlsPlane(const Eigen::Vector3d& p, const std::vector<Eigen::Vector3d>& points,
-                     const std::uint32_t* neighbours, std::size_t count, double h,
-                     const std::vector<Eigen::Vector3d>* normals, const Eigen::Vector3d& pointNormal,
-                     double sharpness, double normalH) {
+/// eq. (1) with given θ weights @p w (eq. 2) for the centre and @p wn for the covariance (nullptr: @p w); @p w
+/// is multiplied in place by the bilateral normal term when @p sharpness > 0 (see fitMlsPlane).
+MlsPlane fitWeightedPlane(const std::vector<Eigen::Vector3d>& points,
+                          const std::uint32_t* neighbours, std::size_t count, double* w, const double* wn,
+                          const std::vector<Eigen::Vector3d>* normals, const Eigen::Vector3d& pointNormal,
+                          double sharpness) {
   MlsPlane plane;
-  if (count == 0 || !(h > 0)) return plane;
+  if (count == 0) return plane;
   const bool bilateral = normals && sharpness > 0 && pointNormal.squaredNorm() > 0;
-  const double invH2 = 1.0 / (h * h), invS2 = bilateral ? 1.0 / (sharpness * sharpness) : 0.0;
-  // eq. (2): θ_j = exp(−|p_j − p|²/h²), optionally times the bilateral normal term; eq. (1): a = Σθp / Σθ.
+  const double invS2 = bilateral ? 1.0 / (sharpness * sharpness) : 0.0;
   double wsum = 0;
   Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-  constexpr std::size_t kStack = 64;
-  double wStack[kStack];
-  std::vector<double> wHeap;
-  double* w = wStack;
-  if (count > kStack) {
-    wHeap.resize(count);
-    w = wHeap.data();
-  }
   for (std::size_t j = 0; j < count; ++j) {
     const Eigen::Vector3d& q = points[neighbours[j]];
-    double wj = std::exp(-(q - p).squaredNorm() * invH2);
     if (bilateral) {
       const double c = 1.0 - std::abs((*normals)[neighbours[j]].dot(pointNormal));
-      wj *= std::exp(-c * c * invS2);
+      w[j] *= std::exp(-c * c * invS2);
     }
-    wj += 1e-300;
-    w[j] = wj;
-    wsum += wj;
-    sum += wj * q;
+    w[j] += 1e-300;
+    wsum += w[j];
+    sum += w[j] * q;
   }
   plane.centre = sum / wsum;
   plane.weightSum = wsum;
   Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-  const double invN2 = normalH > 0 ? 1.0 / (normalH * normalH) : invH2;
   for (std::size_t j = 0; j < count; ++j) {
     const Eigen::Vector3d d = points[neighbours[j]] - plane.centre;
-    const double wn = normalH > 0 ? std::exp(-(points[neighbours[j]] - p).squaredNorm() * invN2) : w[j];
-    cov.noalias() += wn * d * d.transpose();
+    cov.noalias() += (wn ? wn[j] : w[j]) * d * d.transpose();
   }
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
   eig.computeDirect(cov);
@@ -135,6 +113,39 @@ MlsPlane fitMlsPlane(const Eigen::Vector3d& p, const std::vector<Eigen::Vector3d
   return plane;
 }
 
+}  // namespace
+
+void DenoiseParams::validate() const {
+  auto fail = [](const std::string& what) { throw std::invalid_argument("DenoiseParams: " + what); };
+  if (neighbours < 3) fail("neighbours must be at least 3 (a plane needs 3 points)");
+  if (kernelNeighbour < 1) fail("kernelNeighbour must be at least 1");
+  if (!(kernelQuantile > 0.0 && kernelQuantile <= 1.0)) fail("kernelQuantile must lie in (0, 1]");
+  if (iterations < 0) fail("iterations must be >= 0");
+  if (degree != 1 && degree != 2) fail("degree must be 1 (plane) or 2 (quadric)");
+  if (neighbours > static_cast<int>(kMaxNeighbours)) fail("neighbours must be at most 128");
+  if (!(sharpnessAngle >= 0.0 && sharpnessAngle <= 90.0)) fail("sharpnessAngle must lie in [0, 90] degrees");
+  if (!(cleanDisplacement >= 0) || !std::isfinite(cleanDisplacement))
+    fail("cleanDisplacement must be a finite value >= 0");
+  if (orientNeighbours < 1 || orientNeighbours > 128) fail("orientNeighbours must lie in [1, 128]");
+  if (threads < 0) fail("threads must be >= 0 (0 = all cores)");
+}
+
+MlsPlane fitMlsPlane(const Eigen::Vector3d& p, const std::vector<Eigen::Vector3d>& points,
+                     const std::uint32_t* neighbours, std::size_t count, double h,
+                     const std::vector<Eigen::Vector3d>* normals, const Eigen::Vector3d& pointNormal,
+                     double sharpness, double normalH) {
+  if (count == 0 || !(h > 0)) return MlsPlane{};
+  std::vector<double> w(count), wn(normalH > 0 ? count : 0);
+  const double invH2 = 1.0 / (h * h), invN2 = normalH > 0 ? 1.0 / (normalH * normalH) : 0.0;
+  for (std::size_t j = 0; j < count; ++j) {
+    const double d2 = (points[neighbours[j]] - p).squaredNorm();
+    w[j] = std::exp(-d2 * invH2);  // eq. (2)
+    if (normalH > 0) wn[j] = std::exp(-d2 * invN2);
+  }
+  return fitWeightedPlane(points, neighbours, count, w.data(), normalH > 0 ? wn.data() : nullptr, normals,
+                          pointNormal, sharpness);
+}
+
 DenoiseResult denoise(const PointCloud& input, const DenoiseParams& params) {
   params.validate();
   const auto start = Clock::now();
@@ -143,66 +154,110 @@ DenoiseResult denoise(const PointCloud& input, const DenoiseParams& params) {
   const std::size_t n = input.size();
   const std::size_t kernelK = static_cast<std::size_t>(params.kernelNeighbour);
   const std::size_t K = std::max(k, kernelK + 1);  // neighbours per query, the point itself included
+  const bool given = input.hasNormals();
+
+  // Work in Morton order: neighbours in space are neighbours in memory (k-NN queries and sweeps stay in
+  // cache). in[a] is the caller's point order[a]; the output is put back in the caller's order.
+  const std::vector<std::uint32_t> order = mortonOrder(input.points);
+  std::vector<Eigen::Vector3d> in(n), normals(n, Eigen::Vector3d::Zero());
+  for (std::size_t a = 0; a < n; ++a) {
+    in[a] = input.points[order[a]];
+    if (given) normals[a] = input.normals[order[a]];
+  }
 
   // Neighbour lists, found once on the input: each sweep moves points by a fraction of the spacing only.
   std::vector<std::uint32_t> nbr(n * K);
   std::vector<std::uint32_t> found(n);
-  std::vector<double> h(n, 0.0);
+  std::vector<double> h(n, 0.0), nearest(n, 0.0);
   {
-    KnnIndex index(input.points);
+    const KnnIndex index(in);
     parallelFor(n, params.threads, [&](std::size_t i) {
       std::vector<std::uint32_t> idx;
       std::vector<double> d2;
-      const std::size_t f = index.knn(input.points[i], K, idx, d2);
+      const std::size_t f = index.knn(in[i], K, idx, d2);
       std::copy(idx.begin(), idx.begin() + static_cast<long>(f), nbr.begin() + static_cast<long>(i * K));
+      std::fill(nbr.begin() + static_cast<long>(i * K + f), nbr.begin() + static_cast<long>((i + 1) * K),
+                static_cast<std::uint32_t>(i));
       found[i] = static_cast<std::uint32_t>(std::min(f, k));
       h[i] = std::sqrt(d2[std::min(f - 1, kernelK)]);
+      nearest[i] = std::sqrt(d2[std::min<std::size_t>(f - 1, 1)]);
     });
   }
+  const double spacing = std::accumulate(nearest.begin(), nearest.end(), 0.0) / static_cast<double>(n);
   // Robust kernel width (DESIGN §3.3): clamp h to a quantile, so one outlier's huge h_i stays local; a
   // point whose own h is 0 (duplicates) gets the median.
   const double cap = quantile(h, params.kernelQuantile), median = quantile(h, 0.5);
   for (double& hi : h) hi = hi > 0 ? std::min(hi, cap) : (median > 0 ? median : 1.0);
+  DenoiseResult result;
+  const auto sweepStart = Clock::now();
+  result.neighbourSeconds = std::chrono::duration<double>(sweepStart - start).count();
 
-  const bool given = input.hasNormals();
-  std::vector<Eigen::Vector3d> cur = input.points, next(n);
-  std::vector<Eigen::Vector3d> normals =
-      given ? input.normals : std::vector<Eigen::Vector3d>(n, Eigen::Vector3d::Zero());
-  std::vector<Eigen::Vector3d> nextNormals(n);
+  std::vector<Eigen::Vector3d> cur = in, next(n), nextNormals(n);
+  std::vector<double> moved(n);
   const double sharp = params.sharpnessAngle > 0 ? 1.0 - std::cos(params.sharpnessAngle * M_PI / 180.0) : 0.0;
+  const double invSharp2 = sharp > 0 ? 1.0 / (sharp * sharp) : 0.0;
   const int sweeps = std::max(1, params.iterations);  // at least one fit, for the normals
   for (int it = 0; it < sweeps; ++it) {
     const bool useBilateral = sharp > 0 && (given || it > 0);
     parallelFor(n, params.threads, [&](std::size_t i) {
-      const MlsPlane plane = fitMlsPlane(cur[i], cur, nbr.data() + i * K, found[i], h[i], &normals,
-                                         normals[i], useBilateral ? sharp : 0.0, 2.0 * h[i]);
-      Eigen::Vector3d moved = projectOntoPlane(cur[i], plane), normal = plane.normal;  // eq. (3)
-      if (params.degree == 2)
-        projectOntoQuadric(cur[i], cur, nbr.data() + i * K, found[i], h[i], plane, moved, normal);
-      next[i] = params.iterations > 0 ? moved : cur[i];
+      const std::uint32_t* nb = nbr.data() + i * K;
+      const std::size_t count = found[i];
+      // eq. (2): θ_j = exp(−|p_j − p|²/h²); the covariance uses the wider exp(−|p_j − p|²/(2h)²) = θ_j^¼ (one
+      // exp per neighbour). The bilateral normal term, when on, multiplies all of them (centre, normal, quadric).
+      double w[kMaxNeighbours], wn[kMaxNeighbours];
+      const double invN2 = 0.25 / (h[i] * h[i]);
+      for (std::size_t j = 0; j < count; ++j) {
+        wn[j] = std::exp(-(cur[nb[j]] - cur[i]).squaredNorm() * invN2);
+        if (useBilateral) {
+          const double c = 1.0 - std::abs(normals[nb[j]].dot(normals[i]));
+          wn[j] *= std::exp(-c * c * invSharp2);
+        }
+        const double w2 = wn[j] * wn[j];
+        w[j] = w2 * w2;
+      }
+      double theta[kMaxNeighbours];
+      if (params.degree == 2) std::copy(w, w + count, theta);  // the quadric's weights
+      const MlsPlane plane = fitWeightedPlane(cur, nb, count, w, wn, nullptr, normals[i], 0.0);
+      Eigen::Vector3d p = projectOntoPlane(cur[i], plane), normal = plane.normal;  // eq. (3)
+      if (params.degree == 2) projectOntoQuadric(cur[i], cur, nb, count, theta, h[i], plane, p, normal);
+      next[i] = params.iterations > 0 ? p : cur[i];
       nextNormals[i] = normal;
+      moved[i] = (next[i] - cur[i]).norm();
     });
-    std::swap(cur, next);
-    normals.swap(nextNormals);
     // Without given normals the first sweep's normals are unoriented; the bilateral term uses |n_j·n_p|,
     // and later sweeps orient each fit like the point's previous normal, so the sign only needs fixing
     // once at the end.
+    normals.swap(nextNormals);
+    if (params.iterations == 0) break;
+    if (it == 0 && params.cleanDisplacement > 0 &&
+        std::accumulate(moved.begin(), moved.end(), 0.0) / static_cast<double>(n) <
+            params.cleanDisplacement * spacing) {
+      result.cleanInput = true;  // noise probe: keep the input positions
+      if (given) normals = std::move(nextNormals);
+      break;
+    }
+    std::swap(cur, next);
+    ++result.iterations;
   }
+  const auto orientStart = Clock::now();
+  result.sweepSeconds = std::chrono::duration<double>(orientStart - sweepStart).count();
+  if (!given && params.orientNormals)
+    orientNormals(cur, normals, nbr, K, std::min<std::size_t>(K, static_cast<std::size_t>(params.orientNeighbours) + 1));
+  result.orientSeconds = std::chrono::duration<double>(Clock::now() - orientStart).count();
 
-  DenoiseResult result;
-  result.iterations = params.iterations;
-  if (!given && params.orientNormals) orientNormals(cur, normals, 12);
+  result.cloud.points.resize(n);
+  result.cloud.normals.resize(n);
   double sum = 0, worst = 0;
-  for (std::size_t i = 0; i < n; ++i) {
-    const double d = (cur[i] - input.points[i]).norm();
+  for (std::size_t a = 0; a < n; ++a) {
+    const double d = (cur[a] - in[a]).norm();
     sum += d;
     worst = std::max(worst, d);
+    result.cloud.points[order[a]] = cur[a];
+    result.cloud.normals[order[a]] = normals[a];
   }
   result.meanDisplacement = sum / static_cast<double>(n);
   result.maxDisplacement = worst;
   result.kernelWidth = median;
-  result.cloud.points = std::move(cur);
-  result.cloud.normals = std::move(normals);
   result.seconds = std::chrono::duration<double>(Clock::now() - start).count();
   return result;
 }

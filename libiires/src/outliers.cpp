@@ -15,6 +15,7 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 constexpr std::size_t kSpacingNeighbours = 6;  // l = mean distance to the 6 nearest neighbours (paper §6.1)
+constexpr std::size_t kNearPlanePoints = 9;     // the nearest trusted point and its 8 nearest trusted neighbours
 
 void checkCloud(const PointCloud& cloud, std::size_t minPoints) {
   if (cloud.empty()) throw InputError("processOutliers: the cloud is empty");
@@ -77,6 +78,7 @@ void OutlierParams::validate() const {
   if (planeNeighbours < 3) fail("planeNeighbours must be at least 3");
   if (!(planeThreshold > 0) || !std::isfinite(planeThreshold))
     fail("planeThreshold must be a finite value > 0");
+  if (!(nearPlaneThreshold > 0)) fail("nearPlaneThreshold must be > 0 (infinity: off)");
   if (threads < 0) fail("threads must be >= 0 (0 = all cores)");
 }
 
@@ -91,12 +93,16 @@ OutlierResult processOutliers(const PointCloud& input, const OutlierParams& para
   // Neighbours per point, itself first (index 0).
   const std::size_t K = std::max({k, planeK, kSpacingNeighbours}) + 1;
 
+  // Every per-point loop visits the points in Morton order (neighbours in space are visited together, which
+  // keeps the k-d tree and the neighbour rows in cache); each iteration writes only its own point's slot.
+  const std::vector<std::uint32_t> order = mortonOrder(P);
+  auto forEachPoint = [&](auto&& fn) { parallelFor(n, params.threads, [&](std::size_t a) { fn(order[a]); }); };
   std::vector<std::uint32_t> nbr(n * K);
   std::vector<std::uint32_t> count(n);
   std::vector<double> spacing(n);
   {
     KnnIndex index(P);
-    parallelFor(n, params.threads, [&](std::size_t i) {
+    forEachPoint([&](std::size_t i) {
       std::vector<std::uint32_t> idx;
       std::vector<double> d2;
       const std::size_t f = index.knn(P[i], K, idx, d2);
@@ -117,7 +123,7 @@ OutlierResult processOutliers(const PointCloud& input, const OutlierParams& para
   // eq. (4): the k-NN relation i → j is mutual when i is also among j's k nearest. Suspects are in fewer
   // than minMutual of their neighbours' lists.
   std::vector<std::uint8_t> suspect(n, 0);  // written once per point below
-  parallelFor(n, params.threads, [&](std::size_t i) {
+  forEachPoint([&](std::size_t i) {
     const std::uint32_t* ri = row(i);
     const std::size_t ki = std::min<std::size_t>(k + 1, count[i]);
     int mutual = 0;
@@ -134,10 +140,11 @@ OutlierResult processOutliers(const PointCloud& input, const OutlierParams& para
   });
 
   // Geometric test: distance to the plane of the trusted (non-suspect) points among the planeNeighbours
-  // nearest, in local spacings. A suspect beyond planeThreshold is an outlier; so is any point beyond twice
-  // that (a small cluster of outliers can be mutual among itself). Trusted = mutual and near its plane.
+  // nearest, in local spacings. A suspect beyond planeThreshold, or beyond nearPlaneThreshold from the small
+  // plane of the nearest of those points, is an outlier; so is any point beyond twice planeThreshold (a small cluster of
+  // outliers can be mutual among itself). Trusted = mutual and near its plane.
   std::vector<std::uint8_t> outlier(n, 0), trusted(n, 0);
-  parallelFor(n, params.threads, [&](std::size_t i) {
+  forEachPoint([&](std::size_t i) {
     const std::uint32_t* ri = row(i);
     const std::size_t ki = std::min<std::size_t>(planeK + 1, count[i]);
     std::vector<std::uint32_t> used;
@@ -148,8 +155,19 @@ OutlierResult processOutliers(const PointCloud& input, const OutlierParams& para
     std::vector<double> s;
     s.reserve(used.size());
     for (std::uint32_t j : used) s.push_back(spacing[j]);
-    const double ratio = planeDistance(P[i], P, used) / std::max(median(s), 1e-300);
-    outlier[i] = (suspect[i] && ratio > params.planeThreshold) || ratio > 2 * params.planeThreshold;
+    const double local = std::max(median(s), 1e-300);
+    const double ratio = planeDistance(P[i], P, used) / local;
+    bool off = ratio > params.planeThreshold;
+    if (suspect[i] && !off && std::isfinite(params.nearPlaneThreshold)) {
+      // The small plane of the nearest trusted point q (rows are sorted: used[0] is the nearest).
+      const std::uint32_t q = used.front();
+      const std::uint32_t* rq = row(q);
+      std::vector<std::uint32_t> near;
+      for (std::size_t a = 0; a < count[q] && near.size() < kNearPlanePoints; ++a)
+        if (!suspect[rq[a]]) near.push_back(rq[a]);
+      off = near.size() >= 3 && planeDistance(P[i], P, near) / local > params.nearPlaneThreshold;
+    }
+    outlier[i] = (suspect[i] && off) || ratio > 2 * params.planeThreshold;
     trusted[i] = !suspect[i] && ratio <= params.planeThreshold;
   });
 

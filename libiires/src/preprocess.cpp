@@ -5,7 +5,6 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "iires/metrics.hpp"
 
 namespace iires {
 
@@ -44,29 +43,14 @@ PreprocessResult preprocess(const PointCloud& input, const PreprocessParams& par
   if (params.runDenoise) {
     // eq. (1)–(3). The first sweep doubles as a noise probe: when it moves points by less than
     // cleanDisplacement input spacings on average, the cloud is already clean and further sweeps would only
-    // erode tight curvature (folds, thin parts, sparse clouds) — keep the positions (and the given normals, else
-    // take the fitted ones).
-    DenoiseParams first = dp;
-    first.iterations = std::min(1, dp.iterations);
-    DenoiseResult denoised = denoise(outliers.cloud, first);
-    const double spacing = spacingStats(outliers.cloud.points, dp.threads).mean;
+    // erode tight curvature (folds, thin parts, sparse clouds) — denoise() keeps the positions then.
+    dp.cleanDisplacement = params.cleanDisplacement;
+    DenoiseResult denoised = denoise(outliers.cloud, dp);
     result.denoiseSeconds = denoised.seconds;
-    result.cleanInput = denoised.meanDisplacement < params.cleanDisplacement * spacing;
-    if (result.cleanInput) {
-      if (outliers.cloud.hasNormals()) denoised.cloud.normals = std::move(outliers.cloud.normals);
-      denoised.cloud.points = std::move(outliers.cloud.points);
-    } else if (dp.iterations > 1) {
-      DenoiseParams rest = dp;
-      rest.iterations = dp.iterations - 1;
-      const double firstMove = denoised.meanDisplacement;
-      denoised = denoise(denoised.cloud, rest);
-      denoised.meanDisplacement = (firstMove + rest.iterations * denoised.meanDisplacement) / dp.iterations;
-      denoised.iterations = dp.iterations;
-      result.denoiseSeconds += denoised.seconds;
-    }
+    result.cleanInput = denoised.cleanInput;
+    result.denoiseIterations = denoised.iterations;
+    result.meanDisplacement = denoised.meanDisplacement;
     result.cloud = std::move(denoised.cloud);
-    result.denoiseIterations = result.cleanInput ? 0 : denoised.iterations;
-    result.meanDisplacement = result.cleanInput ? 0.0 : denoised.meanDisplacement;
   } else {
     result.cloud = std::move(outliers.cloud);
   }

@@ -3,6 +3,8 @@
 /// @brief PCA normals with consistent orientation (DESIGN §3 step 4).
 
 #include <Eigen/Core>
+#include <cstddef>
+#include <cstdint>
 #include <vector>
 
 namespace iires {
@@ -23,5 +25,12 @@ std::vector<Eigen::Vector3d> estimateNormals(const std::vector<Eigen::Vector3d>&
 /// @brief Orient given (unoriented) normals consistently, as estimateNormals does.
 void orientNormals(const std::vector<Eigen::Vector3d>& points, std::vector<Eigen::Vector3d>& normals,
                    int k = 12);
+
+/// @brief Orient normals consistently over a k-NN graph the caller already has (no search of its own).
+/// @param neighbours point i's neighbours are neighbours[i·stride + 0 … i·stride + k − 1] (the point itself
+/// may be among them and is skipped); the graph is made symmetric.
+/// @note O(n k log n) (Prim's minimum spanning tree on 1 − |nᵢ·nⱼ|, roots as estimateNormals). Deterministic.
+void orientNormals(const std::vector<Eigen::Vector3d>& points, std::vector<Eigen::Vector3d>& normals,
+                   const std::vector<std::uint32_t>& neighbours, std::size_t stride, std::size_t k);
 
 }  // namespace iires

@@ -16,7 +16,8 @@ struct PreprocessParams {
   DenoiseParams denoise;   ///< MLS projection sweeps
   bool runDenoise = true;  ///< false: outliers only (`--no-denoise`)
   /// Denoising stops after its first sweep when that sweep moved points by less than this many input spacings
-  /// on average: the input is clean, and smoothing it further would only erode tight curvature.
+  /// on average: the input is clean, and smoothing it further would only erode tight curvature. Overrides
+  /// denoise.cleanDisplacement (whose default, 0, is off for denoise() on its own).
   double cleanDisplacement = 0.05;
   int threads = 0;         ///< overrides outliers.threads and denoise.threads when > 0
 
