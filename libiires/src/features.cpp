@@ -642,15 +642,47 @@ std::vector<Eigen::Vector3d> snapToCreases(const PointCloud& cloud, const std::v
   parallelFor(n, params.threads, [&](std::size_t i) {
     std::vector<std::uint32_t> idx;
     std::vector<double> d2;
-    bool onCrease = true;
-    for (int it = 0; it < 2 && onCrease; ++it) {  // re-centred once: the second fit is centred on the crease
-      index.radius(moved[i], params.radius * h, idx, d2);
-      if (idx.size() > 200) idx.resize(200);
-      Crease c;
-      onCrease = twoPlaneTest(cloud.points, cloud.normals, moved[i], idx, h, params, c, params.snapSigma * h);
-      if (onCrease) moved[i] = c.point;
+    // A chain may run beside its crease (its points come from the detector's unweighted fits): when the crease
+    // is not within maxLineDistance, the sample may jump to it from up to 0.8·radius away.
+    FeatureParams far = params;
+    far.maxLineDistance = std::max(params.maxLineDistance, 0.8 * params.radius);
+    const std::size_t before = i > 0 && chainOfSample[i - 1] == chainOfSample[i] ? i - 1 : i;
+    const std::size_t after = i + 1 < n && chainOfSample[i + 1] == chainOfSample[i] ? i + 1 : i;
+    const Eigen::Vector3d along = (samples[after] - samples[before]).normalized();  // 0 for a lone sample
+    bool onCrease = false;
+    for (const FeatureParams* prm : {&params, static_cast<const FeatureParams*>(&far)}) {
+      moved[i] = samples[i];
+      onCrease = true;
+      for (int it = 0; it < 2 && onCrease; ++it) {  // re-centred once: the second fit is centred on the crease
+        index.radius(moved[i], params.radius * h, idx, d2);
+        if (idx.size() > 200) idx.resize(200);
+        Crease c;
+        onCrease = twoPlaneTest(cloud.points, cloud.normals, moved[i], idx, h, it == 0 ? *prm : params, c,
+                                params.snapSigma * h);
+        // A jump must land on a crease running along the chain (not on another crease meeting it at a corner).
+        if (onCrease && prm == &far && std::abs(c.direction.dot(along)) < std::cos(params.maxChainTurn * kDeg))
+          onCrease = false;
+        if (onCrease) moved[i] = c.point;
+      }
+      if (onCrease) break;
     }
+    if (!onCrease) moved[i] = samples[i];
     good[i] = onCrease ? 1 : 0;
+    if (onCrease) return;
+    // The looser thresholds of the VCM detector's lines (the chain already says a crease is here), trusted
+    // only for a small correction: a sample extended past the feature would be pulled far.
+    FeatureParams loose = params;
+    loose.angle = 1.0;
+    loose.maxResidual = 2.0 * params.maxResidual;
+    loose.minClusterShare = 0.5 * params.minClusterShare;
+    index.radius(samples[i], params.radius * h, idx, d2);
+    if (idx.size() > 200) idx.resize(200);
+    Crease c;
+    if (twoPlaneTest(cloud.points, cloud.normals, samples[i], idx, h, loose, c, params.snapSigma * h) &&
+        (c.point - samples[i]).norm() <= 0.25 * h) {
+      moved[i] = c.point;
+      good[i] = 2;
+    }
   });
   // 2. A sample where no crease fits but whose chain neighbours (≤ 3 samples either way) do goes onto the
   // chord between them; the others (chain ends past the feature, corners where three sheets meet) are dropped.
@@ -671,7 +703,9 @@ std::vector<Eigen::Vector3d> snapToCreases(const PointCloud& cloud, const std::v
     if (prev == n || next == n) continue;
     const Eigen::Vector3d ab = moved[next] - moved[prev];
     const double t = std::clamp((samples[i] - moved[prev]).dot(ab) / std::max(ab.squaredNorm(), 1e-300), 0.0, 1.0);
-    moved[i] = moved[prev] + t * ab;
+    const Eigen::Vector3d onChord = moved[prev] + t * ab;
+    if ((onChord - samples[i]).norm() > params.maxLineDistance * h) continue;  // the neighbours disagree
+    moved[i] = onChord;
     keep[i] = 1;
   }
   std::vector<Eigen::Vector3d> out;
@@ -708,7 +742,7 @@ std::vector<Eigen::Vector3d> snapToCreases(const PointCloud& cloud, const std::v
       const double sa = (c * e - d) / (1.0 - c * c), tb = (e - c * d) / (1.0 - c * c);
       if (sa < -0.5 * h || tb < -0.5 * h || sa > reach || tb > reach) continue;
       const Eigen::Vector3d pa = ea.point + sa * ea.direction, pb = eb.point + tb * eb.direction;
-      if ((pa - pb).norm() > h) continue;
+      if ((pa - pb).norm() > 0.5 * h) continue;  // the two lines must (nearly) meet
       const Eigen::Vector3d corner = 0.5 * (pa + pb);
       double nearest = 0;
       index.nearest(corner, &nearest);
