@@ -37,11 +37,11 @@ struct Crease {
 };
 
 /// Plane through the (weighted) centroid of @p pts (indices into @p points) by PCA; returns the (weighted) RMS
-/// residual. @p weight (may be empty = all 1) is indexed like @p points.
+/// residual. @p sigma > 0: point q has weight exp(−|q − p|²/σ²); 0 = all weights 1.
 double fitPlane(const std::vector<Eigen::Vector3d>& points, const std::vector<std::uint32_t>& idx,
-                const std::unordered_map<std::uint32_t, double>& weight, const Eigen::Vector3d& hint,
-                Eigen::Vector3d& normal, double& offset) {
-  auto w = [&](std::uint32_t i) { return weight.empty() ? 1.0 : weight.at(i); };
+                const Eigen::Vector3d& p, double sigma, const Eigen::Vector3d& hint, Eigen::Vector3d& normal,
+                double& offset) {
+  auto w = [&](std::uint32_t i) { return sigma > 0 ? std::exp(-(points[i] - p).squaredNorm() / (sigma * sigma)) : 1.0; };
   Eigen::Vector3d c = Eigen::Vector3d::Zero();
   double sum = 0;
   for (std::uint32_t i : idx) c += w(i) * points[i], sum += w(i);
@@ -90,9 +90,6 @@ bool twoPlaneTest(const std::vector<Eigen::Vector3d>& points, const std::vector<
     nb = sb.normalized();
   }
   // Planes through each cluster's positions, refined by reassigning points to the nearer plane.
-  std::unordered_map<std::uint32_t, double> weight;
-  if (sigma > 0)
-    for (std::uint32_t j : nbr) weight[j] = std::exp(-(points[j] - p).squaredNorm() / (sigma * sigma));
   std::vector<std::uint32_t> ca, cb;
   Eigen::Vector3d pa, pb;
   double oa = 0, ob = 0, ra = 0, rb = 0;
@@ -102,8 +99,8 @@ bool twoPlaneTest(const std::vector<Eigen::Vector3d>& points, const std::vector<
     cb.clear();
     for (std::size_t t = 0; t < m; ++t) (side[t] == 0 ? ca : cb).push_back(nbr[t]);
     if (ca.size() < minCount || cb.size() < minCount) return false;
-    ra = fitPlane(points, ca, weight, na, pa, oa);
-    rb = fitPlane(points, cb, weight, nb, pb, ob);
+    ra = fitPlane(points, ca, p, sigma, na, pa, oa);
+    rb = fitPlane(points, cb, p, sigma, nb, pb, ob);
     if (it == 2) break;
     for (std::size_t t = 0; t < m; ++t) {
       const double da = std::abs(pa.dot(points[nbr[t]]) - oa), db = std::abs(pb.dot(points[nbr[t]]) - ob);
@@ -648,7 +645,8 @@ std::vector<Eigen::Vector3d> snapToCreases(const PointCloud& cloud, const std::v
     far.maxLineDistance = std::max(params.maxLineDistance, 0.8 * params.radius);
     const std::size_t before = i > 0 && chainOfSample[i - 1] == chainOfSample[i] ? i - 1 : i;
     const std::size_t after = i + 1 < n && chainOfSample[i + 1] == chainOfSample[i] ? i + 1 : i;
-    const Eigen::Vector3d along = (samples[after] - samples[before]).normalized();  // 0 for a lone sample
+    Eigen::Vector3d along = samples[after] - samples[before];
+    if (along.norm() > 0) along.normalize();  // stays 0 for a lone sample: no jump then
     bool onCrease = false;
     for (const FeatureParams* prm : {&params, static_cast<const FeatureParams*>(&far)}) {
       moved[i] = samples[i];

@@ -24,7 +24,9 @@
 /// Chains: the detected points with a valid crease are projected onto it, linked into a minimum spanning
 /// forest (edges ≤ `chainRadius` spacings, crease directions compatible), and each tree is peeled into
 /// longest paths; paths shorter than `minChainLength` spacings (spurs, isolated detections) are dropped.
-/// sampleFeatureChains() places samples along the chains at a fixed arc-length spacing, on the crease.
+/// sampleFeatureChains() places samples along the chains at a fixed arc-length spacing, on the crease;
+/// snapToCreases() then moves each onto its two sheets' local plane intersection (or drops it where it would sit
+/// off the surface) and adds corner samples — the samples the resampler holds with `--sharp-edges`.
 
 #include <Eigen/Core>
 #include <array>
@@ -114,6 +116,9 @@ std::vector<Eigen::Vector3d> sampleFeatureChains(const std::vector<FeatureChain>
 ///     normal-variation test, a plane is fitted to each with weights exp(−d²/σ²) (d the distance to x, σ =
 ///     params.snapSigma spacings: local planes, so curved sheets bias the line less than the detector's
 ///     unweighted fit), and x moves to the nearest point of the two planes' intersection; once more from there.
+///     Where no crease lies within maxLineDistance, x may jump to one up to 0.8·radius away that runs along
+///     its chain (within maxChainTurn); failing that, a looser fit (any angle, 2× residual, half the cluster
+///     share) may correct it by at most h/4.
 ///  2. A sample where that fit fails the detector's thresholds goes onto the chord between the nearest fitted
 ///     samples of its chain (at most 3 away on each side); without both it is dropped (a chain end extended
 ///     past the feature would sit off the surface).
