@@ -714,23 +714,37 @@ std::vector<Eigen::Vector3d> snapToCreases(const PointCloud& cloud, const std::v
   // a sample where they meet (the end samples of chains stop short of a corner, where the two-plane fit fails).
   struct End {
     Eigen::Vector3d point, direction;  // direction: forward, off the end of the chain
+    double step;                       // the chain's sample spacing there
     std::uint32_t chain;
+    bool filled;                       // already linked to a corner
   };
   std::vector<End> ends;
   for (std::size_t a = 0; a < out.size();) {
     std::size_t b = a;
     while (b + 1 < out.size() && owner[b + 1] == owner[a]) ++b;
     if (b > a) {
-      ends.push_back({out[a], (out[a] - out[a + 1]).normalized(), owner[a]});
-      ends.push_back({out[b], (out[b] - out[b - 1]).normalized(), owner[a]});
+      ends.push_back({out[a], (out[a] - out[a + 1]).normalized(), (out[a] - out[a + 1]).norm(), owner[a], false});
+      ends.push_back({out[b], (out[b] - out[b - 1]).normalized(), (out[b] - out[b - 1]).norm(), owner[a], false});
     }
     a = b + 1;
   }
   const double reach = 3.0 * params.radius * h;
-  std::vector<Eigen::Vector3d> corners;
+  std::vector<Eigen::Vector3d> corners, cornerPoints;  // all added samples; the corners alone
+  std::vector<std::uint32_t> cornerOwner;
+  // The gap between a chain end and its corner gets samples at the chain's spacing, on the straight line.
+  auto fill = [&](End& e, const Eigen::Vector3d& corner) {
+    if (e.filled) return;
+    e.filled = true;
+    const double gap = (corner - e.point).norm();
+    const int pieces = static_cast<int>(std::ceil(gap / std::max(e.step, 1e-300) - 0.25));
+    for (int k = 1; k < pieces; ++k) {
+      corners.push_back(e.point + (corner - e.point) * (static_cast<double>(k) / pieces));
+      cornerOwner.push_back(e.chain);
+    }
+  };
   for (std::size_t a = 0; a < ends.size(); ++a)
     for (std::size_t b = a + 1; b < ends.size(); ++b) {
-      const End &ea = ends[a], &eb = ends[b];
+      End &ea = ends[a], &eb = ends[b];
       if (ea.chain == eb.chain || (ea.point - eb.point).norm() > reach) continue;
       // Closest points of the two lines: ea.point + s·da and eb.point + t·db.
       const double c = ea.direction.dot(eb.direction);
@@ -741,14 +755,22 @@ std::vector<Eigen::Vector3d> snapToCreases(const PointCloud& cloud, const std::v
       if (sa < -0.5 * h || tb < -0.5 * h || sa > reach || tb > reach) continue;
       const Eigen::Vector3d pa = ea.point + sa * ea.direction, pb = eb.point + tb * eb.direction;
       if ((pa - pb).norm() > 0.5 * h) continue;  // the two lines must (nearly) meet
-      const Eigen::Vector3d corner = 0.5 * (pa + pb);
+      Eigen::Vector3d corner = 0.5 * (pa + pb);
       double nearest = 0;
       index.nearest(corner, &nearest);
       if (std::sqrt(nearest) > params.maxOffCrease * h) continue;  // the lines meet off the surface
       bool dup = false;
-      for (const auto& q : corners) dup = dup || (q - corner).norm() < h;
-      if (!dup) corners.push_back(corner), owner.push_back(ea.chain);
+      for (const auto& q : cornerPoints)
+        if ((q - corner).norm() < h) dup = true, corner = q;
+      if (!dup) {
+        cornerPoints.push_back(corner);
+        corners.push_back(corner);
+        cornerOwner.push_back(ea.chain);
+      }
+      fill(ea, corner);
+      fill(eb, corner);
     }
+  owner.insert(owner.end(), cornerOwner.begin(), cornerOwner.end());
   out.insert(out.end(), corners.begin(), corners.end());
   if (chainOut) *chainOut = std::move(owner);
   return out;

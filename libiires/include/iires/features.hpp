@@ -123,12 +123,13 @@ std::vector<Eigen::Vector3d> sampleFeatureChains(const std::vector<FeatureChain>
 ///     samples of its chain (at most 3 away on each side); without both it is dropped (a chain end extended
 ///     past the feature would sit off the surface).
 ///  3. Where two chains' end lines, continued, meet within 3·radius spacings of both ends and within
-///     params.maxOffCrease spacings of an input point, a corner sample is added there.
+///     params.maxOffCrease spacings of an input point, a corner sample is added there, and the gap from each
+///     of those chain ends to the corner gets samples at the chain's spacing on the straight line.
 /// @param chainOfSample the chain index of each sample (sampleFeatureChains' output: a chain's samples are
 ///     consecutive and in order)
 /// @param spacing the input spacing h (FeatureResult::spacing)
 /// @param[out] chainOut (optional) the chain index of each returned sample (a corner: one of its two chains)
-/// @return the kept samples in order, then the corners
+/// @return the kept samples in order, then the corners and their gap samples
 /// @note O(samples · m log n + ends²), m the neighbours in the radius. Deterministic for any thread count.
 std::vector<Eigen::Vector3d> snapToCreases(const PointCloud& cloud, const std::vector<Eigen::Vector3d>& samples,
                                            const std::vector<std::uint32_t>& chainOfSample, double spacing,
