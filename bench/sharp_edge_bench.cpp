@@ -130,19 +130,8 @@ int main(int argc, char** argv) {
       p.sharpEdges = sharp;
       const double t = now();
       const auto r = iires::resample(cloud, p);
-      std::string extra;
-      if (sharp) {  // the held feature samples are the first featureSamples output points
-        const std::vector<Eigen::Vector3d> held(r.cloud.points.begin(),
-                                                r.cloud.points.begin() + static_cast<long>(r.featureSamples));
-        const std::vector<Eigen::Vector3d> free(r.cloud.points.begin() + static_cast<long>(r.featureSamples),
-                                                r.cloud.points.end());
-        char more[160];
-        std::snprintf(more, sizeof more, " feature_samples=%zu held_err_max_pct=%.4f free_err_max_pct=%.4f",
-                      r.featureSamples, held.empty() ? 0.0 : 100 * distance.distances(held).max / distance.diagonal(),
-                      100 * distance.distances(free).max / distance.diagonal());
-        extra = more;
-      }
-      report(prefix, sharp ? "iires_sharp" : "iires", r.cloud.points, now() - t, ref, extra);
+      report(prefix, sharp ? "iires_sharp" : "iires", r.cloud.points, now() - t, ref,
+             sharp ? " feature_samples=" + std::to_string(r.featureSamples) : "");
     }
     double t = now();
     if (run("cgal_wlop")) {
