@@ -679,7 +679,7 @@ std::vector<Eigen::Vector3d> snapToCreases(const PointCloud& cloud, const std::v
     if (twoPlaneTest(cloud.points, cloud.normals, samples[i], idx, h, loose, c, params.snapSigma * h) &&
         (c.point - samples[i]).norm() <= 0.25 * h) {
       moved[i] = c.point;
-      good[i] = 2;
+      good[i] = 1;
     }
   });
   // 2. A sample where no crease fits but whose chain neighbours (≤ 3 samples either way) do goes onto the
