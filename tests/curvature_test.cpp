@@ -189,6 +189,7 @@ iires::PointCloud planeWithBump(std::size_t nPlane, std::size_t nBump) {
 TEST(Curvature, LevelsFollowCurvatureAndSizeFactorsAreMonotone) {
   const auto c = planeWithBump(30000, 3000);
   iires::CurvatureParams p;
+  p.sizeSmoothIterations = 0;  // s exactly c·r_level (the smoothed field: SizeFactorSmoothedAcrossLevels)
   const auto r = iires::computeCurvature(c.points, c.normals, p);
   ASSERT_FALSE(r.uniform);
   const std::size_t n = c.size();
@@ -234,6 +235,41 @@ TEST(Curvature, LevelsFollowCurvatureAndSizeFactorsAreMonotone) {
     swInv += m * m / (r.sizeFactor[i] * r.sizeFactor[i]);
   }
   EXPECT_NEAR(swInv / sw, 1.0, 1e-6);
+}
+
+// Level borders: the smoothed size factor stays within the ratios' range, keeps the flat and curved ends, and
+// has a smaller worst jump between neighbours (6 nearest; |log ratio|) than the raw c·r_level.
+TEST(Curvature, SizeFactorSmoothedAcrossLevels) {
+  const auto c = planeWithBump(30000, 3000);
+  iires::CurvatureParams raw, smooth;
+  raw.sizeSmoothIterations = 0;
+  const auto a = iires::computeCurvature(c.points, c.normals, raw);
+  const auto b = iires::computeCurvature(c.points, c.normals, smooth);
+  ASSERT_EQ(a.level, b.level);
+  iires::KnnIndex index(c.points);
+  std::vector<std::uint32_t> idx;
+  std::vector<double> d2;
+  double jumpA = 0, jumpB = 0;
+  for (std::size_t i = 0; i < c.size(); ++i) {
+    EXPECT_GE(b.sizeFactor[i], b.normalization * raw.ratios.back() * (1 - 1e-9));
+    EXPECT_LE(b.sizeFactor[i], b.normalization * raw.ratios.front() * (1 + 1e-9));
+    index.knn(c.points[i], 7, idx, d2);
+    for (std::size_t t = 1; t < idx.size(); ++t) {
+      jumpA = std::max(jumpA, std::abs(std::log(a.sizeFactor[i] / a.sizeFactor[idx[t]])));
+      jumpB = std::max(jumpB, std::abs(std::log(b.sizeFactor[i] / b.sizeFactor[idx[t]])));
+    }
+  }
+  EXPECT_LT(jumpB, 0.6 * jumpA);
+  // Far plane points keep (about) the flattest ratio; the bump's top the most curved one.
+  for (std::size_t i = 0; i < c.size(); ++i) {
+    const double rad = (c.points[i].head<2>() - Eigen::Vector2d(2, 2)).norm();
+    if (rad > 1.5) {
+      EXPECT_NEAR(b.sizeFactor[i] / b.normalization, raw.ratios.front(), 0.05);
+    }
+    if (c.points[i].z() > 0.45) {
+      EXPECT_NEAR(b.sizeFactor[i] / b.normalization, raw.ratios.back(), 0.05);
+    }
+  }
 }
 
 TEST(Curvature, SmoothingIsEq8) {

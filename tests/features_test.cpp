@@ -134,6 +134,54 @@ TEST_P(CubeFeatures, AllTwelveEdgesFoundAndSampledOnTheCrease) {
 INSTANTIATE_TEST_SUITE_P(Detectors, CubeFeatures,
                          ::testing::Values(FeatureDetector::NormalVariation, FeatureDetector::Vcm));
 
+// snapToCreases: samples beside a cube edge go onto it, samples off the surface past a corner are dropped, a
+// sample that no fit accepts between good ones goes onto their chord, and two chain ends meeting at a corner
+// get a corner sample.
+TEST(Features, SnapToCreasesOnACube) {
+  const auto mesh = cubeMesh();
+  const auto cloud = sampledWithEstimatedNormals(mesh, 60000);
+  const auto edges = iires::sharpMeshEdges(mesh, 45.0);
+  FeatureParams p;
+  const double h = iires::estimateSpacing(cloud.points);
+  // Chain 0 along the edge x = 1, z = 1 (y up to 1 − 3h), its samples pushed 0.4 h off the edge into the
+  // cube's top face or its side alternately; then two samples past the corner y = 1, off the surface.
+  // Chain 1 along the edge y = 1, z = 1 (x from 1 − 3h down): its end and chain 0's end meet at (1, 1, 1).
+  std::vector<Eigen::Vector3d> samples;
+  std::vector<std::uint32_t> chain;
+  for (int t = 0; t <= 15; ++t) {
+    const double off = 0.4 * h;
+    samples.emplace_back(1.0 - (t % 2 ? off : 0.0), 1.0 - 3 * h - 0.05 * (15 - t), 1.0 - (t % 2 ? 0.0 : off));
+    chain.push_back(0);
+  }
+  samples.emplace_back(1.0 + 2 * h, 1.0 + 3 * h, 1.0);  // beyond the corner and off the cube
+  chain.push_back(0);
+  samples.emplace_back(1.0 + 2 * h, 1.0 + 6 * h, 1.0);
+  chain.push_back(0);
+  for (int t = 0; t <= 15; ++t) {
+    samples.emplace_back(1.0 - 3 * h - 0.05 * t, 1.0, 1.0);
+    chain.push_back(1);
+  }
+  std::vector<std::uint32_t> owner;
+  const auto out = iires::snapToCreases(cloud, samples, chain, h, p, &owner);
+  ASSERT_EQ(out.size(), owner.size());
+  std::size_t onChain0 = 0, corners = 0;
+  for (std::size_t i = 0; i < out.size(); ++i) {
+    EXPECT_LE(iires::distanceToSegments(out[i], edges), 0.25 * h) << out[i].transpose();
+    const bool corner = (out[i] - Eigen::Vector3d(1, 1, 1)).norm() < 0.5 * h;
+    corners += corner;
+    onChain0 += owner[i] == 0 && !corner;
+  }
+  EXPECT_EQ(onChain0, 16u);  // the two samples off the surface are gone
+  EXPECT_EQ(corners, 1u);
+  EXPECT_EQ(out.size(), 33u);
+  // Deterministic for any thread count.
+  p.threads = 1;
+  const auto one = iires::snapToCreases(cloud, samples, chain, h, p);
+  p.threads = 2;
+  EXPECT_EQ(one, iires::snapToCreases(cloud, samples, chain, h, p));
+  EXPECT_THROW(iires::snapToCreases(cloud, samples, {0u}, h, p), std::invalid_argument);
+}
+
 TEST(Features, SphereHasNoFeatures) {
   iires::PointCloud c;
   c.points = iires::test::fibonacciSphere(20000);

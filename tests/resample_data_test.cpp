@@ -130,8 +130,10 @@ TEST(ResampleTool, BadInputExitsTwoWithoutOutput) {
 namespace {
 
 // Adaptively isotropic (paper §4.2): exact N, spacing falls level by level, and no abrupt jumps.
-TEST(CurvatureMode, GradesSpacingWithCurvatureWithoutJumps) {
-  const auto mesh = iires::readMesh(dataPath("meshes/bunny00.off"));
+class CurvatureMode : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(CurvatureMode, GradesSpacingWithCurvatureWithoutJumps) {
+  const auto mesh = iires::readMesh(dataPath(std::string("meshes/") + GetParam() + ".off"));
   iires::ResampleParams p;
   p.targetCount = 10000;
   p.mode = iires::ResampleMode::kCurvature;
@@ -156,21 +158,33 @@ TEST(CurvatureMode, GradesSpacingWithCurvatureWithoutJumps) {
       smooth += std::max(nn[i], nn[idx[k]]) <= 1.5 * std::min(nn[i], nn[idx[k]]);
   }
   EXPECT_GE(static_cast<double>(smooth) / static_cast<double>(pairs), 0.95);
+  RecordProperty("smooth_pairs", std::to_string(static_cast<double>(smooth) / static_cast<double>(pairs)));
 }
 
-// Sharp edges: exact N with samples held on the detected creases, every one of them on the surface.
-// (Crease coverage is not yet better than the isotropic mode's on non-uniform input: see issue 5's note.)
-TEST(SharpEdges, KeepsExactCountWithSamplesOnTheCreases) {
+INSTANTIATE_TEST_SUITE_P(Cgal, CurvatureMode, ::testing::Values("bunny00", "armadillo"));
+
+// Sharp edges on 5× non-uniform input: exact N, samples held on the creases, and against the isotropic mode on
+// the same input: closer to the mesh (mean and max) and the reference sharp edges (dihedral > 45°) better
+// covered on average (measured: mean error 0.0012 vs 0.0032 % of the diagonal, max 0.137 vs 0.224 %, mean
+// edge-to-sample distance 0.18 vs 0.40 spacings; bench/sharp_edge_bench).
+TEST(SharpEdges, HeldOnTheCreasesAndCloserToTheMeshThanIsotropic) {
   const auto mesh = iires::readMesh(dataPath("meshes/fandisk.off"));
+  const auto cloud = denseSampling(mesh, 100000);
   iires::ResampleParams p;
   p.targetCount = 10000;
+  const auto iso = iires::resample(cloud, p);
   p.sharpEdges = true;
-  const auto r = iires::resample(denseSampling(mesh, 100000), p);
+  const auto r = iires::resample(cloud, p);
   ASSERT_EQ(r.cloud.size(), 10000u);
   EXPECT_GT(r.featurePoints, 1000u);
-  EXPECT_GT(r.featureSamples, 100u);
+  EXPECT_GT(r.featureSamples, 1000u);
   const iires::MeshDistance distance(mesh);
-  EXPECT_LE(distance.distances(r.cloud.points).mean, 0.001 * distance.diagonal());
+  const auto err = distance.distances(r.cloud.points), isoErr = distance.distances(iso.cloud.points);
+  EXPECT_LT(err.mean, isoErr.mean);
+  EXPECT_LE(err.max, isoErr.max);
+  const auto edges = iires::sampleSegments(iires::sharpMeshEdges(mesh, 45.0), 0.01 * r.spacing.mean);
+  const auto cover = iires::coverage(edges, r.cloud.points), isoCover = iires::coverage(edges, iso.cloud.points);
+  EXPECT_LT(cover.mean / r.spacing.mean, 0.6 * isoCover.mean / iso.spacing.mean);
 }
 
 }  // namespace

@@ -102,6 +102,7 @@ void CurvatureParams::validate() const {
   if (!(beta >= 0.0 && beta <= 1.0))
     throw std::invalid_argument("CurvatureParams: beta must be in [0, 1], got " + std::to_string(beta));
   if (smoothIterations < 0) throw std::invalid_argument("CurvatureParams: smoothIterations must be >= 0");
+  if (sizeSmoothIterations < 0) throw std::invalid_argument("CurvatureParams: sizeSmoothIterations must be >= 0");
   if (ratios.empty()) throw std::invalid_argument("CurvatureParams: ratios must not be empty (t >= 1)");
   for (std::size_t i = 0; i < ratios.size(); ++i) {
     if (!(ratios[i] > 0.0) || !std::isfinite(ratios[i]))
@@ -186,6 +187,13 @@ CurvatureResult computeCurvature(const std::vector<Eigen::Vector3d>& points,
   // Σ w_i / (c r_i)² = Σ w_i (the isotropic count), summed in index order (deterministic).
   r.sizeFactor.resize(n);
   for (std::size_t i = 0; i < n; ++i) r.sizeFactor[i] = params.ratios[r.level[i]];
+  if (params.sizeSmoothIterations > 0 && !r.uniform) {
+    // Level borders: smooth log s by eq. 8 so the target length changes by a steady factor across a few
+    // samples instead of jumping by r_q/r_{q+1} at once (the paper's smooth gradation).
+    for (double& s : r.sizeFactor) s = std::log(s);
+    r.sizeFactor = smoothFromTable(r.sizeFactor, table, params.beta, params.sizeSmoothIterations, params.threads);
+    for (double& s : r.sizeFactor) s = std::exp(s);
+  }
   if (params.normalize && n > 0) {
     double sw = 0, swInv = 0;
     for (std::size_t i = 0; i < n; ++i) {

@@ -36,29 +36,34 @@ struct Crease {
   Eigen::Vector3d direction = Eigen::Vector3d::Zero();
 };
 
-/// Plane through the centroid of @p pts (indices into @p points) by PCA; returns RMS residual.
+/// Plane through the (weighted) centroid of @p pts (indices into @p points) by PCA; returns the (weighted) RMS
+/// residual. @p sigma > 0: point q has weight exp(−|q − p|²/σ²); 0 = all weights 1.
 double fitPlane(const std::vector<Eigen::Vector3d>& points, const std::vector<std::uint32_t>& idx,
-                const Eigen::Vector3d& hint, Eigen::Vector3d& normal, double& offset) {
+                const Eigen::Vector3d& p, double sigma, const Eigen::Vector3d& hint, Eigen::Vector3d& normal,
+                double& offset) {
+  auto w = [&](std::uint32_t i) { return sigma > 0 ? std::exp(-(points[i] - p).squaredNorm() / (sigma * sigma)) : 1.0; };
   Eigen::Vector3d c = Eigen::Vector3d::Zero();
-  for (std::uint32_t i : idx) c += points[i];
-  c /= static_cast<double>(idx.size());
+  double sum = 0;
+  for (std::uint32_t i : idx) c += w(i) * points[i], sum += w(i);
+  c /= sum;
   Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
   for (std::uint32_t i : idx) {
     const Eigen::Vector3d d = points[i] - c;
-    cov += d * d.transpose();
+    cov += w(i) * d * d.transpose();
   }
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(cov);
   normal = es.eigenvectors().col(0);
   if (normal.dot(hint) < 0) normal = -normal;
   offset = normal.dot(c);
-  return std::sqrt(std::max(0.0, es.eigenvalues()(0)) / static_cast<double>(idx.size()));
+  return std::sqrt(std::max(0.0, es.eigenvalues()(0)) / sum);
 }
 
-/// Two-plane fit of the neighbourhood @p nbr of point @p i (the normal-variation test). Returns whether the
-/// point is on a crease by the thresholds in @p prm; fills @p crease.
+/// Two-plane fit of the neighbourhood @p nbr of the point @p p (the normal-variation test). Returns whether the
+/// point is on a crease by the thresholds in @p prm; fills @p crease. @p sigma > 0: the plane fits weight each
+/// point by exp(−d²/σ²), d its distance to p (local planes: less bias from curved sheets); 0 = unweighted.
 bool twoPlaneTest(const std::vector<Eigen::Vector3d>& points, const std::vector<Eigen::Vector3d>& normals,
-                  std::size_t i, const std::vector<std::uint32_t>& nbr, double h, const FeatureParams& prm,
-                  Crease& crease) {
+                  const Eigen::Vector3d& p, const std::vector<std::uint32_t>& nbr, double h, const FeatureParams& prm,
+                  Crease& crease, double sigma = 0) {
   crease = Crease{};
   const std::size_t m = nbr.size();
   if (m < 8) return false;
@@ -94,8 +99,8 @@ bool twoPlaneTest(const std::vector<Eigen::Vector3d>& points, const std::vector<
     cb.clear();
     for (std::size_t t = 0; t < m; ++t) (side[t] == 0 ? ca : cb).push_back(nbr[t]);
     if (ca.size() < minCount || cb.size() < minCount) return false;
-    ra = fitPlane(points, ca, na, pa, oa);
-    rb = fitPlane(points, cb, nb, pb, ob);
+    ra = fitPlane(points, ca, p, sigma, na, pa, oa);
+    rb = fitPlane(points, cb, p, sigma, nb, pb, ob);
     if (it == 2) break;
     for (std::size_t t = 0; t < m; ++t) {
       const double da = std::abs(pa.dot(points[nbr[t]]) - oa), db = std::abs(pb.dot(points[nbr[t]]) - ob);
@@ -107,7 +112,6 @@ bool twoPlaneTest(const std::vector<Eigen::Vector3d>& points, const std::vector<
   const double sinAngle = dir.norm();
   if (pa.dot(pb) > std::cos(prm.angle * kDeg) || sinAngle < 1e-6) return false;
   // Closest point of the line {x : pa·x = oa, pb·x = ob} to p: x = p + α pa + β pb.
-  const Eigen::Vector3d& p = points[i];
   Eigen::Matrix2d g;
   g << 1.0, pa.dot(pb), pa.dot(pb), 1.0;
   const Eigen::Vector2d rhs(oa - pa.dot(p), ob - pb.dot(p));
@@ -614,6 +618,162 @@ void FeatureParams::validate() const {
   if (!(maxChainTurn > 0.0 && maxChainTurn < 90.0)) fail("maxChainTurn must be in (0, 90) degrees");
   if (!(minChainLength >= 0.0)) fail("minChainLength must be >= 0");
   if (!(sampleSpacing >= 0.0)) fail("sampleSpacing must be >= 0");
+  if (!(snapSigma > 0.0)) fail("snapSigma must be > 0");
+  if (!(maxOffCrease >= 0.0)) fail("maxOffCrease must be >= 0");
+}
+
+std::vector<Eigen::Vector3d> snapToCreases(const PointCloud& cloud, const std::vector<Eigen::Vector3d>& samples,
+                                           const std::vector<std::uint32_t>& chainOfSample, double spacing,
+                                           const FeatureParams& params, std::vector<std::uint32_t>* chainOut) {
+  params.validate();
+  if (!(spacing > 0)) throw std::invalid_argument("snapToCreases: spacing must be > 0");
+  if (!cloud.hasNormals()) throw std::invalid_argument("snapToCreases: the cloud needs one normal per point");
+  if (chainOfSample.size() != samples.size())
+    throw std::invalid_argument("snapToCreases: one chain index per sample is needed");
+  const double h = spacing;
+  const std::size_t n = samples.size();
+  const KnnIndex index(cloud.points);
+  // 1. Each sample onto the intersection of its two sheets' local planes (the detector's thresholds).
+  std::vector<Eigen::Vector3d> moved(samples);
+  std::vector<char> good(n, 0);
+  parallelFor(n, params.threads, [&](std::size_t i) {
+    std::vector<std::uint32_t> idx;
+    std::vector<double> d2;
+    // A chain may run beside its crease (its points come from the detector's unweighted fits): when the crease
+    // is not within maxLineDistance, the sample may jump to it from up to 0.8·radius away.
+    FeatureParams far = params;
+    far.maxLineDistance = std::max(params.maxLineDistance, 0.8 * params.radius);
+    const std::size_t before = i > 0 && chainOfSample[i - 1] == chainOfSample[i] ? i - 1 : i;
+    const std::size_t after = i + 1 < n && chainOfSample[i + 1] == chainOfSample[i] ? i + 1 : i;
+    Eigen::Vector3d along = samples[after] - samples[before];
+    if (along.norm() > 0) along.normalize();  // stays 0 for a lone sample: no jump then
+    bool onCrease = false;
+    for (const FeatureParams* prm : {&params, static_cast<const FeatureParams*>(&far)}) {
+      moved[i] = samples[i];
+      onCrease = true;
+      for (int it = 0; it < 2 && onCrease; ++it) {  // re-centred once: the second fit is centred on the crease
+        index.radius(moved[i], params.radius * h, idx, d2);
+        if (idx.size() > 200) idx.resize(200);
+        Crease c;
+        onCrease = twoPlaneTest(cloud.points, cloud.normals, moved[i], idx, h, it == 0 ? *prm : params, c,
+                                params.snapSigma * h);
+        // A jump must land on a crease running along the chain (not on another crease meeting it at a corner).
+        if (onCrease && prm == &far && std::abs(c.direction.dot(along)) < std::cos(params.maxChainTurn * kDeg))
+          onCrease = false;
+        if (onCrease) moved[i] = c.point;
+      }
+      if (onCrease) break;
+    }
+    if (!onCrease) moved[i] = samples[i];
+    good[i] = onCrease ? 1 : 0;
+    if (onCrease) return;
+    // The looser thresholds of the VCM detector's lines (the chain already says a crease is here), trusted
+    // only for a small correction: a sample extended past the feature would be pulled far.
+    FeatureParams loose = params;
+    loose.angle = 1.0;
+    loose.maxResidual = 2.0 * params.maxResidual;
+    loose.minClusterShare = 0.5 * params.minClusterShare;
+    index.radius(samples[i], params.radius * h, idx, d2);
+    if (idx.size() > 200) idx.resize(200);
+    Crease c;
+    if (twoPlaneTest(cloud.points, cloud.normals, samples[i], idx, h, loose, c, params.snapSigma * h) &&
+        (c.point - samples[i]).norm() <= 0.25 * h) {
+      moved[i] = c.point;
+      good[i] = 1;
+    }
+  });
+  // 2. A sample where no crease fits but whose chain neighbours (≤ 3 samples either way) do goes onto the
+  // chord between them; the others (chain ends past the feature, corners where three sheets meet) are dropped.
+  std::vector<char> keep(good);
+  for (std::size_t i = 0; i < n; ++i) {
+    if (good[i]) continue;
+    std::size_t prev = n, next = n;
+    for (std::size_t j = i; j-- > 0 && i - j <= 3 && chainOfSample[j] == chainOfSample[i];)
+      if (good[j]) {
+        prev = j;
+        break;
+      }
+    for (std::size_t j = i + 1; j < n && j - i <= 3 && chainOfSample[j] == chainOfSample[i]; ++j)
+      if (good[j]) {
+        next = j;
+        break;
+      }
+    if (prev == n || next == n) continue;
+    const Eigen::Vector3d ab = moved[next] - moved[prev];
+    const double t = std::clamp((samples[i] - moved[prev]).dot(ab) / std::max(ab.squaredNorm(), 1e-300), 0.0, 1.0);
+    const Eigen::Vector3d onChord = moved[prev] + t * ab;
+    if ((onChord - samples[i]).norm() > params.maxLineDistance * h) continue;  // the neighbours disagree
+    moved[i] = onChord;
+    keep[i] = 1;
+  }
+  std::vector<Eigen::Vector3d> out;
+  std::vector<std::uint32_t> owner;
+  for (std::size_t i = 0; i < n; ++i)
+    if (keep[i]) out.push_back(moved[i]), owner.push_back(chainOfSample[i]);
+  // 3. Corners: two chain ends whose crease lines, continued forward, meet within a few spacings of both get
+  // a sample where they meet (the end samples of chains stop short of a corner, where the two-plane fit fails).
+  struct End {
+    Eigen::Vector3d point, direction;  // direction: forward, off the end of the chain
+    double step;                       // the chain's sample spacing there
+    std::uint32_t chain;
+    bool filled;                       // already linked to a corner
+  };
+  std::vector<End> ends;
+  for (std::size_t a = 0; a < out.size();) {
+    std::size_t b = a;
+    while (b + 1 < out.size() && owner[b + 1] == owner[a]) ++b;
+    if (b > a) {
+      ends.push_back({out[a], (out[a] - out[a + 1]).normalized(), (out[a] - out[a + 1]).norm(), owner[a], false});
+      ends.push_back({out[b], (out[b] - out[b - 1]).normalized(), (out[b] - out[b - 1]).norm(), owner[a], false});
+    }
+    a = b + 1;
+  }
+  const double reach = 3.0 * params.radius * h;
+  std::vector<Eigen::Vector3d> corners, cornerPoints;  // all added samples; the corners alone
+  std::vector<std::uint32_t> cornerOwner;
+  // The gap between a chain end and its corner gets samples at the chain's spacing, on the straight line.
+  auto fill = [&](End& e, const Eigen::Vector3d& corner) {
+    if (e.filled) return;
+    e.filled = true;
+    const double gap = (corner - e.point).norm();
+    const int pieces = static_cast<int>(std::ceil(gap / std::max(e.step, 1e-300) - 0.25));
+    for (int k = 1; k < pieces; ++k) {
+      corners.push_back(e.point + (corner - e.point) * (static_cast<double>(k) / pieces));
+      cornerOwner.push_back(e.chain);
+    }
+  };
+  for (std::size_t a = 0; a < ends.size(); ++a)
+    for (std::size_t b = a + 1; b < ends.size(); ++b) {
+      End &ea = ends[a], &eb = ends[b];
+      if (ea.chain == eb.chain || (ea.point - eb.point).norm() > reach) continue;
+      // Closest points of the two lines: ea.point + s·da and eb.point + t·db.
+      const double c = ea.direction.dot(eb.direction);
+      if (1.0 - c * c < 0.1) continue;  // nearly parallel: no corner between them
+      const Eigen::Vector3d w = ea.point - eb.point;
+      const double d = ea.direction.dot(w), e = eb.direction.dot(w);
+      const double sa = (c * e - d) / (1.0 - c * c), tb = (e - c * d) / (1.0 - c * c);
+      if (sa < -0.5 * h || tb < -0.5 * h || sa > reach || tb > reach) continue;
+      const Eigen::Vector3d pa = ea.point + sa * ea.direction, pb = eb.point + tb * eb.direction;
+      if ((pa - pb).norm() > 0.5 * h) continue;  // the two lines must (nearly) meet
+      Eigen::Vector3d corner = 0.5 * (pa + pb);
+      double nearest = 0;
+      index.nearest(corner, &nearest);
+      if (std::sqrt(nearest) > params.maxOffCrease * h) continue;  // the lines meet off the surface
+      bool dup = false;
+      for (const auto& q : cornerPoints)
+        if ((q - corner).norm() < h) dup = true, corner = q;
+      if (!dup) {
+        cornerPoints.push_back(corner);
+        corners.push_back(corner);
+        cornerOwner.push_back(ea.chain);
+      }
+      fill(ea, corner);
+      fill(eb, corner);
+    }
+  owner.insert(owner.end(), cornerOwner.begin(), cornerOwner.end());
+  out.insert(out.end(), corners.begin(), corners.end());
+  if (chainOut) *chainOut = std::move(owner);
+  return out;
 }
 
 double estimateSpacing(const std::vector<Eigen::Vector3d>& points, int threads) {
@@ -664,7 +824,7 @@ FeatureResult detectFeatures(const PointCloud& cloud, const FeatureParams& param
     parallelFor(n, params.threads, [&](std::size_t i) {
       std::vector<std::uint32_t> idx;
       neighbourhood(i, idx);
-      flag[i] = twoPlaneTest(pts, nrm, i, idx, h, params, creases[i]) ? 1 : 0;
+      flag[i] = twoPlaneTest(pts, nrm, pts[i], idx, h, params, creases[i]) ? 1 : 0;
     });
   } else {
     const auto cov = computeVcm(pts, params.vcmOffset * h, params.vcmConvolution * h, params.threads);
@@ -680,7 +840,7 @@ FeatureResult detectFeatures(const PointCloud& cloud, const FeatureParams& param
       loose.maxResidual = 1e9;
       std::vector<std::uint32_t> idx;
       neighbourhood(i, idx);
-      twoPlaneTest(pts, nrm, i, idx, h, loose, creases[i]);
+      twoPlaneTest(pts, nrm, pts[i], idx, h, loose, creases[i]);
     });
   }
   std::vector<Eigen::Vector3d> x, d;
@@ -724,7 +884,9 @@ FeatureResult detectFeatures(const PointCloud& cloud, const FeatureParams& param
   r.chainSeconds = since(t0);
   if (params.sampleSpacing > 0) {
     t0 = Clock::now();
-    r.samples = sampleFeatureChains(r.chains, params.sampleSpacing, &r.sampleChain);
+    std::vector<std::uint32_t> owner;
+    const auto samples = sampleFeatureChains(r.chains, params.sampleSpacing, &owner);
+    r.samples = snapToCreases(cloud, samples, owner, h, params, &r.sampleChain);
     r.sampleSeconds = since(t0);
   }
   return r;
@@ -820,6 +982,22 @@ std::vector<Segment> sharpMeshEdges(const TriangleMesh& mesh, double minAngleDeg
   return out;
 }
 
+std::vector<Eigen::Vector3d> sampleSegments(const std::vector<Segment>& edges, double step,
+                                            std::vector<std::uint32_t>* owner) {
+  if (!(step > 0)) throw std::invalid_argument("sampleSegments: step must be > 0");
+  std::vector<Eigen::Vector3d> out;
+  if (owner) owner->clear();
+  for (std::uint32_t e = 0; e < edges.size(); ++e) {
+    const double len = (edges[e][1] - edges[e][0]).norm();
+    const int m = std::max(1, static_cast<int>(std::ceil(len / step)));
+    for (int t = 0; t <= m; ++t) {
+      out.push_back(edges[e][0] + (edges[e][1] - edges[e][0]) * (static_cast<double>(t) / m));
+      if (owner) owner->push_back(e);
+    }
+  }
+  return out;
+}
+
 double distanceToSegments(const Eigen::Vector3d& p, const std::vector<Segment>& edges) {
   double best = std::numeric_limits<double>::infinity();
   for (const Segment& s : edges) best = std::min(best, segmentDistance(p, s));
@@ -835,16 +1013,8 @@ FeatureScore scoreFeatures(const std::vector<Eigen::Vector3d>& points,
   // Densify the edges at step δ; a point within r of an edge has a densified sample within r + δ/2.
   const double reach = std::max(tolerance, band);
   const double step = std::max(reach, 1e-12);
-  std::vector<Eigen::Vector3d> dense;
   std::vector<std::uint32_t> owner;
-  for (std::uint32_t e = 0; e < edges.size(); ++e) {
-    const double len = (edges[e][1] - edges[e][0]).norm();
-    const int m = std::max(1, static_cast<int>(std::ceil(len / step)));
-    for (int t = 0; t <= m; ++t) {
-      dense.push_back(edges[e][0] + (edges[e][1] - edges[e][0]) * (static_cast<double>(t) / m));
-      owner.push_back(e);
-    }
-  }
+  const std::vector<Eigen::Vector3d> dense = sampleSegments(edges, step, &owner);
   KnnIndex index(dense);
   std::vector<double> dist(points.size());
   parallelFor(points.size(), threads, [&](std::size_t i) {

@@ -807,11 +807,13 @@ ResampleResult resample(const PointCloud& input, const ResampleParams& params) {
     fp.threads = params.threads;
     const FeatureResult features = detectFeatures(cloud, fp);
     const double l0 = std::sqrt(2.0 * surface.area() / (std::sqrt(3.0) * static_cast<double>(params.targetCount)));
-    std::vector<Eigen::Vector3d> onEdges = sampleFeatureChains(features.chains, params.edgeRatio * l0);
+    std::vector<std::uint32_t> chainOf;
+    std::vector<Eigen::Vector3d> onEdges = sampleFeatureChains(features.chains, params.edgeRatio * l0, &chainOf);
     if (onEdges.size() + params.fixedSamples.size() > params.targetCount / 2)  // never let edges take over N
       onEdges = sampleFeatureChains(features.chains, params.edgeRatio * l0 * 2.0 *
                                                          static_cast<double>(onEdges.size()) /
-                                                         static_cast<double>(params.targetCount));
+                                                         static_cast<double>(params.targetCount), &chainOf);
+    onEdges = snapToCreases(cloud, onEdges, chainOf, features.spacing, fp);  // exactly on the creases
     result.featurePoints = features.featureIndices.size();
     result.featureSamples = std::min(onEdges.size(), params.targetCount - params.fixedSamples.size());
     local.fixedSamples.insert(local.fixedSamples.end(), onEdges.begin(),

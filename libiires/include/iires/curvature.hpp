@@ -9,7 +9,8 @@
 ///  - η_s(p): η_c smoothed over the k-NN graph (eq. 8, see CurvatureParams::beta);
 ///  - a level q ∈ [0, t) from flat (0) to curved (t − 1), by equal-count quantiles of η_s (eq. 10's groups);
 ///  - a size factor s(p) = c·r_q, the target edge length at p in units of the isotropic length l
-///    (l_q = r_q·l, eq. 10), with c a normalisation constant (CurvatureParams::normalize).
+///    (l_q = r_q·l, eq. 10), with c a normalisation constant (CurvatureParams::normalize), smoothed across
+///    level borders (CurvatureParams::sizeSmoothIterations).
 
 #include <Eigen/Core>
 #include <cstddef>
@@ -22,6 +23,10 @@ struct CurvatureParams {
   int k = 10;             ///< neighbours for eq. 9 and for the eq. 8 smoothing (≥ 3)
   double beta = 0.5;      ///< eq. 8 smoothing weight: η ← (1 − β)·η + β·mean_{k-NN}(η) [paper 0.5], in [0, 1]
   int smoothIterations = 3;  ///< applications of eq. 8 (0 = no smoothing)
+  /// Applications of eq. 8 (same k and β) to log s after quantisation, so the size factor changes gradually
+  /// across level borders (≈ one output spacing wide when the input is ~10× denser than the output) instead
+  /// of jumping by r_q/r_{q+1}; levels stay discrete. 0 = s is exactly c·r_level.
+  int sizeSmoothIterations = 10;
   /// Length ratios r_q per level, flat → curved [paper t = 5: 2.0, 1.5, 1.0, 0.8, 0.6]; t = ratios.size().
   /// Must be positive and non-increasing.
   std::vector<double> ratios{2.0, 1.5, 1.0, 0.8, 0.6};
@@ -45,7 +50,7 @@ struct CurvatureResult {
   std::vector<double> eta;          ///< η_c(p), eq. 9, radians
   std::vector<double> smoothedEta;  ///< η_s(p) after eq. 8
   std::vector<int> level;           ///< 0 = flattest … t − 1 = most curved
-  std::vector<double> sizeFactor;   ///< s(p) = c·r_level, in units of the isotropic length l
+  std::vector<double> sizeFactor;   ///< s(p) = c·r_level (smoothed across level borders), units of l
   std::vector<double> thresholds;   ///< t − 1 η_s bounds between levels (empty when uniform)
   std::vector<std::size_t> pointsPerLevel;  ///< size t
   std::vector<double> meanEtaPerLevel;      ///< size t (0 for empty levels)

@@ -24,7 +24,9 @@
 /// Chains: the detected points with a valid crease are projected onto it, linked into a minimum spanning
 /// forest (edges ≤ `chainRadius` spacings, crease directions compatible), and each tree is peeled into
 /// longest paths; paths shorter than `minChainLength` spacings (spurs, isolated detections) are dropped.
-/// sampleFeatureChains() places samples along the chains at a fixed arc-length spacing, on the crease.
+/// sampleFeatureChains() places samples along the chains at a fixed arc-length spacing, on the crease;
+/// snapToCreases() then moves each onto its two sheets' local plane intersection (or drops it where it would sit
+/// off the surface) and adds corner samples — the samples the resampler holds with `--sharp-edges`.
 
 #include <Eigen/Core>
 #include <array>
@@ -60,6 +62,8 @@ struct FeatureParams {
   double maxChainTurn = 35.0;   ///< degrees: linked points' crease directions (and the link) agree this well
   double minChainLength = 6.0;  ///< spacings: shorter chains and spurs are dropped
   double sampleSpacing = 0.0;   ///< absolute units: spacing of the chain samples; 0 = do not sample
+  double snapSigma = 1.5;       ///< spacings: Gaussian width of the local plane fits of snapToCreases()
+  double maxOffCrease = 1.0;    ///< spacings: snapToCreases() adds a corner only this close to an input point
   int threads = 0;              ///< 0 = all cores; results do not depend on it
 
   /// @throws std::invalid_argument with a readable message when a field is out of range.
@@ -84,12 +88,13 @@ struct FeatureResult {
   /// were dropped and chains were extended into their corners), increasing. Use these to mark input points.
   std::vector<std::uint32_t> featureIndices;
   std::vector<FeatureChain> chains;          ///< longest first
-  std::vector<Eigen::Vector3d> samples;      ///< chain samples (when params.sampleSpacing > 0)
+  std::vector<Eigen::Vector3d> samples;      ///< chain samples put on the creases by snapToCreases() (when params.sampleSpacing > 0)
   std::vector<std::uint32_t> sampleChain;    ///< chain index of each sample
   double detectSeconds = 0, chainSeconds = 0, sampleSeconds = 0;  ///< wall times per stage
 };
 
-/// @brief Detect sharp-feature points, build the feature chains and (if params.sampleSpacing > 0) sample them.
+/// @brief Detect sharp-feature points, build the feature chains and (if params.sampleSpacing > 0) sample them
+/// (sampleFeatureChains() then snapToCreases()).
 /// @param cloud points with oriented unit normals (estimateNormals() when it has none)
 /// @throws InputError when the cloud has fewer than 8 points; std::invalid_argument for bad parameters.
 /// @note NormalVariation: O(n m log n), m the neighbours in the radius. Vcm: a 3-D Delaunay triangulation
@@ -104,6 +109,32 @@ FeatureResult detectFeatures(const PointCloud& cloud, const FeatureParams& param
 /// @note O(total chain vertices + samples). Deterministic.
 std::vector<Eigen::Vector3d> sampleFeatureChains(const std::vector<FeatureChain>& chains, double spacing,
                                                  std::vector<std::uint32_t>* chainOfSample = nullptr);
+
+/// @brief Put chain samples exactly on the creases of @p cloud (sheet-plane intersections), for the
+/// resampler to hold.
+///  1. At each sample x, the neighbours within params.radius spacings are split into two sheets as in the
+///     normal-variation test, a plane is fitted to each with weights exp(−d²/σ²) (d the distance to x, σ =
+///     params.snapSigma spacings: local planes, so curved sheets bias the line less than the detector's
+///     unweighted fit), and x moves to the nearest point of the two planes' intersection; once more from there.
+///     Where no crease lies within maxLineDistance, x may jump to one up to 0.8·radius away that runs along
+///     its chain (within maxChainTurn); failing that, a looser fit (any angle, 2× residual, half the cluster
+///     share) may correct it by at most h/4.
+///  2. A sample where that fit fails the detector's thresholds goes onto the chord between the nearest fitted
+///     samples of its chain (at most 3 away on each side); without both it is dropped (a chain end extended
+///     past the feature would sit off the surface).
+///  3. Where two chains' end lines, continued, meet within 3·radius spacings of both ends and within
+///     params.maxOffCrease spacings of an input point, a corner sample is added there, and the gap from each
+///     of those chain ends to the corner gets samples at the chain's spacing on the straight line.
+/// @param chainOfSample the chain index of each sample (sampleFeatureChains' output: a chain's samples are
+///     consecutive and in order)
+/// @param spacing the input spacing h (FeatureResult::spacing)
+/// @param[out] chainOut (optional) the chain index of each returned sample (a corner: one of its two chains)
+/// @return the kept samples in order, then the corners and their gap samples
+/// @note O(samples · m log n + ends²), m the neighbours in the radius. Deterministic for any thread count.
+std::vector<Eigen::Vector3d> snapToCreases(const PointCloud& cloud, const std::vector<Eigen::Vector3d>& samples,
+                                           const std::vector<std::uint32_t>& chainOfSample, double spacing,
+                                           const FeatureParams& params,
+                                           std::vector<std::uint32_t>* chainOut = nullptr);
 
 /// @brief A reference sharp edge (a mesh edge).
 using Segment = std::array<Eigen::Vector3d, 2>;
@@ -128,6 +159,13 @@ struct FeatureScore {
 FeatureScore scoreFeatures(const std::vector<Eigen::Vector3d>& points,
                            const std::vector<std::uint32_t>& featureIndices, const std::vector<Segment>& edges,
                            double tolerance, double band, int threads = 0);
+
+/// @brief Points along @p edges at most @p step apart, both ends of every edge included (e.g. to measure how
+/// well a cloud covers the reference sharp edges with coverage() from metrics.hpp).
+/// @param[out] owner (optional) the edge index of each point
+/// @throws std::invalid_argument when step ≤ 0. @note O(total length / step).
+std::vector<Eigen::Vector3d> sampleSegments(const std::vector<Segment>& edges, double step,
+                                            std::vector<std::uint32_t>* owner = nullptr);
 
 /// @brief Exact distance from @p p to the nearest of @p edges (brute force; for tests and reports).
 double distanceToSegments(const Eigen::Vector3d& p, const std::vector<Segment>& edges);
