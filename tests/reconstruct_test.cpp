@@ -246,6 +246,24 @@ TEST_F(ReconstructCli, WritesMeshAndReport) {
   EXPECT_NE(out.find("Hausdorff"), std::string::npos) << out;
 }
 
+// Progress on stderr (issue 9): forced with --progress it names the resampling AND the meshing stages; -q silences
+// it (and the report) even with --progress; stderr is a pipe here, so without --progress nothing is shown.
+TEST_F(ReconstructCli, ProgressNamesStagesAndQuietSilencesIt) {
+  const std::string t = test::tool("iires-reconstruct");
+  std::string out;
+  ASSERT_EQ(test::run("(" + t + " " + cloud_ + " " + dir_ + "/a.off -n 500 --progress 2>&1 >/dev/null)", &out), 0)
+      << out;
+  for (const char* stage : {"iires-reconstruct: read", "normals", "resample", "triangulate", "holes", "orient",
+                            "quality", "write", "100%"})
+    EXPECT_NE(out.find(stage), std::string::npos) << "no \"" << stage << "\" in:\n" << out;
+  ASSERT_EQ(test::run("(" + t + " " + cloud_ + " " + dir_ + "/b.off -n 500 2>&1 >/dev/null)", &out), 0) << out;
+  EXPECT_EQ(out, "");
+  ASSERT_EQ(test::run(t + " " + cloud_ + " " + dir_ + "/c.off -n 500 --progress -q", &out), 0) << out;
+  EXPECT_EQ(out, "");
+  // Progress does not change the mesh.
+  EXPECT_EQ(test::readText(dir_ + "/a.off"), test::readText(dir_ + "/c.off"));
+}
+
 TEST_F(ReconstructCli, ExitCodes) {
   const std::string t = test::tool("iires-reconstruct");
   EXPECT_EQ(test::run(t + " " + dir_ + "/missing.ply " + dir_ + "/m.ply"), 2);
