@@ -6,6 +6,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "iires/intrinsic.hpp"
 #include "iires/normals.hpp"
 #include "iires/validate.hpp"
 
@@ -139,7 +140,14 @@ ReconstructResult reconstruct(const PointCloud& input, const ReconstructParams& 
   if (params.method == ReconstructMethod::kLocal) {
     TriangulateParams tp = params.local;
     tp.threads = params.threads;
-    if (params.neighbourRule) tp.neighbourRule = params.neighbourRule;
+    if (params.neighbourRule) {
+      tp.neighbourRule = params.neighbourRule;
+    } else if (result.resampling.geodesic) {
+      // The resampler's intrinsic rule (DESIGN §5.2): 1-rings never link across a thin gap or between objects.
+      IntrinsicParams ip = params.resampling.intrinsicRule;
+      ip.threads = params.threads;
+      tp.neighbourRule = std::make_shared<IntrinsicRule>(result.resampling.geodesic, ip);
+    }
     result.triangulation = triangulateLocal(result.samples, tp);
     result.mesh = std::move(result.triangulation.mesh);
     result.triangulation.mesh = TriangleMesh{};

@@ -44,7 +44,8 @@ struct ReconstructParams {
   HoleFillingParams holes;          ///< which loops count as small
   bool evaluate = true;             ///< compute the quality report (distance to the validated input cloud)
   MeshQualityParams quality;        ///< report settings (threads and seed are set from here)
-  /// Neighbour rule for resampling and the 1-rings (nullptr = Euclidean), e.g. an intrinsic (geodesic) rule.
+  /// Neighbour rule for resampling and the 1-rings. nullptr = the resampler's default (intrinsic unless
+  /// resampling.intrinsic is false), whose rule the 1-rings then use too; Euclidean 1-rings without resampling.
   std::shared_ptr<NeighbourRule> neighbourRule;
   std::uint64_t seed = 0;  ///< seed of the resampling and the report's mesh sampling; same seed → same mesh
   int threads = 0;         ///< 0 = all cores; the mesh does not depend on it
