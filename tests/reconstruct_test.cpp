@@ -222,6 +222,31 @@ TEST(ReconstructRealData, Fandisk10k) {
   EXPECT_LE(d.relativeHausdorff(), 0.01);
 }
 
+// A sparse, uneven scan (issue 7): the 1,197 vertices of CGAL's hand mesh upsampled to 10k and meshed end to end.
+// What holds today: exactly N samples, one manifold, consistently oriented component, near-equilateral triangles.
+// NOT yet met (see BENCHMARKS.md): closed and Hausdorff ≤ 1 % — the wrist cap is 11 large faces with no vertex
+// inside, so the cloud has a 0.4-wide hole there that stays open (163 boundary edges), the MLS surface bulges
+// 0.05 past the cap's rim, and Q_avg is 0.895 (< 0.90), Q_min 0.22.
+TEST(ReconstructRealData, SparseHandVerticesTo10k) {
+  const TriangleMesh truth = readMesh(test::dataPath("meshes/hand.off"));
+  PointCloud input;
+  input.points = truth.vertices;
+  ReconstructParams p;
+  p.targetCount = 10000;
+  const ReconstructResult r = reconstruct(input, p);
+  const MeshQuality& q = r.quality;
+  EXPECT_EQ(r.samples.size(), 10000u);
+  EXPECT_GE(q.vertices, 9990u);
+  EXPECT_EQ(q.components, 1u);
+  EXPECT_EQ(q.nonManifoldEdges, 0u);
+  EXPECT_EQ(q.nonManifoldVertices, 0u);
+  EXPECT_TRUE(q.oriented);
+  EXPECT_GE(q.qualityMean, 0.88);
+  EXPECT_LT(q.shareBelow30, 0.01);
+  // Every input vertex is near the mesh (the worst, 2.7 % of the diagonal, is on the wrist cap's rim).
+  EXPECT_LT(q.distance.backwardMax / q.distance.diagonal, 0.04);
+}
+
 // An open scan (issue 7): bunny00's samples above a plane removed. The mesh keeps the cut as one boundary loop
 // that runs all the way round the cut, and no face reaches across it (above the plane).
 TEST(ReconstructRealData, CroppedBunnyKeepsTheCut) {
