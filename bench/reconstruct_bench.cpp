@@ -1,8 +1,8 @@
 // reconstruct_bench: issue 7's side-by-side table (the paper's Tables 5–6 protocol). For each model: a dense
 // area-uniform sampling of the true mesh → isotropic resampling to N (iires) → the same N points meshed by
-//   iires local (the whole pipeline from the dense input: resampling with the intrinsic neighbour rule, which the
-//   1-rings then use too; deterministic, so its points are the ones the others get), iires + CGAL advancing
-//   front, Open3D ball pivoting, Open3D Poisson;
+//   iires local (the whole pipeline from the dense input, as iires-reconstruct runs it; its resampling is
+//   deterministic, so its points are the ones the others get), iires + CGAL advancing front, Open3D ball
+//   pivoting, Open3D Poisson;
 // each method runs in a child process (Debian's Open3D Poisson aborts on some models) and prints one
 // key=value line: quality (Q, angles), topology, Hausdorff to the TRUE mesh (% of its diagonal), time.
 //

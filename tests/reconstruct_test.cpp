@@ -126,7 +126,7 @@ TEST(Reconstruct, SphereCloudClosedGenus0) {
   ReconstructParams p;
   p.targetCount = 2000;
   const ReconstructResult r = reconstruct(test::sphereCloud(20000), p);
-  ASSERT_NE(r.resampling.geodesic, nullptr);  // default: the intrinsic rule, for the resampling and the 1-rings
+  ASSERT_NE(r.resampling.geodesic, nullptr);  // default: the resampler's intrinsic rule
   expectClosedGenus(r.quality, 2);
   EXPECT_GT(signedVolume(r.mesh), 0);
   EXPECT_GE(r.quality.qualityMean, 0.88);

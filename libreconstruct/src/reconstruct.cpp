@@ -6,7 +6,6 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "iires/intrinsic.hpp"
 #include "iires/normals.hpp"
 #include "iires/validate.hpp"
 
@@ -140,14 +139,9 @@ ReconstructResult reconstruct(const PointCloud& input, const ReconstructParams& 
   if (params.method == ReconstructMethod::kLocal) {
     TriangulateParams tp = params.local;
     tp.threads = params.threads;
-    if (params.neighbourRule) {
-      tp.neighbourRule = params.neighbourRule;
-    } else if (result.resampling.geodesic) {
-      // The resampler's intrinsic rule (DESIGN §5.2): 1-rings never link across a thin gap or between objects.
-      IntrinsicParams ip = params.resampling.intrinsicRule;
-      ip.threads = params.threads;
-      tp.neighbourRule = std::make_shared<IntrinsicRule>(result.resampling.geodesic, ip);
-    }
+    // Euclidean 1-rings unless a rule is given. The resampler's intrinsic rule is not reused here: its geodesic
+    // coordinates split a unit sphere 1e7 from the origin into 7 components (precision), which drops triangles.
+    if (params.neighbourRule) tp.neighbourRule = params.neighbourRule;
     result.triangulation = triangulateLocal(result.samples, tp);
     result.mesh = std::move(result.triangulation.mesh);
     result.triangulation.mesh = TriangleMesh{};

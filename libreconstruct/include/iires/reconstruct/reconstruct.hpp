@@ -45,7 +45,7 @@ struct ReconstructParams {
   bool evaluate = true;             ///< compute the quality report (distance to the validated input cloud)
   MeshQualityParams quality;        ///< report settings (threads and seed are set from here)
   /// Neighbour rule for resampling and the 1-rings. nullptr = the resampler's default (intrinsic unless
-  /// resampling.intrinsic is false), whose rule the 1-rings then use too; Euclidean 1-rings without resampling.
+  /// resampling.intrinsic is false) and Euclidean 1-rings.
   std::shared_ptr<NeighbourRule> neighbourRule;
   std::uint64_t seed = 0;  ///< seed of the resampling and the report's mesh sampling; same seed → same mesh
   int threads = 0;         ///< 0 = all cores; the mesh does not depend on it
