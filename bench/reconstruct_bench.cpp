@@ -1,13 +1,14 @@
 // reconstruct_bench: issue 7's side-by-side table (the paper's Tables 5–6 protocol). For each model: a dense
 // area-uniform sampling of the true mesh → isotropic resampling to N (iires) → the same N points meshed by
-//   iires local (tangent-plane Delaunay 1-rings), iires + CGAL advancing front, Open3D ball pivoting, Open3D
-//   Poisson;
+//   iires local (the whole pipeline from the dense input, as iires-reconstruct runs it; its resampling is
+//   deterministic, so its points are the ones the others get), iires + CGAL advancing front, Open3D ball
+//   pivoting, Open3D Poisson;
 // each method runs in a child process (Debian's Open3D Poisson aborts on some models) and prints one
 // key=value line: quality (Q, angles), topology, Hausdorff to the TRUE mesh (% of its diagonal), time.
 //
 // Usage: reconstruct_bench [--data DIR] [--models a,b,c] [--counts 10000,20000] [--dense 100000]
 //                          [--methods local,advancing-front,bpa,poisson] [--threads T]
-// (internally: --child METHOD --cloud FILE --truth MESH --spacing L runs one method and prints its line)
+// (internally: --child METHOD --cloud FILE --truth MESH --spacing L --n N runs one method and prints its line)
 // Extra model "hand-vertices": the 1,197 vertices of CGAL's hand mesh (a sparse, uneven scan) upsampled to N.
 #include <sys/wait.h>
 #include <unistd.h>
@@ -62,17 +63,40 @@ std::string describe(const iires::TriangleMesh& mesh, const iires::TriangleMesh&
   return os.str();
 }
 
+/// The input of a model: a dense area-uniform sampling of the true mesh without normals (a scan), or for the
+/// sparse model the mesh's own vertices.
+iires::PointCloud modelInput(const iires::TriangleMesh& truth, bool sparse, std::size_t dense) {
+  iires::PointCloud input;
+  if (sparse) {
+    input.points = truth.vertices;
+  } else {
+    iires::MeshSamplingParams sp;
+    sp.count = dense;
+    sp.seed = 3;
+    input = iires::sampleMesh(truth, sp);
+    input.normals.clear();  // a scan has no normals: the pipeline estimates them
+  }
+  return input;
+}
+
 std::string runMethod(const std::string& method, const iires::PointCloud& samples, const iires::TriangleMesh& truth,
-                      double spacing, int threads) {
+                      double spacing, std::size_t n, bool sparse, std::size_t dense, int threads) {
   const auto t = Clock::now();
   iires::TriangleMesh mesh;
   if (method == "local" || method == "advancing-front") {
     iires::ReconstructParams p;
-    p.resample = false;
     p.evaluate = false;
     p.threads = threads;
     p.method = iires::parseReconstructMethod(method);
-    const iires::ReconstructResult r = iires::reconstruct(samples, p);
+    iires::ReconstructResult r;
+    if (method == "local") {  // the whole pipeline, as iires-reconstruct runs it
+      p.targetCount = n;
+      r = iires::reconstruct(modelInput(truth, sparse, dense), p);
+      if (r.samples.points != samples.points) return "status=error message=\"resampling differs from the parent's\"";
+    } else {
+      p.resample = false;
+      r = iires::reconstruct(samples, p);
+    }
     mesh = r.mesh;
     return describe(mesh, truth, r.meshingSeconds(), threads) +
            " holes_filled=" + std::to_string(r.holes.filled) + " holes_kept=" + std::to_string(r.holes.kept);
@@ -99,10 +123,12 @@ std::string runMethod(const std::string& method, const iires::PointCloud& sample
 /// the parent has used OpenMP, and Debian's Open3D Poisson aborts on some models. Returns the child's line, or a
 /// status when it crashed.
 std::string isolated(const std::string& self, const std::string& method, const std::string& cloudFile,
-                     const std::string& truthFile, double spacing, int threads) {
+                     const std::string& truthFile, double spacing, const std::string& n, bool sparse,
+                     std::size_t dense, int threads) {
   std::ostringstream cmd;
   cmd << "'" << self << "' --child " << method << " --cloud '" << cloudFile << "' --truth '" << truthFile
-      << "' --spacing " << std::setprecision(17) << spacing << " --threads " << threads << " 2>/dev/null";
+      << "' --spacing " << std::setprecision(17) << spacing << " --n " << n << " --sparse " << sparse
+      << " --dense " << dense << " --threads " << threads << " 2>/dev/null";
   std::FILE* pipe = popen(cmd.str().c_str(), "r");
   if (!pipe) return "status=popen_failed";
   std::string out;
@@ -126,12 +152,16 @@ int main(int argc, char** argv) {
   int threads = 0;
   std::string child, cloudFile, truthFile;
   double spacingArg = 0;
+  std::size_t nArg = 0;
+  bool sparseArg = false;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string k = argv[i], v = argv[i + 1];
     if (k == "--child") child = v;
     else if (k == "--cloud") cloudFile = v;
     else if (k == "--truth") truthFile = v;
     else if (k == "--spacing") spacingArg = std::stod(v);
+    else if (k == "--n") nArg = std::stoul(v);
+    else if (k == "--sparse") sparseArg = v == "1";
     else if (k == "--data") data = v;
     else if (k == "--models") models = v;
     else if (k == "--counts") counts = v;
@@ -147,7 +177,7 @@ int main(int argc, char** argv) {
   if (!child.empty()) {
     try {
       std::cout << "status=ok " << runMethod(child, iires::readPointCloud(cloudFile), iires::readMesh(truthFile),
-                                              spacingArg, threads)
+                                              spacingArg, nArg, sparseArg, dense, threads)
                 << std::endl;
     } catch (const std::exception& e) {
       std::cout << "status=error message=\"" << e.what() << "\"" << std::endl;
@@ -161,16 +191,7 @@ int main(int argc, char** argv) {
     const bool sparse = model == "hand-vertices";
     const std::string file = data + "/meshes/" + (sparse ? std::string("hand") : model) + ".off";
     const iires::TriangleMesh truth = iires::readMesh(file);
-    iires::PointCloud input;
-    if (sparse) {
-      input.points = truth.vertices;
-    } else {
-      iires::MeshSamplingParams sp;
-      sp.count = dense;
-      sp.seed = 3;
-      input = iires::sampleMesh(truth, sp);
-      input.normals.clear();  // a scan has no normals: the pipeline estimates them
-    }
+    const iires::PointCloud input = modelInput(truth, sparse, dense);
     for (const std::string& c : split(counts)) {
       iires::ResampleParams rp;
       rp.targetCount = std::stoul(c);
@@ -185,7 +206,7 @@ int main(int argc, char** argv) {
       iires::writePointCloud(cloudFile, rs.cloud);
       for (const std::string& m : split(methods))
         std::cout << "model=" << model << " n=" << c << " method=" << m << " "
-                  << isolated(argv[0], m, cloudFile, file, spacing, threads) << std::endl;
+                  << isolated(argv[0], m, cloudFile, file, spacing, c, sparse, dense, threads) << std::endl;
       std::remove(cloudFile.c_str());
     }
   }

@@ -49,16 +49,19 @@ int main(int argc, char** argv) {
     if (!reportPath.empty() && reportPath == output)
       throw iires::InputError("OUTPUT_MESH and --report must be different files");
     iires::tools::Progress progress("iires-reconstruct", showProgress, quiet);
-    params.resampling.progress = progress.callback();
+    params.progress = progress.callback();  // resampling and meshing stages
 
     if (!qualityOnly.empty()) {
       if (!output.empty()) throw iires::InputError("--quality-only takes no OUTPUT_MESH (got " + output + ")");
+      progress.update("read", 0.0);
       const iires::TriangleMesh mesh = iires::readMesh(qualityOnly);
       const iires::PointCloud reference = iires::readPointCloud(input);
+      progress.update("quality", 0.0);
       iires::MeshQualityParams qp;
       qp.threads = params.threads;
       qp.seed = params.seed + 1;
       const iires::MeshQuality q = iires::evaluateMesh(mesh, &reference, qp);
+      progress.finish();
       if (!reportPath.empty()) iires::writeTextFile(reportPath, q.toJson());
       if (!quiet) std::cout << "quality of " << qualityOnly << " (reference " << input << ")\n" << q.toTable();
       return iires::tools::kOk;

@@ -43,10 +43,12 @@ std::unordered_map<std::uint64_t, std::vector<std::uint32_t>> edgeFaces(const Tr
 }
 
 /// Optimal triangulation of one hole polygon (vertices in the order new faces must follow).
-/// Returns false when every triangulation contains a forbidden triangle.
+/// Returns false when every triangulation contains a forbidden triangle. With @p acrossNormals (the unit normal of
+/// the face at each boundary half-edge, keyed by that half-edge), faces folding back onto those are forbidden.
 bool triangulatePolygon(const TriangleMesh& mesh, const std::vector<Eigen::Vector3d>& normals,
                         const std::vector<std::uint32_t>& loop, const std::unordered_set<std::uint64_t>& edges,
-                        bool useNormals, std::vector<Eigen::Vector3i>& out, double* minQuality = nullptr) {
+                        bool useNormals, std::vector<Eigen::Vector3i>& out, double* minQuality = nullptr,
+                        const std::unordered_map<std::uint64_t, Eigen::Vector3d>* acrossNormals = nullptr) {
   const int m = static_cast<int>(loop.size());
   constexpr double kForbidden = -1.0;
   auto weight = [&](int i, int j, int k) {
@@ -58,9 +60,16 @@ bool triangulatePolygon(const TriangleMesh& mesh, const std::vector<Eigen::Vecto
     if (!(i == 0 && k == m - 1) && edges.count(undirectedKey(a, c))) return kForbidden;
     const double q = triangleQuality(mesh.vertices[a], mesh.vertices[b], mesh.vertices[c]);
     if (q <= 1e-6) return kForbidden;
-    if (useNormals && normals.size() == mesh.vertices.size()) {
-      const Eigen::Vector3d fn = faceNormal(mesh, a, b, c);
-      if (fn.dot(normals[a] + normals[b] + normals[c]) <= 0) return kForbidden;
+    const Eigen::Vector3d fn = faceNormal(mesh, a, b, c);
+    if (useNormals && normals.size() == mesh.vertices.size() && fn.dot(normals[a] + normals[b] + normals[c]) <= 0)
+      return kForbidden;
+    if (acrossNormals) {
+      // A face on a loop edge must not fold back onto the face across it (an angle under ~37° between them).
+      const std::uint32_t corner[3] = {a, b, c};
+      for (int e = 0; e < 3; ++e) {
+        const auto it = acrossNormals->find(directedKey(corner[(e + 1) % 3], corner[e]));
+        if (it != acrossNormals->end() && fn.normalized().dot(it->second) < -0.8) return kForbidden;
+      }
     }
     return q;
   };
@@ -126,10 +135,13 @@ HoleFillingReport fillSmallHoles(TriangleMesh& mesh, std::vector<Eigen::Vector3d
   for (const auto& [key, c] : count) edges.insert(key);
   std::map<std::uint32_t, std::vector<std::uint32_t>> next;  // reversed boundary edges, deterministic order
   std::size_t boundaryEdges = 0;
+  std::unordered_map<std::uint64_t, Eigen::Vector3d> boundaryNormal;  // face normal at each boundary half-edge a→b
   for (const auto& t : mesh.triangles)
     for (int c = 0; c < 3; ++c) {
       const std::uint32_t a = vtx(t, c), b = vtx(t, (c + 1) % 3);
-      if (count[undirectedKey(a, b)] == 1) next[b].push_back(a), ++boundaryEdges;
+      if (count[undirectedKey(a, b)] != 1) continue;
+      next[b].push_back(a), ++boundaryEdges;
+      boundaryNormal[directedKey(a, b)] = faceNormal(mesh, vtx(t, 0), vtx(t, 1), vtx(t, 2)).normalized();
     }
   for (auto& [v, list] : next) std::sort(list.begin(), list.end());
   const bool haveNormals = normals.size() == mesh.vertices.size();
@@ -213,6 +225,16 @@ HoleFillingReport fillSmallHoles(TriangleMesh& mesh, std::vector<Eigen::Vector3d
     std::vector<Eigen::Vector3i> faces;
     double dpQuality = 0;
     const bool dp = triangulatePolygon(mesh, normals, loop, edges, true, faces, &dpQuality);
+    if (dp && dpQuality < params.minQuality) {
+      // Normals can be unreliable where the loop closes over a part thinner than the spacing (both sides' normals
+      // in one loop): the best triangulation without it is taken if better, as long as no face folds back onto
+      // the face across a loop edge.
+      std::vector<Eigen::Vector3i> free;
+      double freeQuality = 0;
+      if (triangulatePolygon(mesh, normals, loop, edges, false, free, &freeQuality, &boundaryNormal) &&
+          freeQuality > dpQuality)
+        faces.swap(free), dpQuality = freeQuality;
+    }
     // The fan around the centroid, for comparison.
     Eigen::Vector3d centre = Eigen::Vector3d::Zero(), normal = Eigen::Vector3d::Zero();
     for (std::uint32_t v : loop) centre += mesh.vertices[v];

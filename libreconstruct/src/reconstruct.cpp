@@ -95,9 +95,17 @@ ReconstructResult reconstruct(const PointCloud& input, const ReconstructParams& 
   ReconstructResult result;
   result.method = toString(params.method);
   result.inputPoints = input.size();
-  auto stage = [&](const char* name, Clock::time_point t) { result.timings.push_back({name, secondsSince(t)}); };
+  // Each stage is reported when it starts (0) and when it ends (1); the resampler reports its own stages.
+  auto stage = [&](const char* name, Clock::time_point t) {
+    result.timings.push_back({name, secondsSince(t)});
+    if (params.progress && std::string(name) != "total") params.progress(name, 1.0);
+  };
+  auto begin = [&](const char* name) {
+    if (params.progress) params.progress(name, 0.0);
+    return Clock::now();
+  };
 
-  auto t = Clock::now();
+  auto t = begin("validate");
   PointCloud cloud = input;
   validateCloud(cloud, 4, "input");
   stage("validate", t);
@@ -109,13 +117,14 @@ ReconstructResult reconstruct(const PointCloud& input, const ReconstructParams& 
     rp.seed = params.seed;
     rp.threads = params.threads;
     if (params.neighbourRule) rp.neighbourRule = params.neighbourRule;
+    if (!rp.progress) rp.progress = params.progress;
     result.resampling = resample(cloud, rp);
     result.samples = std::move(result.resampling.cloud);
     result.resampling.cloud = PointCloud{};
     result.resampled = true;
     stage("resample", t);
   } else {
-    t = Clock::now();
+    t = begin("normals");
     result.samples = cloud;
     if (!result.samples.hasNormals()) {
       NormalParams np = params.resampling.normals;
@@ -126,10 +135,12 @@ ReconstructResult reconstruct(const PointCloud& input, const ReconstructParams& 
     stage("normals", t);
   }
 
-  t = Clock::now();
+  t = begin("triangulate");
   if (params.method == ReconstructMethod::kLocal) {
     TriangulateParams tp = params.local;
     tp.threads = params.threads;
+    // Euclidean 1-rings unless a rule is given. The resampler's intrinsic rule is not reused here: its geodesic
+    // coordinates split a unit sphere 1e7 from the origin into 7 components (precision), which drops triangles.
     if (params.neighbourRule) tp.neighbourRule = params.neighbourRule;
     result.triangulation = triangulateLocal(result.samples, tp);
     result.mesh = std::move(result.triangulation.mesh);
@@ -139,7 +150,7 @@ ReconstructResult reconstruct(const PointCloud& input, const ReconstructParams& 
   }
   stage("triangulate", t);
 
-  t = Clock::now();
+  t = begin("holes");
   std::vector<Eigen::Vector3d> normals = result.samples.normals;  // grows with any vertex hole filling adds
   if (params.minComponentFaces > 1) result.smallComponentFaces = removeSmallComponents(result.mesh, params.minComponentFaces);
   if (params.fillHoles) {
@@ -160,7 +171,7 @@ ReconstructResult reconstruct(const PointCloud& input, const ReconstructParams& 
   }
   stage("holes", t);
 
-  t = Clock::now();
+  t = begin("orient");
   result.orientation = orientConsistently(result.mesh, normals);
   const std::size_t before = result.mesh.vertices.size();
   removeUnusedVertices(result.mesh);
@@ -168,7 +179,7 @@ ReconstructResult reconstruct(const PointCloud& input, const ReconstructParams& 
   stage("orient", t);
 
   if (params.evaluate) {
-    t = Clock::now();
+    t = begin("quality");
     MeshQualityParams qp = params.quality;
     qp.threads = params.threads;
     qp.seed = params.seed + 1;

@@ -38,6 +38,9 @@ struct HoleFillingReport {
 /// vertex normals (when @p normals holds one per vertex), are avoided: if no triangulation qualifies, the normal
 /// test is dropped (corners where creases meet); if every triangulation repeats an edge, or its worst Q is below
 /// params.minQuality and a fan does better, the loop becomes a fan around a new vertex at its centroid (appended to the mesh, and to @p normals when it holds one per vertex).
+/// When the best triangulation under the normal test is still below params.minQuality, the best one without it is
+/// taken if better and none of its faces folds back onto the face across a loop edge (normals are unreliable where
+/// a loop closes over a part thinner than the spacing, e.g. a fingertip).
 /// New faces follow the loop's orientation.
 /// @note O(loops · m³) with m ≤ maxEdges. Deterministic.
 HoleFillingReport fillSmallHoles(TriangleMesh& mesh, std::vector<Eigen::Vector3d>& normals,

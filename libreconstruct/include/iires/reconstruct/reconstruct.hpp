@@ -5,6 +5,7 @@
 /// report.
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -43,10 +44,16 @@ struct ReconstructParams {
   HoleFillingParams holes;          ///< which loops count as small
   bool evaluate = true;             ///< compute the quality report (distance to the validated input cloud)
   MeshQualityParams quality;        ///< report settings (threads and seed are set from here)
-  /// Neighbour rule for resampling and the 1-rings (nullptr = Euclidean), e.g. an intrinsic (geodesic) rule.
+  /// Neighbour rule for resampling and the 1-rings. nullptr = the resampler's default (intrinsic unless
+  /// resampling.intrinsic is false) and Euclidean 1-rings.
   std::shared_ptr<NeighbourRule> neighbourRule;
   std::uint64_t seed = 0;  ///< seed of the resampling and the report's mesh sampling; same seed → same mesh
   int threads = 0;         ///< 0 = all cores; the mesh does not depend on it
+  /// Optional progress report: called with a stage name and the fraction of that stage done, in [0, 1], from
+  /// the calling thread only — the resampler's stages (see ResampleParams::progress, used when
+  /// resampling.progress is empty), then "normals" (no resampling), "triangulate", "holes", "orient",
+  /// "quality". Empty = no reports. Does not affect the output.
+  std::function<void(const std::string& stage, double fraction)> progress;
 
   /// @throws std::invalid_argument with a readable message when a field is out of range.
   void validate() const;
