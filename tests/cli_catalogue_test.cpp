@@ -132,9 +132,13 @@ class Catalogue : public ::testing::TestWithParam<ToolSpec> {
       EXPECT_NE(message.find(p), std::string::npos) << "expected \"" << p << "\" in:\n" << message;
     EXPECT_EQ(message.find("terminate called"), std::string::npos) << message;
     EXPECT_NE(message.find(std::string(spec_.name) + ": error: "), std::string::npos) << message;
-    if (!outputExisted) EXPECT_FALSE(fs::exists(out)) << "output written: " << out;
+    if (!outputExisted) {
+      EXPECT_FALSE(fs::exists(out)) << "output written: " << out;
+    }
     EXPECT_EQ(listing(dir_), files) << "files appeared or disappeared in " << dir_;
-    if (inputIsFile) EXPECT_EQ(bytesOf(input), before) << "the input changed";
+    if (inputIsFile) {
+      EXPECT_EQ(bytesOf(input), before) << "the input changed";
+    }
   }
 
   static constexpr long long kGoodCount = std::numeric_limits<long long>::min();  ///< "the tool's good count"

@@ -62,6 +62,22 @@ TEST(Geodesic, SphereMatchesGreatCircleDistances) {
   }
 }
 
+// Scan coordinates: a small object 1e7 from the origin gets the same graph and coordinates as at the origin
+// (the float copy used by the sweeps must not round its spacing away).
+TEST(Geodesic, FarFromTheOriginLikeAtTheOrigin) {
+  const PointCloud near = test::sphereCloud(4000, 1.0, 9);
+  PointCloud far = near;
+  for (auto& p : far.points) p += Eigen::Vector3d(1e7, -2e7, 1e7);
+  const GeodesicCoordinates a(near), b(far);
+  EXPECT_EQ(b.components(), 1u);
+  EXPECT_EQ(a.components(), b.components());
+  double worst = 0;
+  for (std::size_t i = 0; i < near.size(); ++i)
+    for (int s = 0; s < a.dimensions(); ++s)
+      worst = std::max(worst, double(std::abs(a.coordinate(i, s) - b.coordinate(i, s))));
+  EXPECT_LT(worst, 0.01);  // unit sphere: geodesic distances up to π
+}
+
 TEST(Geodesic, SatellitesAreFarApart) {
   PointCloud c = test::sphereCloud(8000, 1.0, 3);
   const GeodesicCoordinates g(c);

@@ -62,7 +62,9 @@ TEST_P(RawModel, ExactCountForOneTenAndFiftyThousand) {
     const auto r = resampleTo(cloud, n);
     EXPECT_EQ(r.cloud.size(), n);
     EXPECT_EQ(r.cloud.normals.size(), n);
-    if (n == 10000u) EXPECT_LE(r.spacing.cv, 0.08) << "N = " << n;
+    if (n == 10000u) {
+      EXPECT_LE(r.spacing.cv, 0.08) << "N = " << n;
+    }
   }
 }
 

@@ -107,10 +107,10 @@ int main(int argc, char** argv) {
     if (!geodesicPath.empty() && iires::extensionOf(geodesicPath) != ".ply")
       throw iires::InputError(geodesicPath + ": --export-geodesic writes .ply only");
     progress.update("read", 0.0);
-    const iires::PointCloud cloud = iires::readPointCloud(input);
+    iires::PointCloud cloud = iires::readPointCloud(input);
     iires::ResampleResult result;
     try {
-      result = iires::resample(cloud, params);
+      result = iires::resample(std::move(cloud), params);
     } catch (const iires::InputError& e) {
       throw iires::InputError(input + ": " + e.what());
     }

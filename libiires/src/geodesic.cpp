@@ -168,7 +168,8 @@ struct GeodesicCoordinates::Impl {
   std::vector<std::size_t> componentSize;
   // Internal side, in Z-order: internal i is the caller's point order[i].
   std::vector<std::uint32_t> order, rank;
-  std::vector<Eigen::Vector3d> sorted;
+  std::vector<Eigen::Vector3d> sortedCopy;      // the points in Z-order, unless they already are (then empty)
+  const std::vector<Eigen::Vector3d>* sorted = nullptr;  // sortedCopy or points
   std::vector<Eigen::Vector3f> pos;  // float copy for the sweeps
   std::unique_ptr<KnnIndex> index;   // over sorted
   Graph graph;
@@ -188,14 +189,23 @@ void GeodesicCoordinates::Impl::build() {
   auto t = Clock::now();
   order = mortonOrder(points);
   rank.assign(n, 0);
-  sorted.resize(n);
+  bool identity = true;
+  for (std::size_t i = 0; i < n && identity; ++i) identity = order[i] == i;
+  if (!identity) sortedCopy.resize(n);  // a cloud already in Z-order (the resampler's) is not copied
+  sorted = identity ? &points : &sortedCopy;
+  const std::vector<Eigen::Vector3d>& zp = *sorted;
   pos.resize(n);
+  // The float copy is taken relative to the bounding-box centre: a small object far from the origin (scan
+  // coordinates) would otherwise lose its spacing to float rounding.
+  Eigen::Vector3d lo = points.front(), hi = points.front();
+  for (const auto& p : points) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
+  const Eigen::Vector3d centre = 0.5 * (lo + hi);
   for (std::size_t i = 0; i < n; ++i) {
     rank[order[i]] = static_cast<std::uint32_t>(i);
-    sorted[i] = points[order[i]];
-    pos[i] = sorted[i].cast<float>();
+    if (!identity) sortedCopy[i] = points[order[i]];
+    pos[i] = (zp[i] - centre).cast<float>();
   }
-  index = std::make_unique<KnnIndex>(sorted);
+  index = std::make_unique<KnnIndex>(zp);
   std::vector<std::uint32_t> knn(n * k, kNone);
   std::vector<float> knnDist(n * k, kInf);
   std::vector<float> rho(n, 0.0f), nearestDist(n, 0.0f);
@@ -204,7 +214,7 @@ void GeodesicCoordinates::Impl::build() {
   parallelFor(n, threads, [&](std::size_t i) {
     std::vector<std::uint32_t> idx;
     std::vector<double> d2;
-    index->knn(sorted[i], k + 1, idx, d2);
+    index->knn(zp[i], k + 1, idx, d2);
     std::size_t w = 0;
     for (std::size_t r = 0; r < idx.size() && w < k; ++r) {
       if (idx[r] == i) continue;
@@ -220,12 +230,12 @@ void GeodesicCoordinates::Impl::build() {
       if (len > 0) nrm[i] = (normals[order[i]] / len).cast<float>();
     } else if (w >= 2) {
       // PCA normal of the point and its k nearest neighbours (unoriented; used by the tangent test only).
-      Eigen::Vector3d mean = sorted[i];
-      for (std::size_t r = 0; r < w; ++r) mean += sorted[knn[i * k + r]];
+      Eigen::Vector3d mean = zp[i];
+      for (std::size_t r = 0; r < w; ++r) mean += zp[knn[i * k + r]];
       mean /= static_cast<double>(w + 1);
-      Eigen::Matrix3d cov = (sorted[i] - mean) * (sorted[i] - mean).transpose();
+      Eigen::Matrix3d cov = (zp[i] - mean) * (zp[i] - mean).transpose();
       for (std::size_t r = 0; r < w; ++r) {
-        const Eigen::Vector3d d = sorted[knn[i * k + r]] - mean;
+        const Eigen::Vector3d d = zp[knn[i * k + r]] - mean;
         cov += d * d.transpose();
       }
       Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
@@ -349,7 +359,7 @@ void GeodesicCoordinates::Impl::build() {
     for (std::size_t r = 0; r < k; ++r)
       if (keep[i * k + r] == 2) addEdge(knn[i * k + r], static_cast<std::uint32_t>(i), knnDist[i * k + r]);
   for (const auto& e : extra) {
-    const float d = static_cast<float>((sorted[e[0]] - sorted[e[1]]).norm());
+    const float d = static_cast<float>(((*sorted)[e[0]] - (*sorted)[e[1]]).norm());
     addEdge(e[0], e[1], d);
     addEdge(e[1], e[0], d);
   }

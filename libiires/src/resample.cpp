@@ -718,12 +718,12 @@ std::string ResampleResult::toJson() const {
   return os.str();
 }
 
-ResampleResult resample(const PointCloud& input, const ResampleParams& params) {
+ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
   params.validate();
   const auto start = Clock::now();
   ResampleResult result;
   result.requestedPoints = params.targetCount;
-  result.inputPoints = input.size();
+  result.inputPoints = cloud.size();
   auto stage = [&](const char* name, Clock::time_point t) {
     result.timings.push_back({name, secondsSince(t)});
     if (params.progress && std::string(name) != "total") params.progress(name, 1.0);
@@ -734,7 +734,6 @@ ResampleResult resample(const PointCloud& input, const ResampleParams& params) {
   };
 
   auto t = begin("validate");
-  PointCloud cloud = input;
   const ValidationReport report = validateCloud(cloud, 4, "input");
   result.duplicatesMerged = report.duplicatesMerged;
   stage("validate", t);

@@ -121,7 +121,8 @@ struct ResampleResult {
 /// @throws InputError for an unusable cloud (empty, NaN, < 4 distinct points, collinear);
 /// std::invalid_argument for bad parameters.
 /// @note Deterministic: same input, params and seed give the same output for any thread count.
-/// Cost O(n log n) on the input plus O(N k) per pass.
-ResampleResult resample(const PointCloud& input, const ResampleParams& params);
+/// Cost O(n log n) on the input plus O(N k) per pass. Taken by value: pass an rvalue (std::move) when the
+/// caller no longer needs the cloud, and the pipeline works in its memory instead of a copy.
+ResampleResult resample(PointCloud input, const ResampleParams& params);
 
 }  // namespace iires
