@@ -85,9 +85,10 @@ struct RotationSearch::Impl {
 
   /// The best @p keepCount of @p order (indices into @p rotations) by energy @p fn, with early exit against
   /// the keepCount-th best so far, block by block (deterministic for any thread count).
-  template <typename Fn>
+  /// @p onBlock(done) after each block (progress).
+  template <typename Fn, typename OnBlock>
   std::vector<Scored> bestOf(const std::vector<Eigen::Matrix3d>& rotations, const std::vector<std::size_t>& order,
-                             std::size_t keepCount, Fn&& fn, std::size_t* evaluations) const {
+                             std::size_t keepCount, Fn&& fn, std::size_t* evaluations, OnBlock&& onBlock) const {
     std::vector<Scored> top;
     double bound = kInf;
     std::vector<double> e(std::max(kBlock, keepCount));
@@ -102,6 +103,7 @@ struct RotationSearch::Impl {
       std::sort(top.begin(), top.end());
       if (top.size() > keepCount) top.resize(keepCount);
       if (top.size() == keepCount) bound = top.back().energy;
+      onBlock(start + count);
     }
     return top;
   }
@@ -160,15 +162,22 @@ RotationSearchResult RotationSearch::search(const std::vector<Eigen::Matrix3d>& 
   // Coarse pass over the whole grid: a lower bound of E on point subsets.
   std::vector<std::size_t> all(grid.size());
   for (std::size_t i = 0; i < all.size(); ++i) all[i] = i;
-  const auto coarse = m.bestOf(grid, all, p.coarseKeep,
-                               [&](const Eigen::Matrix3d& r, double b) { return m.coarse(r, b); }, nullptr);
+  // Progress: the coarse pass is most of the work (≈ 90 %), the exact pass and the refinement the rest.
+  auto report = [&](double fraction) {
+    if (p.progress) p.progress(fraction);
+  };
+  report(0.0);
+  const auto coarse = m.bestOf(
+      grid, all, p.coarseKeep, [&](const Eigen::Matrix3d& r, double b) { return m.coarse(r, b); }, nullptr,
+      [&](std::size_t done) { report(0.9 * static_cast<double>(done) / static_cast<double>(grid.size())); });
 
   // Exact energy of the survivors, best coarse first (so the bound tightens early).
   std::vector<std::size_t> survivors;
   for (const auto& s : coarse) survivors.push_back(s.index);
   const auto exact = m.bestOf(grid, survivors, p.fullKeep,
                               [&](const Eigen::Matrix3d& r, double b) { return m.full(r, b); },
-                              &result.exactEvaluations);
+                              &result.exactEvaluations, [](std::size_t) {});
+  report(0.95);
 
   // Distinct candidates: greedy, lowest energy first, at least minSeparationDeg apart.
   const double minSep = p.minSeparationDeg * M_PI / 180.0;
@@ -217,6 +226,7 @@ RotationSearchResult RotationSearch::search(const std::vector<Eigen::Matrix3d>& 
   }
   std::stable_sort(result.candidates.begin(), result.candidates.end(),
                    [](const RotationCandidate& a, const RotationCandidate& b) { return a.energy < b.energy; });
+  report(1.0);
   result.pointQueries = m.queries.load();
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return result;
