@@ -12,6 +12,7 @@
 #include <stdexcept>
 
 #include "iires/knn.hpp"
+#include "iires/metrics.hpp"
 #include "iires/parallel.hpp"
 #include "iires/register/hausdorff.hpp"
 #include "iires/validate.hpp"
@@ -349,6 +350,18 @@ RegistrationResult registerClouds(const PointCloud& sourceIn, const PointCloud& 
   r.hausdorffTrimmed = params.overlap < 1.0 ? hausdorffDistance(applied(rs.cloud.points, r.T_target_source),
                                                                 rt.cloud.points, params.overlap, params.threads)
                                             : r.hausdorff;
+  {  // overlap: share of the aligned source samples with a target sample within one sample spacing
+    const std::vector<Eigen::Vector3d> aligned = applied(rs.cloud.points, r.T_target_source);
+    const KnnIndex targetSamples(rt.cloud.points);
+    const double l = spacingStats(rt.cloud.points, params.threads).mean;
+    std::vector<char> near(aligned.size());
+    parallelFor(aligned.size(), params.threads, [&](std::size_t i) {
+      double d2 = 0;
+      targetSamples.nearest(aligned[i], &d2);
+      near[i] = d2 <= l * l;
+    });
+    r.overlapShare = static_cast<double>(std::count(near.begin(), near.end(), 1)) / static_cast<double>(near.size());
+  }
   stage("evaluate", t);
   stage("total", tTotal);
   return r;
@@ -368,6 +381,7 @@ std::string RegistrationResult::toJson() const {
   s << "],\n  \"rotation_angle_deg\": " << num(rotationAngleDeg) << ",\n  \"rotation_axis\": " << vec(rotationAxis)
     << ",\n  \"translation\": " << vec(translation) << ",\n  \"rmse\": " << num(rmse)
     << ",\n  \"hausdorff\": " << num(hausdorff) << ",\n  \"hausdorff_trimmed\": " << num(hausdorffTrimmed)
+    << ",\n  \"overlap_share\": " << num(overlapShare)
     << ",\n  \"normalised_energy\": " << num(normalisedEnergy) << ",\n  \"grid\": \"" << grid
     << "\",\n  \"grid_size\": " << gridSize << ",\n  \"best_candidate\": " << bestCandidate
     << ",\n  \"candidate_rank\": " << candidateRank << ",\n  \"icp_iterations\": " << icpIterations

@@ -68,6 +68,8 @@ struct RegistrationResult {
   double rmse = 0;              ///< RMS distance of the ICP's (trimmed) matched pairs, target units
   double hausdorff = 0;         ///< symmetric Hausdorff distance of the aligned resampled clouds, target units
   double hausdorffTrimmed = 0;  ///< the same, trimmed to the overlap (= hausdorff when overlap = 1)
+  double overlapShare = 0;      ///< share of the aligned source samples within one mean sample spacing of a
+                                ///< target sample (1 = the source lies entirely on the target)
   double normalisedEnergy = 0;  ///< search energy E of the chosen candidate (normalised units)
   std::string grid;             ///< "so3" or "euler"
   std::size_t gridSize = 0;     ///< candidates in the grid
