@@ -20,6 +20,15 @@ namespace {
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr std::size_t kBlock = 64;  // candidates evaluated against one fixed bound
 
+/// fn(i) for i in [0, n) in parallel, one iteration at a time: a block has only 64 candidates (iires::parallelFor
+/// hands out chunks of 256, i.e. the whole block to one thread). Each iteration writes only its own slot.
+template <typename Fn>
+void parallelEach(std::size_t n, int threads, Fn&& fn) {
+  const long long count = static_cast<long long>(n);
+#pragma omp parallel for schedule(dynamic, 1) num_threads(resolveThreads(threads))
+  for (long long i = 0; i < count; ++i) fn(static_cast<std::size_t>(i));
+}
+
 /// Fisher–Yates with a seeded 64-bit engine: the order does not depend on the standard library.
 std::vector<Eigen::Vector3d> shuffled(std::vector<Eigen::Vector3d> points, std::uint64_t seed) {
   std::mt19937_64 rng(seed);
@@ -96,7 +105,7 @@ struct RotationSearch::Impl {
     for (std::size_t start = 0, block = std::min(keepCount, kBlock); start < order.size();
          start += block, block = kBlock) {
       const std::size_t count = std::min(block, order.size() - start);
-      parallelFor(count, params.threads, [&](std::size_t j) { e[j] = fn(rotations[order[start + j]], bound); });
+      parallelEach(count, params.threads, [&](std::size_t j) { e[j] = fn(rotations[order[start + j]], bound); });
       if (evaluations) *evaluations += count;
       for (std::size_t j = 0; j < count; ++j)
         if (std::isfinite(e[j])) top.push_back({e[j], order[start + j]});
@@ -207,7 +216,7 @@ RotationSearchResult RotationSearch::search(const std::vector<Eigen::Matrix3d>& 
     int moves = 0;
     for (int level = 0; level < p.refineLevels && moves < 64;) {
       const Eigen::Matrix3d current = c.rotation;
-      parallelFor(steps.size(), p.threads, [&](std::size_t j) {
+      parallelEach(steps.size(), p.threads, [&](std::size_t j) {
         e[j] = m.full(expMap(h * steps[j].normalized()) * current, c.energy);
       });
       result.exactEvaluations += steps.size();
