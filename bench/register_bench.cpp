@@ -6,13 +6,19 @@
 // object diagonals; optionally 25 % of the source is cut off by a random plane. Success (DESIGN §7): rotation
 // error < 5°, error of the mapped source centroid < 2 % of the target's diagonal, scale error < 2 %; the
 // surface criterion (mean distance from the source mapped by the estimate to the source mapped by the truth
-// < 1 % of the diagonal) is reported too and decides on symmetric shapes (knot1).
+// < 1 % of the diagonal, and scale error < 2 %) is reported too and decides on symmetric shapes (knot1). With
+// --partial the distance is to the whole source surface mapped by the truth (before the cut): a symmetric pose
+// puts the cut source on another, equally valid part of the surface.
 //
 // Prints key=value lines, one per model and method, and a summary per method.
-//   register_bench [--models bunny00,armadillo,...] [--trials N] [--partial] [--seed S] [--threads T]
-//                  [--methods iires,iires-euler,o3d-fpfh,o3d-fpfh-norm,o3d-icp] [--source-count N]
-//                  [--target-count N] [--verbose]
+// time_s is wall time per pair, cpu_s the process's user + system CPU time per pair (all threads; on a shared
+// machine the honest measure of work). For iires the mean wall time of each stage is printed too.
+//   register_bench [--models bunny00,armadillo,...] [--trials N] [--first-trial K] [--partial] [--seed S]
+//                  [--threads T] [--methods iires,iires-euler,o3d-fpfh,o3d-fpfh-norm,o3d-icp]
+//                  [--source-count N] [--target-count N] [--samples M] [--so3-count K] [--thin F] [--icp-candidates C]
+//                  [--resample preprocess=0,intrinsic=0,maxPasses=4,...] [--verbose]
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -23,6 +29,7 @@
 #include <memory>
 #include <open3d/Open3D.h>
 #include <random>
+#include <sys/resource.h>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -36,6 +43,15 @@
 namespace {
 
 using Clock = std::chrono::steady_clock;
+
+/// User + system CPU time of the process so far (all threads), seconds.
+double cpuSeconds() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return static_cast<double>(u.ru_utime.tv_sec + u.ru_stime.tv_sec) +
+         1e-6 * static_cast<double>(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
+}
+
 using Vec = Eigen::Vector3d;
 using Cloud = std::vector<Vec>;
 
@@ -103,12 +119,13 @@ Cloud transformed(const Cloud& p, const Eigen::Matrix4d& T) {
 }
 
 struct Errors {
-  double rotDeg = 180, trans = 1e9, scale = 1e9, surface = 1e9, seconds = 0;
+  double rotDeg = 180, trans = 1e9, scale = 1e9, surface = 1e9, seconds = 0, cpu = 0;
   bool ok = false, okSurface = false, failed = false;
 };
 
-Errors evaluate(const Eigen::Matrix4d& est, const Eigen::Matrix4d& truth, const Cloud& source, double diag,
-                double seconds) {
+/// @p surface: the whole source surface (before any cut) in source coordinates, for the surface error.
+Errors evaluate(const Eigen::Matrix4d& est, const Eigen::Matrix4d& truth, const Cloud& source, const Cloud& surface,
+                double diag, double seconds) {
   Errors e;
   e.seconds = seconds;
   const double se = est.topLeftCorner<3, 3>().col(0).norm(), st = truth.topLeftCorner<3, 3>().col(0).norm();
@@ -124,7 +141,7 @@ Errors evaluate(const Eigen::Matrix4d& est, const Eigen::Matrix4d& truth, const 
   c /= static_cast<double>(source.size());
   const Vec ce = re * se * c + est.topRightCorner<3, 1>(), ct = rt * st * c + truth.topRightCorner<3, 1>();
   e.trans = (ce - ct).norm() / diag;
-  const Cloud mt = transformed(source, truth), me = transformed(source, est);
+  const Cloud mt = transformed(surface, truth), me = transformed(source, est);
   const iires::KnnIndex tree(mt);
   double sum = 0;
   for (const auto& p : me) {
@@ -201,11 +218,20 @@ Eigen::Matrix4d o3dIcp(const Cloud& source, const Cloud& target, double maxDist)
 
 struct Tally {
   int trials = 0, ok = 0, okSurface = 0, failed = 0, ambiguous = 0;
-  std::vector<double> rot, trans, scale, seconds;
+  std::vector<double> rot, trans, scale, seconds, cpu;
+  std::vector<std::pair<std::string, double>> stages;  // summed wall time per stage (iires), in stage order
+  void addStages(const std::vector<iires::StageTime>& timings) {
+    for (const auto& st : timings) {
+      auto it = std::find_if(stages.begin(), stages.end(), [&](const auto& x) { return x.first == st.name; });
+      if (it == stages.end()) stages.emplace_back(st.name, st.seconds);
+      else it->second += st.seconds;
+    }
+  }
   void add(const Errors& e) {
     ++trials;
     ok += e.ok;
     okSurface += e.okSurface;
+    cpu.push_back(e.cpu);
     failed += e.failed;
     rot.push_back(e.rotDeg);
     trans.push_back(e.trans);
@@ -228,10 +254,16 @@ double mean(const std::vector<double>& v) {
 void print(const std::string& model, const std::string& method, const Tally& t, bool partial) {
   std::printf(
       "model=%s method=%s partial=%d trials=%d success=%.3f success_surface=%.3f ambiguous=%d failed=%d "
-      "rot_err_deg_median=%.3g trans_err_median=%.3g scale_err_median=%.3g time_s_mean=%.3f\n",
+      "rot_err_deg_median=%.3g trans_err_median=%.3g scale_err_median=%.3g time_s_mean=%.3f time_s_median=%.3f "
+      "cpu_s_mean=%.3f ok=%d ok_surface=%d\n",
       model.c_str(), method.c_str(), partial ? 1 : 0, t.trials, t.trials ? double(t.ok) / t.trials : 0.0,
       t.trials ? double(t.okSurface) / t.trials : 0.0, t.ambiguous, t.failed, median(t.rot), median(t.trans),
-      median(t.scale), mean(t.seconds));
+      median(t.scale), mean(t.seconds), median(t.seconds), mean(t.cpu), t.ok, t.okSurface);
+  if (!t.stages.empty()) {
+    std::printf("stages model=%s method=%s partial=%d", model.c_str(), method.c_str(), partial ? 1 : 0);
+    for (const auto& [name, sum] : t.stages) std::printf(" %s_s=%.4f", name.c_str(), sum / t.trials);
+    std::printf("\n");
+  }
   std::fflush(stdout);
 }
 
@@ -243,7 +275,12 @@ int main(int argc, char** argv) {
   int trials = 50, threads = 0;
   bool partial = false, verbose = false;
   std::uint64_t seed = 1;
-  std::size_t sourceCount = 5000, targetCount = 30000, samples = 2000;
+  std::size_t sourceCount = 5000, targetCount = 30000;
+  const iires::reg::RegistrationParams defaults;
+  std::size_t samples = defaults.samples, so3Count = defaults.so3Count, thin = defaults.maxInputPerSample,
+              icpCandidates = defaults.icpCandidates;
+  int firstTrial = 0;
+  iires::ResampleParams resampleParams = defaults.resample;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto next = [&]() -> std::string {
@@ -258,6 +295,25 @@ int main(int argc, char** argv) {
     else if (a == "--source-count") sourceCount = std::stoul(next());
     else if (a == "--target-count") targetCount = std::stoul(next());
     else if (a == "--samples") samples = std::stoul(next());
+    else if (a == "--so3-count") so3Count = std::stoul(next());
+    else if (a == "--thin") thin = std::stoul(next());
+    else if (a == "--icp-candidates") icpCandidates = std::stoul(next());
+    else if (a == "--first-trial") firstTrial = std::stoi(next());
+    else if (a == "--resample") {  // override the registration's resampler settings: key=value,...
+      for (const auto& kv : split(next())) {
+        const auto eq = kv.find('=');
+        const std::string key = kv.substr(0, eq);
+        const double v = std::stod(kv.substr(eq + 1));
+        if (key == "preprocess") resampleParams.preprocess = v != 0;
+        else if (key == "intrinsic") resampleParams.intrinsic = v != 0;
+        else if (key == "maxPasses") resampleParams.maxPasses = static_cast<int>(v);
+        else if (key == "relaxPerPass") resampleParams.relaxPerPass = static_cast<int>(v);
+        else if (key == "maxRelaxIterations") resampleParams.maxRelaxIterations = static_cast<int>(v);
+        else if (key == "relaxPatience") resampleParams.relaxPatience = static_cast<int>(v);
+        else if (key == "candidateFactor") resampleParams.candidateFactor = v;
+        else throw std::invalid_argument("unknown resample key " + key);
+      }
+    }
     else if (a == "--partial") partial = true;
     else if (a == "--verbose") verbose = true;
     else {
@@ -270,12 +326,13 @@ int main(int argc, char** argv) {
   for (const auto& name : models) {
     const Model model = loadModel(name);
     std::map<std::string, Tally> tally;
-    for (int trial = 0; trial < trials; ++trial) {
+    for (int trial = firstTrial; trial < firstTrial + trials; ++trial) {
       std::mt19937_64 rng(seed * 1000003 + std::hash<std::string>{}(name) % 100000 + trial);
       const bool swap = trial % 2 == 1;  // alternate which cloud is the dense one
       iires::PointCloud src = sampleModel(model, swap ? targetCount : sourceCount, rng());
       const iires::PointCloud tgt = sampleModel(model, swap ? sourceCount : targetCount, rng());
       const double diag = iires::bboxDiagonal(tgt.points);
+      const iires::PointCloud whole = src;  // before the cut: the surface a symmetric pose may land on
       if (partial) {  // cut 25 % of the source off by a random plane
         std::normal_distribution<double> g(0, 1);
         const Vec n = Vec(g(rng), g(rng), g(rng)).normalized();
@@ -299,16 +356,21 @@ int main(int argc, char** argv) {
       M.topLeftCorner<3, 3>() = s * R;
       M.topRightCorner<3, 1>() = t;
       const Eigen::Matrix4d truth = M.inverse();
-      const Cloud source = transformed(src.points, M);
+      const Cloud source = transformed(src.points, M), sourceWhole = transformed(whole.points, M);
       const Cloud& target = tgt.points;
       for (const auto& method : methods) {
         const auto t0 = Clock::now();
+        const double cpu0 = cpuSeconds();
         Eigen::Matrix4d est = Eigen::Matrix4d::Identity();
         bool ambiguous = false;
         try {
           if (method == "iires" || method == "iires-euler") {
             iires::reg::RegistrationParams p;
             p.samples = samples;
+            p.so3Count = so3Count;
+            p.maxInputPerSample = thin;
+            p.icpCandidates = icpCandidates;
+            p.resample = resampleParams;
             p.threads = threads;
             p.seed = seed + trial;
             if (partial) p.overlap = 0.75;
@@ -318,6 +380,8 @@ int main(int argc, char** argv) {
             const auto r = iires::reg::registerClouds(sc, tgt, p);
             est = r.T_target_source;
             ambiguous = r.ambiguous;
+            tally[method].addStages(r.timings);
+            overall[method].addStages(r.timings);
             if (verbose) {
               std::printf("stages");
               for (const auto& st : r.timings) std::printf(" %s=%.3f", st.name.c_str(), st.seconds);
@@ -341,7 +405,8 @@ int main(int argc, char** argv) {
           est = Eigen::Matrix4d::Constant(std::nan(""));
         }
         const double secs = std::chrono::duration<double>(Clock::now() - t0).count();
-        const Errors e = evaluate(est, truth, source, diag, secs);
+        Errors e = evaluate(est, truth, source, sourceWhole, diag, secs);
+        e.cpu = cpuSeconds() - cpu0;
         tally[method].add(e);
         tally[method].ambiguous += ambiguous;
         overall[method].add(e);

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <map>
@@ -83,8 +84,21 @@ void expectRecovered(const iires::reg::RegistrationResult& r, const Eigen::Matri
 
 RegistrationParams fast() {
   RegistrationParams p;
-  p.samples = 1000;  // the tests keep the runtime short; the bench uses the default M
+  p.samples = 1000;  // the default M, pinned so the tests' runtime does not follow a change of the default
   return p;
+}
+
+/// @p cloud without the 25 % of its points farthest along @p normal (a scan missing a part).
+PointCloud cutByPlane(const PointCloud& cloud, const Eigen::Vector3d& normal) {
+  const Eigen::Vector3d n = normal.normalized();
+  std::vector<double> h;
+  for (const auto& q : cloud.points) h.push_back(q.dot(n));
+  std::vector<double> sorted = h;
+  std::nth_element(sorted.begin(), sorted.begin() + sorted.size() * 3 / 4, sorted.end());
+  PointCloud cut;
+  for (std::size_t i = 0; i < h.size(); ++i)
+    if (h[i] < sorted[sorted.size() * 3 / 4]) cut.points.push_back(cloud.points[i]);
+  return cut;
 }
 
 // Known similarity transforms, forward (source → target) and inverse (target → source), from poses with
@@ -108,17 +122,28 @@ TEST(Registration, RecoversKnownSimilarityForwardAndInverse) {
 }
 
 TEST(Registration, OtherModelsAndDensitiesAtDefaultSettings) {
+  const RegistrationParams defaults;
   for (const std::string model : {"armadillo", "fandisk"}) {
     const PointCloud target = scan(model, 20000, 21), source0 = scan(model, 4000, 22);
     const Eigen::Matrix4d pose = similarity(0.3, 170, {0.2, 1, -0.4}, Eigen::Vector3d(2, 1, -1));
     const PointCloud source = moved(source0, pose);
-    const auto r = registerClouds(source, target);
+    const auto r = registerClouds(source, target, defaults);
     expectRecovered(r, pose.inverse(), source, target, model);
-    EXPECT_EQ(r.samples, 2000u);
+    EXPECT_EQ(r.samples, defaults.samples);
+    // Dense inputs are thinned to maxInputPerSample·M before resampling; every stage is timed.
+    EXPECT_EQ(r.targetWorkingPoints, defaults.maxInputPerSample * r.samples);
+    EXPECT_EQ(r.sourceWorkingPoints, 4000u);
+    EXPECT_EQ(r.strayDropped, 0u);
+    std::vector<std::string> stages;
+    for (const auto& st : r.timings) stages.push_back(st.name);
+    EXPECT_EQ(stages, (std::vector<std::string>{"validate", "thin", "resample_source", "resample_target", "normalise",
+                                                "search", "icp", "evaluate", "total"}));
     EXPECT_EQ(r.grid, "so3");
     EXPECT_GT(r.icpIterations, 0);
     EXPECT_GT(r.hausdorff, 0);
-    EXPECT_LT(r.rmse, 0.01 * iires::bboxDiagonal(target.points));
+    // The residual of two independent M-samplings is about a third of their spacing (≈ 1–1.5 % of the
+    // diagonal at M = 1000); a wrong pose leaves several times more.
+    EXPECT_LT(r.rmse, 0.02 * iires::bboxDiagonal(target.points));
   }
 }
 
@@ -135,15 +160,8 @@ TEST(Registration, IdentityAndTheEulerGrid) {
 
 TEST(Registration, PartialSourceWithTrimmedEnergy) {
   // 25 % of the source cut off by a plane; --overlap 0.75.
-  const PointCloud target = scan("bunny00", 20000, 41), full = scan("bunny00", 8000, 42);
-  const Eigen::Vector3d n = Eigen::Vector3d(1, 0.3, -0.5).normalized();
-  std::vector<double> h;
-  for (const auto& q : full.points) h.push_back(q.dot(n));
-  std::vector<double> sorted = h;
-  std::nth_element(sorted.begin(), sorted.begin() + sorted.size() * 3 / 4, sorted.end());
-  PointCloud cut;
-  for (std::size_t i = 0; i < h.size(); ++i)
-    if (h[i] < sorted[sorted.size() * 3 / 4]) cut.points.push_back(full.points[i]);
+  const PointCloud target = scan("bunny00", 20000, 41);
+  const PointCloud cut = cutByPlane(scan("bunny00", 8000, 42), Eigen::Vector3d(1, 0.3, -0.5));
   const Eigen::Matrix4d pose = similarity(2.5, 120, {1, 0, 1}, Eigen::Vector3d(-0.5, 0.2, 0.4));
   const PointCloud source = moved(cut, pose);
   auto p = fast();
@@ -151,6 +169,46 @@ TEST(Registration, PartialSourceWithTrimmedEnergy) {
   const auto r = registerClouds(source, target, p);
   expectRecovered(r, pose.inverse(), source, target, "partial");
   EXPECT_LE(r.hausdorffTrimmed, r.hausdorff);
+}
+
+TEST(Registration, RigidKeepsScaleOneWhenTheCloudsDiffer) {
+  // Without scale estimation both clouds share one unit: a cut source (smaller RMS radius than the target)
+  // must still come back at scale 1, not at the ratio of the radii.
+  const PointCloud target = scan("armadillo", 12000, 45);
+  const PointCloud cut = cutByPlane(scan("armadillo", 6000, 46), Eigen::Vector3d(-0.2, 1, 0.4));
+  const Eigen::Matrix4d pose = similarity(1.0, 110, {0.3, -1, 0.5}, Eigen::Vector3d(40, -20, 10));
+  const PointCloud source = moved(cut, pose);
+  auto p = fast();
+  p.estimateScale = false;
+  p.overlap = 0.75;
+  const auto r = registerClouds(source, target, p);
+  EXPECT_NEAR(r.scale, 1.0, 1e-9);
+  expectRecovered(r, pose.inverse(), source, target, "rigid, partial");
+}
+
+TEST(Registration, ProgressNamesEveryStageAndDoesNotChangeTheResult) {
+  const PointCloud target = scan("fandisk", 6000, 55);
+  const PointCloud source = moved(scan("fandisk", 3000, 56), similarity(3, 80, {1, 0, 1}, {2, 0, 1}));
+  std::vector<std::pair<std::string, double>> calls;
+  auto p = fast();
+  p.progress = [&](const std::string& stage, double fraction) { calls.emplace_back(stage, fraction); };
+  const auto withProgress = registerClouds(source, target, p);
+  const auto without = registerClouds(source, target, fast());
+  EXPECT_EQ(withProgress.T_target_source, without.T_target_source);
+  std::vector<std::string> stages;
+  for (const auto& [stage, fraction] : calls) {
+    EXPECT_GE(fraction, 0.0) << stage;
+    EXPECT_LE(fraction, 1.0) << stage;
+    if (stages.empty() || stages.back() != stage) stages.push_back(stage);
+  }
+  EXPECT_EQ(stages, (std::vector<std::string>{"resample source", "resample target", "search", "icp"}));
+  // The search reports its way through the grid, monotonically, and ends at 100 %.
+  std::vector<double> search;
+  for (const auto& [stage, fraction] : calls)
+    if (stage == "search") search.push_back(fraction);
+  EXPECT_GT(search.size(), 10u);
+  EXPECT_TRUE(std::is_sorted(search.begin(), search.end()));
+  EXPECT_EQ(search.back(), 1.0);
 }
 
 TEST(Registration, SameResultForAnyThreadCount) {
@@ -257,6 +315,27 @@ TEST(RegisterTool, WritesTransformReportAndAlignedCloud) {
   ASSERT_EQ(aligned.size(), source.size());
   EXPECT_LT((aligned.points[0] - (T.topLeftCorner<3, 3>() * source.points[0] + T.topRightCorner<3, 1>())).norm(),
             1e-9);
+}
+
+TEST(RegisterTool, ProgressOnStderrWhenAskedAndNothingWhenQuiet) {
+  const std::string dir = iires::test::tempDir();
+  iires::writePointCloud(dir + "/s.xyz", moved(scan("bunny00", 3000, 91), similarity(2, 60, {0, 1, 1}, {1, 0, 0})));
+  iires::writePointCloud(dir + "/t.xyz", scan("bunny00", 5000, 92));
+  const std::string cmd = iires::test::tool("iires-register") + " " + dir + "/s.xyz " + dir + "/t.xyz --threads 2";
+  std::string out;
+  // stderr only (stdout to /dev/null): forced progress names every stage, the search with percentages.
+  ASSERT_EQ(iires::test::run("(" + cmd + " --transform " + dir + "/a.txt --progress 2>&1 >/dev/null)", &out), 0)
+      << out;
+  for (const char* stage : {"iires-register: read", "resample source", "resample target", "search", "icp", "100%"})
+    EXPECT_NE(out.find(stage), std::string::npos) << "no \"" << stage << "\" in:\n" << out;
+  EXPECT_NE(out.find("search  50%"), std::string::npos) << out;
+  // stderr is a pipe here: without --progress nothing is printed there.
+  ASSERT_EQ(iires::test::run("(" + cmd + " 2>&1 >/dev/null)", &out), 0) << out;
+  EXPECT_EQ(out, "");
+  // --quiet wins over --progress and silences stdout too; the result is the same.
+  ASSERT_EQ(iires::test::run(cmd + " --transform " + dir + "/b.txt --progress --quiet", &out), 0) << out;
+  EXPECT_EQ(out, "");
+  EXPECT_EQ(iires::test::readText(dir + "/a.txt"), iires::test::readText(dir + "/b.txt"));
 }
 
 TEST(RegisterTool, BadInputsExitTwoAndWriteNothing) {

@@ -3,6 +3,7 @@
 #include <iostream>
 
 #include "common.hpp"
+#include "progress.hpp"
 #include "iires/io.hpp"
 #include "iires/register/registration.hpp"
 
@@ -15,9 +16,9 @@ int main(int argc, char** argv) {
     CLI::App app{"Align SOURCE to TARGET: resample both, search a rotation grid for the minimum Hausdorff "
                  "distance, refine with ICP (with scale). Prints the similarity T_target_source."};
     std::string sourcePath, targetPath, alignedPath, transformPath, reportPath, grid = "so3";
-    long long samples = 2000;
     iires::reg::RegistrationParams params;
-    bool noScale = false, quiet = false;
+    auto samples = static_cast<long long>(params.samples);
+    bool noScale = false, quiet = false, showProgress = false, fullResample = false;
     app.add_option("SOURCE", sourcePath, "cloud to move (.ply .pcd .xyz .xyzn .pts, or mesh vertices)")->required();
     app.add_option("TARGET", targetPath, "cloud to align to")->required();
     app.add_option("-o,--output", alignedPath, "write SOURCE mapped into TARGET coordinates (.ply .xyz .xyzn)");
@@ -30,7 +31,10 @@ int main(int argc, char** argv) {
     app.add_flag("--no-scale", noScale, "rigid registration: keep the scale at 1");
     app.add_option("--seed", params.seed, "seed; same seed -> same result");
     app.add_option("--threads", params.threads, "threads (0 = all cores); the result does not depend on it");
-    app.add_flag("-q,--quiet", quiet, "print nothing on success");
+    app.add_flag("--full-resample", fullResample,
+                 "resample with the full pipeline (denoising, outliers, relaxation): slower, for noisy scans");
+    app.add_flag("-q,--quiet", quiet, "print nothing on success (no result, no progress)");
+    app.add_flag("--progress", showProgress, "progress on stderr even when it is not a terminal");
     app.set_version_flag("--version", iires::tools::versionString());
     if (const int code = iires::tools::parseArgs(app, argc, argv); code != iires::tools::kContinue) return code;
     if (samples < 50) throw iires::InputError("-m/--samples must be at least 50 (got " + std::to_string(samples) + ")");
@@ -46,6 +50,10 @@ int main(int argc, char** argv) {
         iires::extensionOf(alignedPath) != ".xyzn")
       throw iires::InputError("cannot write " + alignedPath + ": unknown extension (use .ply, .xyz or .xyzn)");
 
+    if (fullResample) params.resample = iires::ResampleParams{};
+    iires::tools::Progress progress("iires-register", showProgress, quiet);
+    params.progress = progress.callback();
+    progress.update("read", 0.0);
     const iires::PointCloud source = iires::readPointCloud(sourcePath);
     const iires::PointCloud target = iires::readPointCloud(targetPath);
     iires::reg::RegistrationResult result;
@@ -58,9 +66,11 @@ int main(int argc, char** argv) {
       else if (msg.rfind("target", 0) == 0) msg = targetPath + msg.substr(6);
       throw iires::InputError(msg);
     }
+    progress.update("write", 0.0);
     if (!alignedPath.empty()) iires::writePointCloud(alignedPath, iires::reg::transformCloud(source, result.T_target_source));
     if (!transformPath.empty()) iires::writeTextFile(transformPath, iires::reg::formatTransform(result.T_target_source));
     if (!reportPath.empty()) iires::writeTextFile(reportPath, result.toJson());
+    progress.finish();
     if (!quiet) {
       std::cout << iires::reg::formatTransform(result.T_target_source);
       std::cout << "scale " << result.scale << "  rotation " << result.rotationAngleDeg << " deg  rmse "

@@ -7,10 +7,12 @@
 #include <cmath>
 #include <iomanip>
 #include <limits>
+#include <random>
 #include <sstream>
 #include <stdexcept>
 
 #include "iires/knn.hpp"
+#include "iires/metrics.hpp"
 #include "iires/parallel.hpp"
 #include "iires/register/hausdorff.hpp"
 #include "iires/validate.hpp"
@@ -76,11 +78,52 @@ std::vector<Eigen::Vector3d> applied(const std::vector<Eigen::Vector3d>& p, cons
   return out;
 }
 
+/// At most @p maxCount points of @p cloud: a seeded random subset (Fisher–Yates on the first maxCount slots),
+/// in input order. Normals are dropped; the cloud is returned unchanged when it is small enough.
+PointCloud randomSubset(const PointCloud& cloud, std::size_t maxCount, std::uint64_t seed) {
+  if (maxCount == 0 || cloud.size() <= maxCount) return cloud;
+  std::vector<std::size_t> idx(cloud.size());
+  for (std::size_t i = 0; i < idx.size(); ++i) idx[i] = i;
+  std::mt19937_64 rng(seed);
+  for (std::size_t i = 0; i < maxCount; ++i) std::swap(idx[i], idx[i + static_cast<std::size_t>(rng() % (idx.size() - i))]);
+  idx.resize(maxCount);
+  std::sort(idx.begin(), idx.end());
+  PointCloud out;
+  out.points.reserve(maxCount);
+  for (std::size_t i : idx) out.points.push_back(cloud.points[i]);
+  if (cloud.hasNormals())
+    for (std::size_t i : idx) out.normals.push_back(cloud.normals[i]);
+  return out;
+}
+
+/// Drop resampled points that are not finite or lie far outside the input's bounding box (grown by 10 % of
+/// its diagonal): a failed MLS projection of one sample must not decide the normalisation. Returns how many.
+std::size_t dropStraySamples(std::vector<Eigen::Vector3d>& samples, const std::vector<Eigen::Vector3d>& input) {
+  Eigen::AlignedBox3d box;
+  for (const auto& p : input) box.extend(p);
+  const double margin = 0.1 * box.diagonal().norm();
+  box.min().array() -= margin;
+  box.max().array() += margin;
+  const std::size_t before = samples.size();
+  samples.erase(std::remove_if(samples.begin(), samples.end(),
+                               [&](const Eigen::Vector3d& p) { return !p.allFinite() || !box.contains(p); }),
+                samples.end());
+  return before - samples.size();
+}
+
 ResampleResult resampleFor(const PointCloud& cloud, const RegistrationParams& params, const char* what) {
   ResampleParams rp = params.resample;
   rp.targetCount = params.samples;
   rp.seed = params.seed;
   rp.threads = params.threads;
+  const std::string stage = std::string("resample ") + what;
+  if (params.progress) {
+    params.progress(stage, 0.0);
+    // The resampler's own stages are short except its main loop ("resample"), which is reported through.
+    rp.progress = [&](const std::string& inner, double fraction) {
+      if (inner == "resample") params.progress(stage, fraction);
+    };
+  }
   try {
     return resample(cloud, rp);
   } catch (const InputError& e) {
@@ -99,10 +142,10 @@ std::string num(double v) {
 
 ResampleParams RegistrationParams::defaultResample() {
   ResampleParams p;
-  p.maxPasses = 6;
-  p.relaxPerPass = 1;
-  p.maxRelaxIterations = 5;
-  p.relaxPatience = 2;
+  p.preprocess = false;
+  p.intrinsic = false;
+  p.maxPasses = 0;
+  p.maxRelaxIterations = 0;
   return p;
 }
 
@@ -114,6 +157,8 @@ void RegistrationParams::validate() const {
     throw std::invalid_argument("registration: overlap must be in (0, 1], got " + std::to_string(overlap));
   if (icpCandidates < 1) throw std::invalid_argument("registration: icpCandidates must be at least 1");
   if (screenIterations < 1) throw std::invalid_argument("registration: screenIterations must be at least 1");
+  if (maxInputPerSample != 0 && maxInputPerSample < 2)
+    throw std::invalid_argument("registration: maxInputPerSample must be 0 (never thin) or at least 2");
   if (!(ambiguityTolerance >= 0.0)) throw std::invalid_argument("registration: ambiguityTolerance must be >= 0");
   search.validate();
   icp.validate();
@@ -158,15 +203,33 @@ RegistrationResult registerClouds(const PointCloud& sourceIn, const PointCloud& 
   r.samples = params.samples;
   stage("validate", t);
 
-  // 2. Resample both to the same M isotropic points: centroid and RMS radius no longer depend on density.
+  // 2. Cheap thinning of dense inputs to maxInputPerSample·M points, then resample both to the same M
+  // isotropic points: centroid and RMS radius no longer depend on density.
   t = Clock::now();
-  const ResampleResult rs = resampleFor(source, params, "source");
-  const ResampleResult rt = resampleFor(target, params, "target");
-  stage("resample", t);
+  const std::size_t workingCap = params.maxInputPerSample * params.samples;
+  source = randomSubset(source, workingCap, params.seed * 2 + 1);
+  target = randomSubset(target, workingCap, params.seed * 2 + 2);
+  r.sourceWorkingPoints = source.size();
+  r.targetWorkingPoints = target.size();
+  stage("thin", t);
+  t = Clock::now();
+  ResampleResult rs = resampleFor(source, params, "source");
+  r.strayDropped = dropStraySamples(rs.cloud.points, source.points);
+  stage("resample_source", t);
+  t = Clock::now();
+  ResampleResult rt = resampleFor(target, params, "target");
+  r.strayDropped += dropStraySamples(rt.cloud.points, target.points);
+  stage("resample_target", t);
+  if (rs.cloud.size() < kMinPoints || rt.cloud.size() < kMinPoints)
+    throw InputError(std::string(rs.cloud.size() < kMinPoints ? "source" : "target") +
+                     ": too few usable points after resampling");
 
   // 3. Normalise: centroid → origin, unit RMS radius.
   t = Clock::now();
-  const Frame fs = frameOf(rs.cloud.points), ft = frameOf(rt.cloud.points);
+  Frame fs = frameOf(rs.cloud.points);
+  const Frame ft = frameOf(rt.cloud.points);
+  // Rigid: one common unit for both clouds, so σ = 1 in the normalised frame is scale 1 in original units.
+  if (!params.estimateScale) fs.radius = ft.radius;
   if (!(fs.radius > 0)) throw InputError("source: zero or non-finite extent after resampling");
   if (!(ft.radius > 0)) throw InputError("target: zero or non-finite extent after resampling");
   r.sourceRadius = fs.radius;
@@ -182,6 +245,7 @@ RegistrationResult registerClouds(const PointCloud& sourceIn, const PointCloud& 
   sp.seed = params.seed;
   sp.threads = params.threads;
   sp.keep = std::max(sp.keep, params.icpCandidates);
+  if (params.progress) sp.progress = [&](double fraction) { params.progress("search", fraction); };
   const RotationSearch search(ns, nt, sp);
   const std::vector<Eigen::Matrix3d> grid = rotationGrid(params.grid, params.eulerSteps, params.so3Count);
   const RotationSearchResult found = search.search(grid);
@@ -215,6 +279,7 @@ RegistrationResult registerClouds(const PointCloud& sourceIn, const PointCloud& 
     return std::sqrt(0.5 * (a * a + b * b));
   };
   for (std::size_t c = 0; c < nc; ++c) {
+    if (params.progress) params.progress("icp", static_cast<double>(c) / static_cast<double>(nc + 1));
     Eigen::Matrix4d init = Eigen::Matrix4d::Identity();
     init.topLeftCorner<3, 3>() = found.candidates[c].rotation;
     icp[c] = similarityIcp(ns, nt, targetTree, init, screen);
@@ -233,6 +298,7 @@ RegistrationResult registerClouds(const PointCloud& sourceIn, const PointCloud& 
       score[best] = symmetricScore(icp[best].T_target_source);
     }
   }
+  if (params.progress) params.progress("icp", 1.0);
   stage("icp", t);
 
   // Ambiguity: a clearly different pose (≥ 10° away after ICP) that fits about as well.
@@ -284,6 +350,18 @@ RegistrationResult registerClouds(const PointCloud& sourceIn, const PointCloud& 
   r.hausdorffTrimmed = params.overlap < 1.0 ? hausdorffDistance(applied(rs.cloud.points, r.T_target_source),
                                                                 rt.cloud.points, params.overlap, params.threads)
                                             : r.hausdorff;
+  {  // overlap: share of the aligned source samples with a target sample within one sample spacing
+    const std::vector<Eigen::Vector3d> aligned = applied(rs.cloud.points, r.T_target_source);
+    const KnnIndex targetSamples(rt.cloud.points);
+    const double l = spacingStats(rt.cloud.points, params.threads).mean;
+    std::vector<char> near(aligned.size());
+    parallelFor(aligned.size(), params.threads, [&](std::size_t i) {
+      double d2 = 0;
+      targetSamples.nearest(aligned[i], &d2);
+      near[i] = d2 <= l * l;
+    });
+    r.overlapShare = static_cast<double>(std::count(near.begin(), near.end(), 1)) / static_cast<double>(near.size());
+  }
   stage("evaluate", t);
   stage("total", tTotal);
   return r;
@@ -303,6 +381,7 @@ std::string RegistrationResult::toJson() const {
   s << "],\n  \"rotation_angle_deg\": " << num(rotationAngleDeg) << ",\n  \"rotation_axis\": " << vec(rotationAxis)
     << ",\n  \"translation\": " << vec(translation) << ",\n  \"rmse\": " << num(rmse)
     << ",\n  \"hausdorff\": " << num(hausdorff) << ",\n  \"hausdorff_trimmed\": " << num(hausdorffTrimmed)
+    << ",\n  \"overlap_share\": " << num(overlapShare)
     << ",\n  \"normalised_energy\": " << num(normalisedEnergy) << ",\n  \"grid\": \"" << grid
     << "\",\n  \"grid_size\": " << gridSize << ",\n  \"best_candidate\": " << bestCandidate
     << ",\n  \"candidate_rank\": " << candidateRank << ",\n  \"icp_iterations\": " << icpIterations
@@ -311,7 +390,8 @@ std::string RegistrationResult::toJson() const {
     << ",\n  \"ambiguous\": " << (ambiguous ? "true" : "false") << ",\n  \"planar\": " << (planar ? "true" : "false")
     << ",\n  \"ambiguity_reason\": \"" << ambiguityReason << "\",\n  \"second_best_score_ratio\": "
     << num(secondBestScoreRatio) << ",\n  \"source_points\": " << sourcePoints << ",\n  \"target_points\": "
-    << targetPoints << ",\n  \"samples\": " << samples << ",\n  \"source_radius\": " << num(sourceRadius)
+    << targetPoints << ",\n  \"source_working_points\": " << sourceWorkingPoints
+    << ",\n  \"target_working_points\": " << targetWorkingPoints << ",\n  \"stray_samples_dropped\": " << strayDropped << ",\n  \"samples\": " << samples << ",\n  \"source_radius\": " << num(sourceRadius)
     << ",\n  \"target_radius\": " << num(targetRadius) << ",\n  \"timings\": {";
   for (std::size_t i = 0; i < timings.size(); ++i)
     s << (i ? ", " : "") << "\"" << timings[i].name << "_s\": " << num(timings[i].seconds);

@@ -20,6 +20,15 @@ namespace {
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr std::size_t kBlock = 64;  // candidates evaluated against one fixed bound
 
+/// fn(i) for i in [0, n) in parallel, one iteration at a time: a block has only 64 candidates (iires::parallelFor
+/// hands out chunks of 256, i.e. the whole block to one thread). Each iteration writes only its own slot.
+template <typename Fn>
+void parallelEach(std::size_t n, int threads, Fn&& fn) {
+  const long long count = static_cast<long long>(n);
+#pragma omp parallel for schedule(dynamic, 1) num_threads(resolveThreads(threads))
+  for (long long i = 0; i < count; ++i) fn(static_cast<std::size_t>(i));
+}
+
 /// Fisher–Yates with a seeded 64-bit engine: the order does not depend on the standard library.
 std::vector<Eigen::Vector3d> shuffled(std::vector<Eigen::Vector3d> points, std::uint64_t seed) {
   std::mt19937_64 rng(seed);
@@ -85,9 +94,10 @@ struct RotationSearch::Impl {
 
   /// The best @p keepCount of @p order (indices into @p rotations) by energy @p fn, with early exit against
   /// the keepCount-th best so far, block by block (deterministic for any thread count).
-  template <typename Fn>
+  /// @p onBlock(done) after each block (progress).
+  template <typename Fn, typename OnBlock>
   std::vector<Scored> bestOf(const std::vector<Eigen::Matrix3d>& rotations, const std::vector<std::size_t>& order,
-                             std::size_t keepCount, Fn&& fn, std::size_t* evaluations) const {
+                             std::size_t keepCount, Fn&& fn, std::size_t* evaluations, OnBlock&& onBlock) const {
     std::vector<Scored> top;
     double bound = kInf;
     std::vector<double> e(std::max(kBlock, keepCount));
@@ -95,13 +105,14 @@ struct RotationSearch::Impl {
     for (std::size_t start = 0, block = std::min(keepCount, kBlock); start < order.size();
          start += block, block = kBlock) {
       const std::size_t count = std::min(block, order.size() - start);
-      parallelFor(count, params.threads, [&](std::size_t j) { e[j] = fn(rotations[order[start + j]], bound); });
+      parallelEach(count, params.threads, [&](std::size_t j) { e[j] = fn(rotations[order[start + j]], bound); });
       if (evaluations) *evaluations += count;
       for (std::size_t j = 0; j < count; ++j)
         if (std::isfinite(e[j])) top.push_back({e[j], order[start + j]});
       std::sort(top.begin(), top.end());
       if (top.size() > keepCount) top.resize(keepCount);
       if (top.size() == keepCount) bound = top.back().energy;
+      onBlock(start + count);
     }
     return top;
   }
@@ -160,15 +171,22 @@ RotationSearchResult RotationSearch::search(const std::vector<Eigen::Matrix3d>& 
   // Coarse pass over the whole grid: a lower bound of E on point subsets.
   std::vector<std::size_t> all(grid.size());
   for (std::size_t i = 0; i < all.size(); ++i) all[i] = i;
-  const auto coarse = m.bestOf(grid, all, p.coarseKeep,
-                               [&](const Eigen::Matrix3d& r, double b) { return m.coarse(r, b); }, nullptr);
+  // Progress: the coarse pass is most of the work (≈ 90 %), the exact pass and the refinement the rest.
+  auto report = [&](double fraction) {
+    if (p.progress) p.progress(fraction);
+  };
+  report(0.0);
+  const auto coarse = m.bestOf(
+      grid, all, p.coarseKeep, [&](const Eigen::Matrix3d& r, double b) { return m.coarse(r, b); }, nullptr,
+      [&](std::size_t done) { report(0.9 * static_cast<double>(done) / static_cast<double>(grid.size())); });
 
   // Exact energy of the survivors, best coarse first (so the bound tightens early).
   std::vector<std::size_t> survivors;
   for (const auto& s : coarse) survivors.push_back(s.index);
   const auto exact = m.bestOf(grid, survivors, p.fullKeep,
                               [&](const Eigen::Matrix3d& r, double b) { return m.full(r, b); },
-                              &result.exactEvaluations);
+                              &result.exactEvaluations, [](std::size_t) {});
+  report(0.95);
 
   // Distinct candidates: greedy, lowest energy first, at least minSeparationDeg apart.
   const double minSep = p.minSeparationDeg * M_PI / 180.0;
@@ -198,7 +216,7 @@ RotationSearchResult RotationSearch::search(const std::vector<Eigen::Matrix3d>& 
     int moves = 0;
     for (int level = 0; level < p.refineLevels && moves < 64;) {
       const Eigen::Matrix3d current = c.rotation;
-      parallelFor(steps.size(), p.threads, [&](std::size_t j) {
+      parallelEach(steps.size(), p.threads, [&](std::size_t j) {
         e[j] = m.full(expMap(h * steps[j].normalized()) * current, c.energy);
       });
       result.exactEvaluations += steps.size();
@@ -217,6 +235,7 @@ RotationSearchResult RotationSearch::search(const std::vector<Eigen::Matrix3d>& 
   }
   std::stable_sort(result.candidates.begin(), result.candidates.end(),
                    [](const RotationCandidate& a, const RotationCandidate& b) { return a.energy < b.energy; });
+  report(1.0);
   result.pointQueries = m.queries.load();
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return result;

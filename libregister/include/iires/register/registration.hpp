@@ -7,6 +7,7 @@
 #include <Eigen/Core>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -20,7 +21,8 @@ namespace iires::reg {
 
 /// @brief Parameters of registerClouds().
 struct RegistrationParams {
-  std::size_t samples = 2000;  ///< M, points each cloud is resampled to (≥ 50) [paper: around 2000]
+  std::size_t samples = 1000;  ///< M, points each cloud is resampled to (≥ 50) [paper: around 2000; 1000 is
+                               ///< as accurate in the benchmark at half the cost]
   RotationGridType grid = RotationGridType::kSo3;  ///< candidate rotations; kEuler is the paper's grid
   int eulerSteps = 24;         ///< Euler grid: steps per angle [24, θ = π/12]
   std::size_t so3Count = 6144; ///< SO(3) grid: rotations (6,144 cover SO(3) within ≈ 11.4°, as 24³ Euler)
@@ -35,10 +37,21 @@ struct RegistrationParams {
   RotationSearchParams search;  ///< coarse/fine search settings (overlap, seed, threads are set from here)
   IcpParams icp;               ///< ICP settings (overlap, estimateScale, threads are set from here)
   ResampleParams resample = defaultResample();  ///< resampler settings (targetCount, seed, threads set here)
+  /// A cloud with more than this × M points is first cut to a seeded random subset of that many (cheap; the
+  /// resampler then evens out the density). 0 = never. [4: the surface stays sampled twice as finely as M]
+  std::size_t maxInputPerSample = 4;
+  /// Optional progress report, called from the calling thread with a stage name ("resample source",
+  /// "resample target", "search", "icp") and the fraction of that stage done, in [0, 1]. Empty = none.
+  /// Does not affect the result.
+  std::function<void(const std::string& stage, double fraction)> progress;
   std::uint64_t seed = 0;      ///< resampling tie-breaks and the search's visiting order
   int threads = 0;             ///< 0 = all cores; the result does not depend on it
 
-  /// @brief Resampler settings tuned for registration: uniform enough, fewer relaxation iterations.
+  /// @brief Resampler settings tuned for registration: the resampler's density initialisation only (weighted
+  /// sample elimination to M: blue-noise, density-independent), without pre-processing, intrinsic control,
+  /// edge passes or Lloyd relaxation. The Hausdorff search needs M evenly spread points, not a polished
+  /// sampling; the full pipeline costs ≈ 3× more for the same success rate (BENCHMARKS.md). Use
+  /// ResampleParams{} for noisy scans with outliers.
   static ResampleParams defaultResample();
   /// @throws std::invalid_argument when a field is out of range.
   void validate() const;
@@ -55,6 +68,8 @@ struct RegistrationResult {
   double rmse = 0;              ///< RMS distance of the ICP's (trimmed) matched pairs, target units
   double hausdorff = 0;         ///< symmetric Hausdorff distance of the aligned resampled clouds, target units
   double hausdorffTrimmed = 0;  ///< the same, trimmed to the overlap (= hausdorff when overlap = 1)
+  double overlapShare = 0;      ///< share of the aligned source samples within one mean sample spacing of a
+                                ///< target sample (1 = the source lies entirely on the target)
   double normalisedEnergy = 0;  ///< search energy E of the chosen candidate (normalised units)
   std::string grid;             ///< "so3" or "euler"
   std::size_t gridSize = 0;     ///< candidates in the grid
@@ -69,7 +84,12 @@ struct RegistrationResult {
   double secondBestScoreRatio = 0;  ///< score of the best clearly different pose / best score (≥ 1; 0 = none)
   std::size_t sourcePoints = 0, targetPoints = 0, samples = 0;  ///< input sizes, M
   double sourceRadius = 0, targetRadius = 0;  ///< RMS radii used for the normalisation, original units
-  std::vector<StageTime> timings;  ///< per stage (validate, resample, normalise, search, icp, evaluate, total)
+  std::size_t sourceWorkingPoints = 0, targetWorkingPoints = 0;  ///< points given to the resampler (after thinning)
+  /// Resampled points dropped as non-finite or far outside their input's bounding box (a failed surface
+  /// projection); normally 0
+  std::size_t strayDropped = 0;
+  /// Wall time per stage: validate, thin, resample_source, resample_target, normalise, search, icp, evaluate, total
+  std::vector<StageTime> timings;
 
   /// @brief The report as a JSON object: transform (4 rows), scale, rotation, rotation_angle_deg, translation,
   /// rmse, hausdorff, best_candidate, icp_iterations, ambiguous, timings, ...

@@ -7,6 +7,7 @@
 #include <Eigen/Core>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <limits>
 #include <memory>
 #include <string>
@@ -28,6 +29,9 @@ struct RotationSearchParams {
   double refineStepDeg = 5.0;     ///< first local step (≈ half the grid spacing), degrees (> 0)
   std::uint64_t seed = 0;         ///< order in which points are visited (early exits come early in random order)
   int threads = 0;                ///< 0 = all cores; the result does not depend on it
+  /// Optional: called from the calling thread with the fraction of the search done, in [0, 1] (the coarse
+  /// pass over the grid is most of it). Does not affect the result.
+  std::function<void(double fraction)> progress;
 
   /// @throws std::invalid_argument when a field is out of range.
   void validate() const;
