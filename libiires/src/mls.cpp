@@ -10,6 +10,7 @@
 namespace iires {
 namespace {
 constexpr std::size_t kKernelNeighbour = 8;  // paper: h from the 8th neighbour
+constexpr double kMaxQuadricHeight = 2.0;     // kernel widths: a quadric fit beyond this is not trusted
 }
 
 MlsSurface::MlsSurface(const std::vector<Eigen::Vector3d>& points, const std::vector<Eigen::Vector3d>& normals,
@@ -115,9 +116,13 @@ Eigen::Vector3d MlsSurface::project(const Eigen::Vector3d& x0, Eigen::Vector3d* 
         const Eigen::Vector3d d = (x - a) / h;
         const double pu = d.dot(u), pv = d.dot(v);
         const double f = c[0] + c[1] * pu + c[2] * pv + c[3] * pu * pu + c[4] * pu * pv + c[5] * pv * pv;
-        next = a + h * (pu * u + pv * v + f * normal);
         const double fu = c[1] + 2 * c[3] * pu + c[4] * pv, fv = c[2] + c[4] * pu + 2 * c[5] * pv;
-        normal = (normal - fu * u - fv * v).normalized();
+        // An ill-conditioned fit (a query far outside its few neighbours) can put the height field kernel
+        // widths away from the plane: the plane's projection is the safe answer there.
+        if (std::abs(f) <= kMaxQuadricHeight && std::isfinite(fu) && std::isfinite(fv)) {
+          next = a + h * (pu * u + pv * v + f * normal);
+          normal = (normal - fu * u - fv * v).normalized();
+        }
       }
     }
     x = next;

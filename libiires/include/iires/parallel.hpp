@@ -5,6 +5,7 @@
 
 #include <omp.h>
 
+#include <algorithm>
 #include <cstddef>
 
 namespace iires {
@@ -12,12 +13,15 @@ namespace iires {
 /// @brief Number of threads to use for a requested count (0 = all cores).
 inline int resolveThreads(int requested) { return requested > 0 ? requested : omp_get_max_threads(); }
 
-/// @brief Run fn(i) for i in [0, n) on @p threads threads (0 = all cores), dynamic chunks.
+/// @brief Run fn(i) for i in [0, n) on @p threads threads (0 = all cores), dynamic chunks of up to 256
+/// iterations, fewer for short loops so that every thread gets work.
 /// @note fn must only write state owned by iteration i (or thread-local state it merges in a fixed order).
 template <typename Fn>
 void parallelFor(std::size_t n, int threads, Fn&& fn) {
   const long long count = static_cast<long long>(n);
-#pragma omp parallel for schedule(dynamic, 256) num_threads(resolveThreads(threads))
+  const int team = resolveThreads(threads);
+  const int chunk = static_cast<int>(std::clamp<long long>(count / (8LL * team), 1, 256));
+#pragma omp parallel for schedule(dynamic, chunk) num_threads(team)
   for (long long i = 0; i < count; ++i) fn(static_cast<std::size_t>(i));
 }
 
