@@ -342,7 +342,7 @@ TEST_P(Catalogue, HugeCoordinateOffsetSucceeds) {
                                  : spec_.badTarget  ? 300u
                                                     : 2000u;
     std::string message;
-    EXPECT_EQ(run(command(input, out, spec_.goodCount, extra), &message), 0) << message;
+    EXPECT_EQ(run(command(input, out, isRegister(spec_) ? 200 : spec_.goodCount, extra), &message), 0) << message;
     const auto points = outputPoints(spec_, out);
     EXPECT_EQ(points.size(), expected);
     double worst = points.empty() ? 1e300 : 0.0;
@@ -350,6 +350,15 @@ TEST_P(Catalogue, HugeCoordinateOffsetSucceeds) {
     return worst;
   };
   const double far = worstDistance(centre, ""), near = worstDistance(Eigen::Vector3d::Zero(), "");
+  if (isRegister(spec_)) {
+    // The aligned sphere's error is the registration's own (scale and centre from 200 samples a cloud), measured
+    // 0.004-0.021 at the origin and 0.009-0.011 at 1e7 (-m 60: 0.044 and 0.059): it varies from run to run
+    // more than any rounding at 1e7 could matter, so no ratio test. Lost precision (e.g. floats at 1e7) would
+    // show as errors of the order of the radius.
+    EXPECT_LT(far, 0.04) << "at the origin " << near;
+    EXPECT_LT(near, 0.04);
+    return;
+  }
   EXPECT_LT(far, 2e-3);
   EXPECT_LE(far, 1.1 * near + 1e-6) << "the offset costs precision; at the origin " << near;
   if (resampler) {
