@@ -7,6 +7,7 @@
 #include "common.hpp"
 #include "progress.hpp"
 #include "iires/io.hpp"
+#include "iires/validate.hpp"
 #include "iires/reconstruct/reconstruct.hpp"
 
 namespace {
@@ -55,7 +56,17 @@ int main(int argc, char** argv) {
       if (!output.empty()) throw iires::InputError("--quality-only takes no OUTPUT_MESH (got " + output + ")");
       progress.update("read", 0.0);
       const iires::TriangleMesh mesh = iires::readMesh(qualityOnly);
-      const iires::PointCloud reference = iires::readPointCloud(input);
+      // NaN/Inf or overflowing coordinates would poison every distance: reject them, naming the file.
+      for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
+        if (!mesh.vertices[i].allFinite())
+          throw iires::InputError(qualityOnly + ": vertex " + std::to_string(i) +
+                                  " has a non-finite coordinate (NaN or Inf)");
+        if (mesh.vertices[i].cwiseAbs().maxCoeff() > iires::kMaxCoordinate)
+          throw iires::InputError(qualityOnly + ": vertex " + std::to_string(i) +
+                                  " has a coordinate beyond the supported magnitude");
+      }
+      iires::PointCloud reference = iires::readPointCloud(input);
+      iires::validateCloud(reference, 1, input);
       progress.update("quality", 0.0);
       iires::MeshQualityParams qp;
       qp.threads = params.threads;
