@@ -23,7 +23,6 @@ namespace iires {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-double secondsSince(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
 constexpr std::uint32_t kNone = 0xffffffffu;
 constexpr double kOffSurfaceLimit = 0.6;  // MlsSurface::project's offSurface beyond which a move left the cloud
@@ -724,29 +723,22 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
   ResampleResult result;
   result.requestedPoints = params.targetCount;
   result.inputPoints = cloud.size();
-  auto stage = [&](const char* name, Clock::time_point t) {
-    result.timings.push_back({name, secondsSince(t)});
-    if (params.progress && std::string(name) != "total") params.progress(name, 1.0);
-  };
-  auto begin = [&](const char* name) {
-    if (params.progress) params.progress(name, 0.0);
-    return Clock::now();
-  };
+  const StageClock clock(result.timings, params.progress);
 
-  auto t = begin("validate");
+  auto t = clock.begin("validate");
   const ValidationReport report = validateCloud(cloud, 4, "input");
   result.duplicatesMerged = report.duplicatesMerged;
-  stage("validate", t);
+  clock.end("validate", t);
 
   constexpr std::size_t kMinWorkingPoints = 100000;  // thinning never goes below this: small N keep a fine surface
   const std::size_t workingTarget = std::max(kMinWorkingPoints, params.maxInputPerSample * params.targetCount);
   if (params.maxInputPerSample > 0 && cloud.size() > workingTarget) {
     // Far denser than the output: thin first, so every O(n) stage below works on ≈ maxInputPerSample·N points.
-    t = begin("thin");
+    t = clock.begin("thin");
     const std::size_t target = workingTarget;
     cloud = select(cloud, voxelThin(cloud.points, cloud.normals, target,
                                     bboxDiagonal(cloud.points) / std::sqrt(static_cast<double>(target))));
-    stage("thin", t);
+    clock.end("thin", t);
   }
   result.thinnedPoints = cloud.size();
   // Every stage below loops over the points querying their neighbours: in Morton order those stay in cache.
@@ -754,16 +746,16 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
 
   constexpr std::size_t kPreprocessMinPoints = 25;
   if (params.preprocess && cloud.size() >= kPreprocessMinPoints) {
-    t = begin("preprocess");
+    t = clock.begin("preprocess");
     PreprocessParams pp = params.preprocessing;
     pp.threads = params.threads;
     result.preprocessing = iires::preprocess(cloud, pp);
     cloud = std::move(result.preprocessing.cloud);
     result.preprocessing.cloud = {};
-    stage("preprocess", t);
+    clock.end("preprocess", t);
   }
 
-  t = begin("normals");
+  t = clock.begin("normals");
   if (!cloud.hasNormals()) {
     NormalParams np = params.normals;
     np.threads = params.threads;
@@ -771,15 +763,15 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
   } else {
     for (auto& nrm : cloud.normals) nrm.normalize();
   }
-  stage("normals", t);
+  clock.end("normals", t);
 
-  t = begin("surface");
+  t = clock.begin("surface");
   const MlsSurface surface(cloud.points, cloud.normals, params.mls);
-  stage("surface", t);
+  clock.end("surface", t);
 
   std::shared_ptr<NeighbourRule> rule = params.neighbourRule;
   if (!rule && params.intrinsic) {
-    t = begin("geodesic");
+    t = clock.begin("geodesic");
     GeodesicParams gp = params.geodesic;
     IntrinsicParams ip = params.intrinsicRule;
     gp.threads = ip.threads = params.threads;
@@ -787,21 +779,21 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
     rule = std::make_shared<IntrinsicRule>(result.geodesic, ip);
     result.components = result.geodesic->components();
     result.satellites = result.components * static_cast<std::size_t>(gp.satellites);
-    stage("geodesic", t);
+    clock.end("geodesic", t);
   }
   if (!rule) rule = std::make_shared<EuclideanRule>();
 
   std::optional<CurvatureResult> curvature;
   if (params.mode == ResampleMode::kCurvature) {
-    t = begin("curvature");
+    t = clock.begin("curvature");
     CurvatureParams cp = params.curvature;
     cp.threads = params.threads;
     curvature = computeCurvature(cloud.points, cloud.normals, cp);  // eq. (8)–(10)
-    stage("curvature", t);
+    clock.end("curvature", t);
   }
   ResampleParams local = params;  // sharp edges add fixed samples
   if (params.sharpEdges) {
-    t = begin("features");
+    t = clock.begin("features");
     FeatureParams fp = params.features;
     fp.threads = params.threads;
     const FeatureResult features = detectFeatures(cloud, fp);
@@ -817,21 +809,21 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
     result.featureSamples = std::min(onEdges.size(), params.targetCount - params.fixedSamples.size());
     local.fixedSamples.insert(local.fixedSamples.end(), onEdges.begin(),
                               onEdges.begin() + static_cast<long>(result.featureSamples));
-    stage("features", t);
+    clock.end("features", t);
   }
   Resampler resampler(cloud.points, cloud.normals, surface, local, *rule,
                       curvature ? &curvature->sizeFactor : nullptr);
-  t = begin("initialise");
+  t = clock.begin("initialise");
   Samples s = resampler.initialise(result);
-  stage("initialise", t);
+  clock.end("initialise", t);
 
-  t = begin("resample");
+  t = clock.begin("resample");
   resampler.run(s, result);
-  stage("resample", t);
+  clock.end("resample", t);
 
   result.cloud.points = std::move(s.pos);
   result.cloud.normals = std::move(s.nrm);
-  t = begin("report");
+  t = clock.begin("report");
   result.spacing = spacingStats(result.cloud.points, params.threads);
   if (curvature) {  // points and mean spacing per level (each output point takes its nearest input's level)
     const std::size_t levels = curvature->pointsPerLevel.size();
@@ -848,8 +840,8 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
     for (std::size_t q = 0; q < levels; ++q)
       if (result.pointsPerLevel[q]) result.spacingPerLevel[q] /= static_cast<double>(result.pointsPerLevel[q]);
   }
-  stage("report", t);
-  stage("total", start);
+  clock.end("report", t);
+  clock.end("total", start);
   return result;
 }
 

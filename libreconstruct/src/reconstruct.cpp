@@ -13,7 +13,6 @@ namespace iires {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-double secondsSince(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
 std::string num(double x) {
   if (!std::isfinite(x)) return "null";
@@ -95,20 +94,12 @@ ReconstructResult reconstruct(const PointCloud& input, const ReconstructParams& 
   ReconstructResult result;
   result.method = toString(params.method);
   result.inputPoints = input.size();
-  // Each stage is reported when it starts (0) and when it ends (1); the resampler reports its own stages.
-  auto stage = [&](const char* name, Clock::time_point t) {
-    result.timings.push_back({name, secondsSince(t)});
-    if (params.progress && std::string(name) != "total") params.progress(name, 1.0);
-  };
-  auto begin = [&](const char* name) {
-    if (params.progress) params.progress(name, 0.0);
-    return Clock::now();
-  };
+  const StageClock clock(result.timings, params.progress);  // the resampler reports its own stages
 
-  auto t = begin("validate");
+  auto t = clock.begin("validate");
   PointCloud cloud = input;
   validateCloud(cloud, 4, "input");
-  stage("validate", t);
+  clock.end("validate", t);
 
   if (params.resample) {
     t = Clock::now();
@@ -122,9 +113,9 @@ ReconstructResult reconstruct(const PointCloud& input, const ReconstructParams& 
     result.samples = std::move(result.resampling.cloud);
     result.resampling.cloud = PointCloud{};
     result.resampled = true;
-    stage("resample", t);
+    clock.end("resample", t);
   } else {
-    t = begin("normals");
+    t = clock.begin("normals");
     result.samples = cloud;
     if (!result.samples.hasNormals()) {
       NormalParams np = params.resampling.normals;
@@ -132,10 +123,10 @@ ReconstructResult reconstruct(const PointCloud& input, const ReconstructParams& 
       result.samples.normals = estimateNormals(result.samples.points, np);
     }
     for (auto& n : result.samples.normals) n.normalize();
-    stage("normals", t);
+    clock.end("normals", t);
   }
 
-  t = begin("triangulate");
+  t = clock.begin("triangulate");
   if (params.method == ReconstructMethod::kLocal) {
     TriangulateParams tp = params.local;
     tp.threads = params.threads;
@@ -148,9 +139,9 @@ ReconstructResult reconstruct(const PointCloud& input, const ReconstructParams& 
   } else {
     result.mesh = advancingFront(result.samples, params.advancingFront).mesh;
   }
-  stage("triangulate", t);
+  clock.end("triangulate", t);
 
-  t = begin("holes");
+  t = clock.begin("holes");
   std::vector<Eigen::Vector3d> normals = result.samples.normals;  // grows with any vertex hole filling adds
   if (params.minComponentFaces > 1) result.smallComponentFaces = removeSmallComponents(result.mesh, params.minComponentFaces);
   if (params.fillHoles) {
@@ -169,24 +160,24 @@ ReconstructResult reconstruct(const PointCloud& input, const ReconstructParams& 
     if (params.method == ReconstructMethod::kLocal && params.local.flipMaxDihedral > 0 && result.holes.facesAdded)
       result.flipsAfterFilling = flipToDelaunay(result.mesh, params.local.flipMaxDihedral, params.local.maxFlipSweeps);
   }
-  stage("holes", t);
+  clock.end("holes", t);
 
-  t = begin("orient");
+  t = clock.begin("orient");
   result.orientation = orientConsistently(result.mesh, normals);
   const std::size_t before = result.mesh.vertices.size();
   removeUnusedVertices(result.mesh);
   result.unusedVertices = before - result.mesh.vertices.size();
-  stage("orient", t);
+  clock.end("orient", t);
 
   if (params.evaluate) {
-    t = begin("quality");
+    t = clock.begin("quality");
     MeshQualityParams qp = params.quality;
     qp.threads = params.threads;
     qp.seed = params.seed + 1;
     result.quality = evaluateMesh(result.mesh, &cloud, qp);
-    stage("quality", t);
+    clock.end("quality", t);
   }
-  stage("total", start);
+  clock.end("total", start);
   return result;
 }
 
