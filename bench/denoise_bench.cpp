@@ -39,6 +39,8 @@
 #include "iires/preprocess.hpp"
 #include "iires/sampling.hpp"
 
+#include "bench_util.hpp"
+
 namespace {
 
 using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
@@ -63,12 +65,7 @@ struct Options {
   bool cgal = true;
 };
 
-std::vector<std::string> split(const std::string& s) {
-  std::vector<std::string> out;
-  std::stringstream ss(s);
-  for (std::string item; std::getline(ss, item, ',');) out.push_back(item);
-  return out;
-}
+using iires::bench::split;
 
 /// Points sampled every @p step along the mesh edges whose dihedral angle exceeds @p degrees.
 std::vector<Eigen::Vector3d> sharpEdgeSamples(const iires::TriangleMesh& mesh, double degrees, double step) {

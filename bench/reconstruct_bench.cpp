@@ -33,18 +33,14 @@
 #include "iires/resample.hpp"
 #include "iires/sampling.hpp"
 
+#include "bench_util.hpp"
+
 namespace {
 
 using Clock = std::chrono::steady_clock;
 double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
-std::vector<std::string> split(const std::string& s) {
-  std::vector<std::string> out;
-  std::stringstream ss(s);
-  std::string item;
-  while (std::getline(ss, item, ',')) out.push_back(item);
-  return out;
-}
+using iires::bench::split;
 
 /// The line a method reports: quality and topology of its mesh, distance to the true surface, time.
 std::string describe(const iires::TriangleMesh& mesh, const iires::TriangleMesh& truth, double seconds, int threads) {

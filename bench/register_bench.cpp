@@ -40,6 +40,8 @@
 #include "iires/register/registration.hpp"
 #include "iires/sampling.hpp"
 
+#include "bench_util.hpp"
+
 namespace {
 
 using Clock = std::chrono::steady_clock;
@@ -55,13 +57,7 @@ double cpuSeconds() {
 using Vec = Eigen::Vector3d;
 using Cloud = std::vector<Vec>;
 
-std::vector<std::string> split(const std::string& s) {
-  std::vector<std::string> out;
-  std::stringstream ss(s);
-  std::string item;
-  while (std::getline(ss, item, ',')) out.push_back(item);
-  return out;
-}
+using iires::bench::split;
 
 struct Model {
   std::string name;

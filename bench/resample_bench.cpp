@@ -15,6 +15,8 @@
 #include "iires/resample.hpp"
 #include "iires/sampling.hpp"
 
+#include "bench_util.hpp"
+
 namespace {
 
 double now() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
@@ -61,12 +63,7 @@ int main(int argc, char** argv) {
     }
   }
   const iires::TriangleMesh mesh = iires::readMesh(meshPath);
-  iires::MeshSamplingParams sp;
-  sp.count = inputCount;
-  sp.densityRatio = ratio;
-  sp.seed = 1;
-  iires::PointCloud cloud = iires::sampleMesh(mesh, sp);
-  cloud.normals.clear();  // like a raw scan: every method gets positions only
+  const iires::PointCloud cloud = iires::bench::scanLikeSampling(mesh, inputCount, ratio);
   iires::MeshSamplingParams rp;
   rp.count = 300000;
   rp.seed = 2;

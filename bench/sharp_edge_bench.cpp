@@ -28,6 +28,8 @@
 #include "iires/resample.hpp"
 #include "iires/sampling.hpp"
 
+#include "bench_util.hpp"
+
 namespace {
 
 using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
@@ -106,12 +108,7 @@ int main(int argc, char** argv) {
     }
   }
   const iires::TriangleMesh mesh = iires::readMesh(meshPath);
-  iires::MeshSamplingParams sp;
-  sp.count = inputCount;
-  sp.densityRatio = ratio;
-  sp.seed = 1;
-  iires::PointCloud cloud = iires::sampleMesh(mesh, sp);
-  cloud.normals.clear();  // like a raw scan: every method gets positions only
+  const iires::PointCloud cloud = iires::bench::scanLikeSampling(mesh, inputCount, ratio);
   const iires::MeshDistance distance(mesh);
   const Reference ref{&distance, iires::sharpMeshEdges(mesh, 45.0)};
   const std::string name = meshPath.substr(meshPath.find_last_of('/') + 1);
