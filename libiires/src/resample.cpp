@@ -66,6 +66,7 @@ struct Relaxation {
   std::optional<Rings> rings;  // the last iteration's rings
   std::vector<char> active;    // samples whose cell may have changed since (they or a ring neighbour moved)
   int sinceQuery = 0;          // iterations since the candidate lists came from a k-d tree
+  std::vector<char> stale;     // samples whose candidate lists an edit made stale: queried anew next iteration
 };
 
 struct Edge {
@@ -78,17 +79,25 @@ struct Edge {
 /// dominant signed axis is part of the cell key, so facing sheets of a thin part that share a cell (a gap
 /// narrower than the cell) each keep a point.
 std::vector<std::uint32_t> voxelThin(const std::vector<Eigen::Vector3d>& pts, const std::vector<Eigen::Vector3d>& normals,
-                                     std::size_t target, double cell) {
+                                     std::size_t target, double cell, std::uint64_t seed = 0) {
   Eigen::Vector3d lo = pts[0];
   for (const auto& p : pts) lo = lo.cwiseMin(p);
+  // A seed shifts the grid by a fraction of a cell in each axis (seed 0: no shift).
+  Eigen::Vector3d shift = Eigen::Vector3d::Zero();
+  for (int a = 0; seed && a < 3; ++a) {
+    std::uint64_t z = seed + 0x9e3779b97f4a7c15ull * static_cast<std::uint64_t>(a + 1);
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+    shift[a] = static_cast<double>((z ^ (z >> 31)) >> 11) * 0x1.0p-53;
+  }
   auto occupancy = [&](double size, std::vector<std::uint32_t>* chosen) {
     std::unordered_map<std::uint64_t, std::uint32_t> best;
     best.reserve(std::min(pts.size(), target * 4));
     auto key = [&](const Eigen::Vector3d& p, Eigen::Vector3d& centre) {
-      const Eigen::Vector3d q = (p - lo) / size;
+      const Eigen::Vector3d q = (p - lo) / size + shift;
       const auto ix = static_cast<std::uint64_t>(q.x()), iy = static_cast<std::uint64_t>(q.y()),
                  iz = static_cast<std::uint64_t>(q.z());
-      centre = lo + size * Eigen::Vector3d(ix + 0.5, iy + 0.5, iz + 0.5);
+      centre = lo + size * (Eigen::Vector3d(ix + 0.5, iy + 0.5, iz + 0.5) - shift);
       return (ix << 42) ^ (iy << 21) ^ iz;
     };
     auto normalClass = [&](std::uint32_t i) -> std::uint64_t {
@@ -185,6 +194,7 @@ Rings Resampler::computeRings(const Samples& s, double cellRadius, const Relaxat
   const Rings* previous = relaxation && relaxation->rings ? &*relaxation->rings : nullptr;
   if (!previous) requery = true;
   auto active = [&](std::size_t i) { return !previous || relaxation->active[i]; };
+  const std::vector<char>* stale = relaxation && !relaxation->stale.empty() ? &relaxation->stale : nullptr;
   const int k = params_.neighbours;
   const std::size_t stride = static_cast<std::size_t>(k) + 1;
   Rings r;
@@ -205,7 +215,7 @@ Rings Resampler::computeRings(const Samples& s, double cellRadius, const Relaxat
       if (active(i)) r.size[i] = (*size_)[surface_.index().nearest(s.pos[i])];
     });
   std::optional<KnnIndex> index;
-  if (requery) index.emplace(s.pos);
+  if (requery || stale) index.emplace(s.pos);
   // The disc bounding each cell, as a polygon circumscribing the unit circle.
   constexpr int kDiscEdges = 16;
   std::array<Eigen::Vector2d, kDiscEdges> unitDisc;
@@ -229,7 +239,7 @@ Rings Resampler::computeRings(const Samples& s, double cellRadius, const Relaxat
     auto& byDistance = sc.byDistance;
     auto& nb = sc.nb;
     const auto candidates = r.candidates.begin() + static_cast<long>(i * stride);
-    if (index) {
+    if (requery || (stale && (*stale)[i])) {
       index->knn(s.pos[i], stride, idx, d2);
     } else {
       byDistance.clear();
@@ -337,6 +347,7 @@ double Resampler::relax(Samples& s, double l, int iterations, Relaxation& state)
     const bool requery = !state.rings || state.sinceQuery >= kRequeryEvery;
     Rings r = computeRings(s, l, &state, requery);
     state.sinceQuery = requery ? 1 : state.sinceQuery + 1;
+    state.stale.clear();
     if (!state.rings) state.active.assign(n, 1);
     std::vector<Eigen::Vector3d> pos(s.pos), nrm(s.nrm);
     parallelFor(n, params_.threads, [&](std::size_t i) {
@@ -349,7 +360,9 @@ double Resampler::relax(Samples& s, double l, int iterations, Relaxation& state)
         Eigen::Vector3d nn;
         double off = 0;
         const Eigen::Vector3d p = surface_.project(target, &nn, &off, &s.nrm[i], &s.cache[i]);
-        if (off <= kOffSurfaceLimit) {
+        // A boundary sample never ends farther out than it was (the projection itself may push it there,
+        // where the MLS surface only extrapolates past the last input points).
+        if (off <= kOffSurfaceLimit && (p - s.pos[i]).dot(r.outward[i]) <= 0) {
           pos[i] = p;
           nrm[i] = nn;
           return;
@@ -410,6 +423,28 @@ EditMap Resampler::splitAndCollapse(Samples& s, const std::vector<Edge>& sorted,
         newPos.push_back(pos[c]), newNrm.push_back(nrm[c]);
         map.touched.push_back(batch[c]->a), map.touched.push_back(batch[c]->b);
       }
+  }
+  // The two diagonals of a cocircular quad (a regular grid of input vertices) are both 1-ring edges with one
+  // midpoint: split samples closer than a tenth of their edge to an earlier one are dropped, since coincident
+  // samples never see each other in a tangent-plane cell and would stay together.
+  if (newPos.size() > 1) {
+    const KnnIndex index(newPos);
+    std::vector<char> keep(newPos.size(), 1);
+    std::vector<std::uint32_t> idx;
+    std::vector<double> d2;
+    for (std::size_t c = 0; c < newPos.size(); ++c) {
+      const double len = (s.pos[map.touched[2 * c]] - s.pos[map.touched[2 * c + 1]]).norm();
+      index.radius(newPos[c], 0.1 * len, idx, d2);
+      for (std::uint32_t j : idx) keep[c] &= !(j < c && keep[j]);
+    }
+    std::size_t w = 0;
+    for (std::size_t c = 0; c < newPos.size(); ++c)
+      if (keep[c]) {
+        newPos[w] = newPos[c], newNrm[w] = newNrm[c];
+        map.touched[2 * w] = map.touched[2 * c], map.touched[2 * w + 1] = map.touched[2 * c + 1];
+        ++w;
+      }
+    newPos.resize(w), newNrm.resize(w), map.touched.resize(2 * w);
   }
   std::vector<char> touched(s.size(), 0), removed(s.size(), 0);
   std::size_t collapsed = 0;
@@ -477,27 +512,33 @@ void Resampler::carry(Relaxation& state, const EditMap& edits, std::size_t count
     r.open[to] = old.open[i];
     active[to] = state.active[i];
   }
-  for (std::size_t a = count - edits.added; a < count; ++a) active[a] = 1;
+  // The samples an edit can affect (split samples, edited ones and their old neighbourhoods) get fresh
+  // candidates next iteration; the others only re-sort theirs.
+  std::vector<char> edited(count, 0);
+  for (std::size_t a = count - edits.added; a < count; ++a) edited[a] = 1;
   for (std::uint32_t e : edits.touched) {
-    if (edits.newIndex[e] != kNone) active[edits.newIndex[e]] = 1;
+    if (edits.newIndex[e] != kNone) edited[edits.newIndex[e]] = 1;
     for (std::size_t x = 0; x < stride; ++x)
       if (const std::uint32_t j = old.candidates[e * stride + x]; j != kNone && edits.newIndex[j] != kNone)
-        active[edits.newIndex[j]] = 1;
+        edited[edits.newIndex[j]] = 1;
   }
+  for (std::size_t i = 0; i < count; ++i) active[i] |= edited[i];
   state.rings = std::move(r);
   state.active = std::move(active);
-  state.sinceQuery = std::numeric_limits<int>::max() / 2;  // the next iteration queries a fresh k-d tree
+  state.stale = std::move(edited);
+  if (getenv("E4")) { state.stale.assign(count, 1); }
 }
 
 /// Rings for the edge operations, from a relaxation's last rings: cells bounded by their neighbours alone are
-/// the same with a wider bounding disc, so only the cells the last moves made stale (the active ones) and the
-/// open ones (boundaries, sparse regions) are recomputed, with the disc of radius 1.5·l that lets long edges
-/// — across holes — show.
+/// the same with a wider bounding disc, so only the open ones (boundaries, sparse regions) are recomputed, with
+/// the disc of radius 1.5·l that lets long edges — across holes — show. The others keep the rings of the last
+/// iteration: one Lloyd step moves a sample by a fraction of a spacing, which changes few 1-rings, and the edge
+/// lengths are measured at the current positions.
 Rings Resampler::edgeRings(const Samples& s, double l, const Relaxation& state) const {
   if (!state.rings) return computeRings(s, 1.5 * l);
-  Relaxation wide{state.rings, state.active, 0};
-  for (std::size_t i = 0; i < s.size(); ++i) wide.active[i] |= state.rings->open[i];
-  return computeRings(s, 1.5 * l, &wide, true);
+  Relaxation wide{state.rings, state.rings->open, 0, {}};
+  if (getenv("E1")) { for (std::size_t i = 0; i < s.size(); ++i) wide.active[i] |= state.active[i]; return computeRings(s, 1.5 * l, &wide, true); }
+  return computeRings(s, 1.5 * l, &wide, false);
 }
 
 /// Weighted sample elimination (Yuksel 2015) of free samples down to @p count: repeatedly drop the sample whose
@@ -506,7 +547,7 @@ void Resampler::eliminate(Samples& s, std::size_t count) {
   if (s.size() <= count) return;
   const double rmax = std::sqrt(surface_.area() / (2.0 * std::sqrt(3.0) * static_cast<double>(count)));
   const double ratio = static_cast<double>(count) / static_cast<double>(s.size());
-  const double rmin = rmax * (1.0 - 0.65 * std::pow(ratio, 1.5));
+  const double rmin = getenv("E3") ? rmax * (1.0 - 0.65 * std::pow(ratio, 1.5)) : rmax * (1.0 - std::pow(ratio, 1.5)) * 0.65;  // Yuksel: γ = 1.5, β = 0.65
   // Adaptive mode: the Poisson-disk radius of a pair scales with the mean size factor of its two samples.
   std::vector<double> sz(s.size(), 1.0);
   if (size_)
@@ -570,12 +611,15 @@ Samples Resampler::initialise(ResampleResult& result) {
     chosen.resize(pts_.size());
     std::iota(chosen.begin(), chosen.end(), 0u);
   } else {
-    chosen = voxelThin(pts_, normals_, candidates, std::sqrt(surface_.area() / static_cast<double>(candidates)));
+    chosen = voxelThin(pts_, normals_, candidates, std::sqrt(surface_.area() / static_cast<double>(candidates)),
+                       params_.seed);
   }
-  std::vector<Eigen::Vector3d> pos(chosen.size()), nrm(chosen.size());
-  parallelFor(chosen.size(), params_.threads, [&](std::size_t c) { pos[c] = surface_.project(pts_[chosen[c]], &nrm[c]); });
-  for (std::size_t c = 0; c < chosen.size(); ++c) s.add(pos[c], nrm[c], false);
+  // Candidates are input points (on the cloud already): only the survivors of the elimination are projected.
+  for (std::uint32_t c : chosen) s.add(pts_[c], normals_[c], false);
   eliminate(s, n);
+  parallelFor(s.size(), params_.threads, [&](std::size_t i) {
+    if (!s.fixed[i]) s.pos[i] = surface_.project(s.pos[i], &s.nrm[i], nullptr, &s.nrm[i], &s.cache[i]);
+  });
   rule_.update(s.pos, s.nrm);
   result.initialSamples = s.size();
   return s;
@@ -611,8 +655,12 @@ void Resampler::run(Samples& s, ResampleResult& result) {
     if (static_cast<double>(map.touched.size()) > kCarryShare * static_cast<double>(s.size())) relaxation = {};
     carry(relaxation, map, s.size());
   };
-  for (int pass = 0; pass < params_.maxPasses; ++pass) {
-    if (params_.progress) params_.progress("resample", 0.8 * pass / params_.maxPasses);
+  // maxPasses bounds the passes at N; passes that still change the count (upsampling doubles it at most once
+  // per pass) come on top, up to kMaxCountPasses of them.
+  constexpr int kMaxCountPasses = 8;
+  for (int pass = 0, atN = 0; atN < params_.maxPasses && pass < params_.maxPasses + kMaxCountPasses; ++pass) {
+    if (params_.progress) params_.progress("resample", 0.8 * atN / params_.maxPasses);
+    atN += s.size() == n;
     const std::vector<Edge> e = sortedEdges(edgeRings(s, l, relaxation));
     l = targetLength(e);
     ++result.passes;
@@ -632,6 +680,13 @@ void Resampler::run(Samples& s, ResampleResult& result) {
       const std::size_t excess = s.size() > n ? s.size() - n : 0, deficit = n > s.size() ? n - s.size() : 0;
       collapses = std::min(collapses, splits + excess);
       splits = std::min(splits, collapses + deficit);
+      // Upsampling can stall short of N: l comes from the 1-ring edges, which miss the holes a sparse input
+      // leaves, so few edges exceed splitRatio·l. The longest edges then make up the deficit (up to half the
+      // samples per pass).
+      if (deficit > 0 && splits < collapses + deficit) {
+        splits = std::min(collapses + deficit, std::max(splits, s.size() / 2));
+        minSplit = 0;
+      }
     }
     edit(e, splits, minSplit, collapses, maxCollapse);
     relax(s, l, params_.relaxPerPass, relaxation);

@@ -37,10 +37,10 @@ struct ResampleParams {
   int neighbours = 14;              ///< Euclidean candidates per sample for its 1-ring (≥ 6)
   double splitRatio = 1.6;          ///< split edges longer than splitRatio·l [paper 1.6; Botsch–Kobbelt 4/3]
   double collapseRatio = 0.8;       ///< collapse edges shorter than collapseRatio·l [0.8]
-  int maxPasses = 8;                ///< split/collapse + relaxation passes (count control, then clean-up at N)
+  int maxPasses = 5;                ///< split/collapse + relaxation passes (count control, then clean-up at N)
   int relaxPerPass = 2;             ///< Lloyd iterations after each pass's edge operations
   double maxEditShare = 0.005;      ///< at N, a pass replaces at most this share of samples (collapse + split)
-  int maxRelaxIterations = 16;      ///< cap on the final Lloyd relaxation iterations (run in rounds of 4)
+  int maxRelaxIterations = 8;       ///< cap on the final Lloyd relaxation iterations (run in rounds of 4)
   int relaxPatience = 1;            ///< stop the final relaxation after this many rounds without a better CV
   double overRelaxation = 1.5;      ///< Lloyd step factor ω: move to p + ω(c − p); 1 = plain Lloyd, < 2
   double candidateFactor = 3.0;     ///< density initialisation keeps ≈ this × N voxel cells, then eliminates to N
@@ -54,7 +54,7 @@ struct ResampleParams {
   PreprocessParams preprocessing;   ///< its parameters (`--outliers`, `--no-denoise`)
   MlsParams mls;                    ///< the surface every sample is projected onto
   NormalParams normals;             ///< used when the input has no normals
-  std::uint64_t seed = 0;           ///< tie-breaking in the initial sample elimination; same seed → same output
+  std::uint64_t seed = 0;           ///< the initial candidates' voxel grid offset and elimination ties; same seed → same output
   int threads = 0;                  ///< 0 = all cores; the output does not depend on it
   /// Intrinsic control (paper §3.2): neighbours must also be consistent in geodesic coordinates and lie on
   /// the same component, so samples never link across a thin gap or between objects. false = Euclidean.
