@@ -37,7 +37,9 @@ int main(int argc, char** argv) {
     app.add_flag("--no-denoise", noDenoise, "skip the MLS denoising of the input");
     app.add_flag("--denoise-only", denoiseOnly,
                  "only pre-process (outliers + denoising) and write the cleaned cloud at its own point count");
-    app.add_option("--seed", params.seed, "seed for tie-breaking; same seed -> same output");
+    app.add_option("--seed", params.seed, "seed of the initial candidates' grid; same seed -> same output");
+    app.add_option("--input-per-sample", params.maxInputPerSample,
+                   "thin inputs denser than this many points per output point first (default 6; 0 = never)");
     app.add_option("--threads", params.threads, "threads (0 = all cores); the output does not depend on it");
     app.add_option("--report", reportPath, "write the report as JSON to this file");
     app.add_flag("--no-intrinsic", noIntrinsic,

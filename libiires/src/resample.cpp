@@ -361,8 +361,9 @@ double Resampler::relax(Samples& s, double l, int iterations, Relaxation& state)
         double off = 0;
         const Eigen::Vector3d p = surface_.project(target, &nn, &off, &s.nrm[i], &s.cache[i]);
         // A boundary sample never ends farther out than it was (the projection itself may push it there,
-        // where the MLS surface only extrapolates past the last input points).
-        if (off <= kOffSurfaceLimit && (p - s.pos[i]).dot(r.outward[i]) <= 0) {
+        // where the MLS surface only extrapolates past the last input points) and stays closer to the cloud.
+        if (off <= (r.outward[i].isZero() ? kOffSurfaceLimit : 0.5 * kOffSurfaceLimit) &&
+            (p - s.pos[i]).dot(r.outward[i]) <= 0) {
           pos[i] = p;
           nrm[i] = nn;
           return;
@@ -785,7 +786,7 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
   result.duplicatesMerged = report.duplicatesMerged;
   clock.end("validate", t);
 
-  constexpr std::size_t kMinWorkingPoints = 100000;  // thinning never goes below this: small N keep a fine surface
+  constexpr std::size_t kMinWorkingPoints = 60000;  // thinning never goes below this: small N keep a fine surface
   const std::size_t workingTarget = std::max(kMinWorkingPoints, params.maxInputPerSample * params.targetCount);
   if (params.maxInputPerSample > 0 && cloud.size() > workingTarget) {
     // Far denser than the output: thin first, so every O(n) stage below works on ≈ maxInputPerSample·N points.

@@ -45,9 +45,11 @@ struct ResampleParams {
   double overRelaxation = 1.5;      ///< Lloyd step factor ω: move to p + ω(c − p); 1 = plain Lloyd, < 2
   double candidateFactor = 3.0;     ///< density initialisation keeps ≈ this × N voxel cells, then eliminates to N
   /// Inputs with more than this × N points are voxel-thinned to about that many first (one point per cell, the
-  /// nearest its centre; never below 100,000): the surface stays sampled several times finer than the output.
-  /// 0 = never thin.
-  std::size_t maxInputPerSample = 16;
+  /// nearest its centre; never below 60,000): the surface stays sampled several times finer than the output
+  /// (its spacing ≤ 0.4 of the output's), and every stage before the resampling loop costs O(N) instead of
+  /// O(input). 0 = never thin (the MLS surface of every input point; measured 25–50 % lower mean error, same
+  /// uniformity, 1.7× the time at 100k → 10k).
+  std::size_t maxInputPerSample = 6;
   /// Pre-processing of the input before anything else (paper §3.1): outliers pulled back (or removed/kept)
   /// and MLS denoising. Skipped for clouds too small for it (fewer than 25 points).
   bool preprocess = true;
