@@ -106,6 +106,23 @@ bool triangulatePolygon(const TriangleMesh& mesh, const std::vector<Eigen::Vecto
   return true;
 }
 
+/// Distance from @p p to triangle (a, b, c).
+double pointTriangleDistance(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                             const Eigen::Vector3d& c) {
+  const Eigen::Vector3d n = (b - a).cross(c - a);
+  if (n.squaredNorm() > 0) {
+    const Eigen::Vector3d q = p - n * (p - a).dot(n) / n.squaredNorm();  // projection onto the plane
+    if ((b - a).cross(q - a).dot(n) >= 0 && (c - b).cross(q - b).dot(n) >= 0 && (a - c).cross(q - c).dot(n) >= 0)
+      return (p - q).norm();
+  }
+  auto segment = [&](const Eigen::Vector3d& x, const Eigen::Vector3d& y) {
+    const Eigen::Vector3d d = y - x;
+    const double t = d.squaredNorm() > 0 ? std::clamp((p - x).dot(d) / d.squaredNorm(), 0.0, 1.0) : 0.0;
+    return (p - x - t * d).norm();
+  };
+  return std::min({segment(a, b), segment(b, c), segment(c, a)});
+}
+
 }  // namespace
 
 void HoleFillingParams::validate() const {
@@ -272,6 +289,98 @@ HoleFillingReport fillSmallHoles(TriangleMesh& mesh, std::vector<Eigen::Vector3d
   report.facesAdded = added.size();
   mesh.triangles.insert(mesh.triangles.end(), added.begin(), added.end());
   return report;
+}
+
+std::size_t removeBadVertices(TriangleMesh& mesh, const std::vector<Eigen::Vector3d>& normals, double minQuality,
+                              double maxDeviation) {
+  if (!(minQuality > 0) || mesh.triangles.empty()) return 0;
+  auto& T = mesh.triangles;
+  const auto& P = mesh.vertices;
+  double edgeSum = 0;
+  for (const auto& t : T)
+    for (int c = 0; c < 3; ++c) edgeSum += (P[vtx(t, c)] - P[vtx(t, (c + 1) % 3)]).norm();
+  const double tolerance = maxDeviation * edgeSum / (3.0 * static_cast<double>(T.size()));
+  std::vector<std::vector<std::uint32_t>> incident(P.size());
+  for (std::uint32_t f = 0; f < T.size(); ++f)
+    for (int c = 0; c < 3; ++c) incident[vtx(T[f], c)].push_back(f);
+  std::vector<char> removed(T.size(), 0);
+  auto quality = [&](std::uint32_t f) { return triangleQuality(P[vtx(T[f], 0)], P[vtx(T[f], 1)], P[vtx(T[f], 2)]); };
+  std::vector<std::pair<double, std::uint32_t>> bad;
+  for (std::uint32_t f = 0; f < T.size(); ++f)
+    if (const double q = quality(f); q < minQuality) bad.emplace_back(q, f);
+  std::sort(bad.begin(), bad.end());
+  std::size_t count = 0;
+  for (const auto& [q0, f] : bad) {
+    if (removed[f]) continue;
+    // The best removal among the face's three vertices: the re-triangulated ring with the highest worst Q.
+    double bestQuality = q0;
+    std::uint32_t bestVertex = 0;
+    std::vector<Eigen::Vector3i> bestFaces;
+    for (int corner = 0; corner < 3; ++corner) {
+      const std::uint32_t v = vtx(T[f], corner);
+      // v's fan as a map a → b over its faces (v, a, b); it must be one closed, consistently oriented disc.
+      std::map<std::uint32_t, std::uint32_t> after;
+      double fanQuality = 1;
+      bool ok = true;
+      for (std::uint32_t g : incident[v]) {
+        int c = 0;
+        while (vtx(T[g], c) != v) ++c;
+        ok = ok && after.emplace(vtx(T[g], (c + 1) % 3), vtx(T[g], (c + 2) % 3)).second;
+        fanQuality = std::min(fanQuality, quality(g));
+      }
+      if (!ok || after.size() < 3) continue;
+      std::vector<std::uint32_t> ring{after.begin()->first};
+      while (ring.size() <= after.size()) {
+        const auto it = after.find(ring.back());
+        if (it == after.end()) break;
+        ring.push_back(it->second);
+      }
+      if (ring.size() != after.size() + 1 || ring.back() != ring.front()) continue;  // an open or pinched fan
+      ring.pop_back();
+      // Edges among the ring's vertices other than v's spokes, and the faces across the ring's edges.
+      std::unordered_set<std::uint64_t> edges;
+      std::unordered_map<std::uint64_t, Eigen::Vector3d> across;
+      for (std::uint32_t r : ring)
+        for (std::uint32_t g : incident[r]) {
+          const auto& t = T[g];
+          if (t[0] == static_cast<int>(v) || t[1] == static_cast<int>(v) || t[2] == static_cast<int>(v)) continue;
+          for (int c = 0; c < 3; ++c) {
+            edges.insert(undirectedKey(vtx(t, c), vtx(t, (c + 1) % 3)));
+            across[directedKey(vtx(t, c), vtx(t, (c + 1) % 3))] = faceNormal(mesh, vtx(t, 0), vtx(t, 1), vtx(t, 2)).normalized();
+          }
+        }
+      std::vector<Eigen::Vector3i> faces;
+      double ringQuality = 0;
+      if (!triangulatePolygon(mesh, normals, ring, edges, true, faces, &ringQuality, &across) ||
+          ringQuality <= std::max(bestQuality, fanQuality))
+        continue;
+      // The surface must stay where it was: v close to its replacement.
+      double deviation = std::numeric_limits<double>::max();
+      for (const auto& t : faces) deviation = std::min(deviation, pointTriangleDistance(P[v], P[vtx(t, 0)], P[vtx(t, 1)], P[vtx(t, 2)]));
+      if (deviation > tolerance) continue;
+      bestQuality = ringQuality, bestVertex = v, bestFaces = faces;
+    }
+    if (bestFaces.empty()) continue;
+    for (std::uint32_t g : std::vector<std::uint32_t>(incident[bestVertex])) {
+      removed[g] = 1;
+      for (int c = 0; c < 3; ++c) {
+        auto& list = incident[vtx(T[g], c)];
+        list.erase(std::find(list.begin(), list.end(), g));
+      }
+    }
+    for (const auto& t : bestFaces) {
+      const auto g = static_cast<std::uint32_t>(T.size());
+      T.push_back(t);
+      removed.push_back(0);
+      for (int c = 0; c < 3; ++c) incident[vtx(t, c)].push_back(g);
+    }
+    ++count;
+  }
+  std::size_t w = 0;
+  for (std::size_t g = 0; g < T.size(); ++g)
+    if (!removed[g]) T[w++] = T[g];
+  T.resize(w);
+  return count;
 }
 
 std::size_t removeExtraFans(TriangleMesh& mesh) {

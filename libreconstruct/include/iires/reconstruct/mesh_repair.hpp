@@ -57,6 +57,17 @@ std::size_t removeExtraFans(TriangleMesh& mesh);
 /// stray islands a local method leaves inside a hole. @return number of faces removed.
 std::size_t removeSmallComponents(TriangleMesh& mesh, std::size_t minFaces);
 
+/// @brief Remove vertices of triangles with Q below @p minQuality (worst first): a vertex of such a triangle whose
+/// fan is a closed, consistently oriented disc is removed and its ring re-triangulated (the triangulation of the
+/// ring maximising the worst Q, faces agreeing with @p normals, none folding onto the face across a ring edge)
+/// when that raises the worst Q of the fan and of the bad triangle, and the removed vertex lies within
+/// @p maxDeviation × the mean edge length of the new faces (the surface stays in place). Of the bad triangle's
+/// three vertices the one giving the best ring is taken. Vertices stay in the list, unused.
+/// @return number of vertices removed.
+/// @note Deterministic. O(F + b·k³) for b bad triangles with rings of k vertices.
+std::size_t removeBadVertices(TriangleMesh& mesh, const std::vector<Eigen::Vector3d>& normals, double minQuality,
+                              double maxDeviation);
+
 /// @brief Delaunay edge flips: flip an interior edge whose opposite angles sum to more than π when both faces
 /// and both new faces lie within @p maxDihedralDeg of each other (creases are kept), the new edge is new and
 /// the smallest angle improves. Sweeps until nothing flips or @p maxSweeps.
