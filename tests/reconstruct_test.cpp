@@ -110,6 +110,49 @@ TEST(MeshRepair, FillsSmallHoleKeepsLargeOne) {
   EXPECT_TRUE(after.manifold);
 }
 
+// A sample crowded onto its neighbour (slivers) is moved or removed; a spike (a vertex 5 l off its neighbours'
+// surface, thin triangles too) is kept: changing it would move the surface by more than 0.25 l — unless allowed.
+TEST(MeshRepair, RepairsCrowdedVertexKeepsSpike) {
+  PointCloud c;
+  c.points = test::fibonacciSphere(3000);
+  c.normals = c.points;
+  TriangleMesh m = triangulateLocal(c).mesh;
+  ASSERT_TRUE(evaluateMesh(m).closed);
+  const double l = evaluateMesh(m).meanEdgeLength;
+  int crowdedOnto = -1;
+  for (const auto& t : m.triangles)
+    if (t[0] == 100) crowdedOnto = t[1];
+  ASSERT_GE(crowdedOnto, 0);
+  m.vertices[100] = (m.vertices[100] + 6.0 * m.vertices[static_cast<std::size_t>(crowdedOnto)]).normalized();
+  m.vertices[2000] *= 1.0 + 5.0 * l;  // a spike 5 l high: its faces have Q ≈ 0.3
+  const Eigen::Vector3d spike = m.vertices[2000];
+  const MeshQuality before = evaluateMesh(m);
+  ASSERT_LT(before.qualityMin, 0.4);
+  auto spikeFaces = [](const TriangleMesh& mesh) {
+    std::size_t n = 0;
+    for (const auto& t : mesh.triangles) n += t[0] == 2000 || t[1] == 2000 || t[2] == 2000;
+    return n;
+  };
+  TriangleMesh loose = m;
+  const BadTriangleReport r = repairBadTriangles(m, c.normals, 0.4, 0.25);
+  EXPECT_GE(r.moved + r.removed, 1u);
+  const MeshQuality after = evaluateMesh(m);
+  EXPECT_TRUE(after.closed);
+  EXPECT_TRUE(after.oriented);
+  EXPECT_TRUE(after.manifold);
+  EXPECT_EQ(after.euler, 2);
+  EXPECT_EQ(m.vertices[2000], spike);  // the spike stays (a neighbour of it may go)
+  EXPECT_GE(spikeFaces(m), 3u);
+  double worstAwayFromSpike = 1;
+  for (const auto& t : m.triangles)
+    if (t[0] != 2000 && t[1] != 2000 && t[2] != 2000)
+      worstAwayFromSpike = std::min(worstAwayFromSpike, triangleQuality(m.vertices[t[0]], m.vertices[t[1]], m.vertices[t[2]]));
+  EXPECT_GE(worstAwayFromSpike, 0.4);
+  // With no bound on the deviation the spike is flattened or removed.
+  repairBadTriangles(loose, c.normals, 0.4, 100.0);
+  EXPECT_TRUE(loose.vertices[2000] != spike || spikeFaces(loose) == 0);
+}
+
 TEST(MeshRepair, OrientsFlippedFacesOutward) {
   PointCloud c;
   c.points = test::fibonacciSphere(1000);

@@ -291,11 +291,12 @@ HoleFillingReport fillSmallHoles(TriangleMesh& mesh, std::vector<Eigen::Vector3d
   return report;
 }
 
-std::size_t removeBadVertices(TriangleMesh& mesh, const std::vector<Eigen::Vector3d>& normals, double minQuality,
-                              double maxDeviation) {
-  if (!(minQuality > 0) || mesh.triangles.empty()) return 0;
+BadTriangleReport repairBadTriangles(TriangleMesh& mesh, const std::vector<Eigen::Vector3d>& normals,
+                                     double minQuality, double maxDeviation) {
+  BadTriangleReport report;
+  if (!(minQuality > 0) || mesh.triangles.empty() || normals.size() != mesh.vertices.size()) return report;
   auto& T = mesh.triangles;
-  const auto& P = mesh.vertices;
+  auto& P = mesh.vertices;
   double edgeSum = 0;
   for (const auto& t : T)
     for (int c = 0; c < 3; ++c) edgeSum += (P[vtx(t, c)] - P[vtx(t, (c + 1) % 3)]).norm();
@@ -305,17 +306,27 @@ std::size_t removeBadVertices(TriangleMesh& mesh, const std::vector<Eigen::Vecto
     for (int c = 0; c < 3; ++c) incident[vtx(T[f], c)].push_back(f);
   std::vector<char> removed(T.size(), 0);
   auto quality = [&](std::uint32_t f) { return triangleQuality(P[vtx(T[f], 0)], P[vtx(T[f], 1)], P[vtx(T[f], 2)]); };
+  auto distanceTo = [&](const Eigen::Vector3d& x, const std::vector<Eigen::Vector3i>& faces) {
+    double d = std::numeric_limits<double>::max();
+    for (const auto& t : faces) d = std::min(d, pointTriangleDistance(x, P[vtx(t, 0)], P[vtx(t, 1)], P[vtx(t, 2)]));
+    return d;
+  };
   std::vector<std::pair<double, std::uint32_t>> bad;
   for (std::uint32_t f = 0; f < T.size(); ++f)
     if (const double q = quality(f); q < minQuality) bad.emplace_back(q, f);
   std::sort(bad.begin(), bad.end());
-  std::size_t count = 0;
-  for (const auto& [q0, f] : bad) {
+  for (const auto& entry : bad) {
+    const std::uint32_t f = entry.second;
     if (removed[f]) continue;
-    // The best removal among the face's three vertices: the re-triangulated ring with the highest worst Q.
-    double bestQuality = q0;
-    std::uint32_t bestVertex = 0;
-    std::vector<Eigen::Vector3i> bestFaces;
+    const double q0 = quality(f);  // an earlier repair nearby may have changed it
+    if (q0 >= minQuality) continue;
+    // Per vertex of the face with a closed disc fan: (1) moved within its tangent plane to its ring's centroid,
+    // (2) removed and its ring re-triangulated. The move (which keeps the vertex) wins when it reaches minQuality
+    // or does at least as well as the best removal.
+    double moveQuality = q0, removeQuality = q0;
+    std::uint32_t moveVertex = 0, removeVertex = 0;
+    Eigen::Vector3d moveTo = Eigen::Vector3d::Zero();
+    std::vector<Eigen::Vector3i> removeFaces;
     for (int corner = 0; corner < 3; ++corner) {
       const std::uint32_t v = vtx(T[f], corner);
       // v's fan as a map a → b over its faces (v, a, b); it must be one closed, consistently oriented disc.
@@ -337,7 +348,31 @@ std::size_t removeBadVertices(TriangleMesh& mesh, const std::vector<Eigen::Vecto
       }
       if (ring.size() != after.size() + 1 || ring.back() != ring.front()) continue;  // an open or pinched fan
       ring.pop_back();
-      // Edges among the ring's vertices other than v's spokes, and the faces across the ring's edges.
+      // (1) The move: the fan keeps its faces, none may flip against the vertex normal or its old normal.
+      {
+        Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+        for (std::uint32_t r : ring) centroid += P[r];
+        centroid /= static_cast<double>(ring.size());
+        const Eigen::Vector3d& n = normals[v];
+        const Eigen::Vector3d target = P[v] + (centroid - P[v]) - n * n.dot(centroid - P[v]);
+        double worst = 1;
+        std::vector<Eigen::Vector3i> fan;
+        for (std::size_t i = 0; i < ring.size(); ++i) {
+          const Eigen::Vector3d &a = P[ring[i]], &b = P[ring[(i + 1) % ring.size()]];
+          const Eigen::Vector3d before = (a - P[v]).cross(b - P[v]), now = (a - target).cross(b - target);
+          worst = now.dot(n) > 0 && now.dot(before) > 0 ? std::min(worst, triangleQuality(target, a, b)) : 0.0;
+          if (worst == 0) break;
+          fan.emplace_back(static_cast<int>(ring[i]), static_cast<int>(ring[(i + 1) % ring.size()]), static_cast<int>(v));
+        }
+        if (worst > std::max(moveQuality, fanQuality)) {
+          const Eigen::Vector3d old = P[v];
+          P[v] = target;
+          const bool near = distanceTo(old, fan) <= tolerance;
+          P[v] = old;
+          if (near) moveQuality = worst, moveVertex = v, moveTo = target;
+        }
+      }
+      // (2) The removal: edges among the ring's vertices other than v's spokes, and the faces across the ring.
       std::unordered_set<std::uint64_t> edges;
       std::unordered_map<std::uint64_t, Eigen::Vector3d> across;
       for (std::uint32_t r : ring)
@@ -352,35 +387,36 @@ std::size_t removeBadVertices(TriangleMesh& mesh, const std::vector<Eigen::Vecto
       std::vector<Eigen::Vector3i> faces;
       double ringQuality = 0;
       if (!triangulatePolygon(mesh, normals, ring, edges, true, faces, &ringQuality, &across) ||
-          ringQuality <= std::max(bestQuality, fanQuality))
+          ringQuality <= std::max(removeQuality, fanQuality) || distanceTo(P[v], faces) > tolerance)
         continue;
-      // The surface must stay where it was: v close to its replacement.
-      double deviation = std::numeric_limits<double>::max();
-      for (const auto& t : faces) deviation = std::min(deviation, pointTriangleDistance(P[v], P[vtx(t, 0)], P[vtx(t, 1)], P[vtx(t, 2)]));
-      if (deviation > tolerance) continue;
-      bestQuality = ringQuality, bestVertex = v, bestFaces = faces;
+      removeQuality = ringQuality, removeVertex = v, removeFaces = faces;
     }
-    if (bestFaces.empty()) continue;
-    for (std::uint32_t g : std::vector<std::uint32_t>(incident[bestVertex])) {
+    if (moveQuality > q0 && (moveQuality >= minQuality || moveQuality >= removeQuality)) {
+      P[moveVertex] = moveTo;
+      ++report.moved;
+      continue;
+    }
+    if (removeFaces.empty()) continue;
+    for (std::uint32_t g : std::vector<std::uint32_t>(incident[removeVertex])) {
       removed[g] = 1;
       for (int c = 0; c < 3; ++c) {
         auto& list = incident[vtx(T[g], c)];
         list.erase(std::find(list.begin(), list.end(), g));
       }
     }
-    for (const auto& t : bestFaces) {
+    for (const auto& t : removeFaces) {
       const auto g = static_cast<std::uint32_t>(T.size());
       T.push_back(t);
       removed.push_back(0);
       for (int c = 0; c < 3; ++c) incident[vtx(t, c)].push_back(g);
     }
-    ++count;
+    ++report.removed;
   }
   std::size_t w = 0;
   for (std::size_t g = 0; g < T.size(); ++g)
     if (!removed[g]) T[w++] = T[g];
   T.resize(w);
-  return count;
+  return report;
 }
 
 std::size_t removeExtraFans(TriangleMesh& mesh) {
