@@ -34,7 +34,7 @@ ReconstructMethod parseReconstructMethod(const std::string& name);
 /// @brief The resampler settings reconstruct() starts from: ResampleParams{} with a longer final Lloyd relaxation
 /// (maxRelaxIterations 48 instead of 16; it still stops once the spacing CV stops improving). Triangle shape
 /// follows the spacing's regularity: on a 100k sampling of fandisk at N = 10k, Q_avg 0.899 → 0.905 (the mean
-/// is set by the bulk, not the creases), for about 30 % more resampling time.
+/// is set by the bulk, not the creases); see BENCHMARKS.md (issue 7) for the cost.
 ResampleParams meshResampling();
 
 /// @brief Parameters of reconstruct().
