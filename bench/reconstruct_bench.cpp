@@ -189,7 +189,7 @@ int main(int argc, char** argv) {
     const iires::TriangleMesh truth = iires::readMesh(file);
     const iires::PointCloud input = modelInput(truth, sparse, dense);
     for (const std::string& c : split(counts)) {
-      iires::ResampleParams rp;
+      iires::ResampleParams rp = iires::meshResampling();  // the resampling reconstruct() does
       rp.targetCount = std::stoul(c);
       rp.threads = threads;
       const auto t = Clock::now();

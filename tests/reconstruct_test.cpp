@@ -110,6 +110,49 @@ TEST(MeshRepair, FillsSmallHoleKeepsLargeOne) {
   EXPECT_TRUE(after.manifold);
 }
 
+// A sample crowded onto its neighbour (slivers) is moved or removed; a spike (a vertex 5 l off its neighbours'
+// surface, thin triangles too) is kept: changing it would move the surface by more than 0.25 l — unless allowed.
+TEST(MeshRepair, RepairsCrowdedVertexKeepsSpike) {
+  PointCloud c;
+  c.points = test::fibonacciSphere(3000);
+  c.normals = c.points;
+  TriangleMesh m = triangulateLocal(c).mesh;
+  ASSERT_TRUE(evaluateMesh(m).closed);
+  const double l = evaluateMesh(m).meanEdgeLength;
+  int crowdedOnto = -1;
+  for (const auto& t : m.triangles)
+    if (t[0] == 100) crowdedOnto = t[1];
+  ASSERT_GE(crowdedOnto, 0);
+  m.vertices[100] = (m.vertices[100] + 6.0 * m.vertices[static_cast<std::size_t>(crowdedOnto)]).normalized();
+  m.vertices[2000] *= 1.0 + 5.0 * l;  // a spike 5 l high: its faces have Q ≈ 0.3
+  const Eigen::Vector3d spike = m.vertices[2000];
+  const MeshQuality before = evaluateMesh(m);
+  ASSERT_LT(before.qualityMin, 0.4);
+  auto spikeFaces = [](const TriangleMesh& mesh) {
+    std::size_t n = 0;
+    for (const auto& t : mesh.triangles) n += t[0] == 2000 || t[1] == 2000 || t[2] == 2000;
+    return n;
+  };
+  TriangleMesh loose = m;
+  const BadTriangleReport r = repairBadTriangles(m, c.normals, 0.4, 0.25);
+  EXPECT_GE(r.moved + r.removed, 1u);
+  const MeshQuality after = evaluateMesh(m);
+  EXPECT_TRUE(after.closed);
+  EXPECT_TRUE(after.oriented);
+  EXPECT_TRUE(after.manifold);
+  EXPECT_EQ(after.euler, 2);
+  EXPECT_EQ(m.vertices[2000], spike);  // the spike stays (a neighbour of it may go)
+  EXPECT_GE(spikeFaces(m), 3u);
+  double worstAwayFromSpike = 1;
+  for (const auto& t : m.triangles)
+    if (t[0] != 2000 && t[1] != 2000 && t[2] != 2000)
+      worstAwayFromSpike = std::min(worstAwayFromSpike, triangleQuality(m.vertices[t[0]], m.vertices[t[1]], m.vertices[t[2]]));
+  EXPECT_GE(worstAwayFromSpike, 0.4);
+  // With no bound on the deviation the spike is flattened or removed.
+  repairBadTriangles(loose, c.normals, 0.4, 100.0);
+  EXPECT_TRUE(loose.vertices[2000] != spike || spikeFaces(loose) == 0);
+}
+
 TEST(MeshRepair, OrientsFlippedFacesOutward) {
   PointCloud c;
   c.points = test::fibonacciSphere(1000);
@@ -215,9 +258,7 @@ TEST(ReconstructRealData, Fandisk10k) {
   const ReconstructResult r = reconstruct(sampleMesh(truth, sp), p);
   const MeshQuality& q = r.quality;
   expectClosedGenus(q, 2);
-  // Issue 7's bound is Q_avg ≥ 0.90. NOT met robustly on fandisk: 0.899–0.905 depending on the resampler's
-  // version (0.8992 measured 2026-11-22); the triangles across the creases pull the mean down.
-  EXPECT_GE(q.qualityMean, 0.89);
+  EXPECT_GE(q.qualityMean, 0.90);  // issue 7's bound (0.9045 measured; the creases are not what lowers it)
   EXPECT_GE(q.qualityMin, 0.4);
   EXPECT_LT(q.shareBelow30, 0.01);
   const SurfaceDistance d = surfaceDistance(r.mesh, truth);
@@ -225,10 +266,11 @@ TEST(ReconstructRealData, Fandisk10k) {
 }
 
 // A sparse, uneven scan (issue 7): the 1,197 vertices of CGAL's hand mesh upsampled to 10k and meshed end to end.
-// What holds today: exactly N samples, one manifold, consistently oriented component, near-equilateral triangles.
-// NOT yet met (see BENCHMARKS.md): closed and Hausdorff ≤ 1 % — the wrist cap is 11 large faces with no vertex
-// inside, so the cloud has a 0.4-wide hole there that stays open (163 boundary edges), the MLS surface bulges
-// 0.05 past the cap's rim, and Q_avg is 0.895 (< 0.90), Q_min 0.22.
+// What holds today: exactly N samples, one manifold, consistently oriented component, Q_avg ≥ 0.90 (0.905).
+// NOT yet met (see BENCHMARKS.md): closed, genus 0, Q_min ≥ 0.4 (0.29) and Hausdorff ≤ 1 % — the wrist cap is 11
+// large faces with no vertex inside, so the cloud has a 0.5-wide hole there that stays open (an 82-edge loop), the
+// MLS surface bulges past the cap's rim (mesh → truth 3.3 % of the diagonal), two fingers are bridged (genus 3,
+// two 17–19-edge loops between them), and the missing cap is 13 % of the diagonal from the mesh.
 TEST(ReconstructRealData, SparseHandVerticesTo10k) {
   const TriangleMesh truth = readMesh(test::dataPath("meshes/hand.off"));
   PointCloud input;
@@ -243,7 +285,7 @@ TEST(ReconstructRealData, SparseHandVerticesTo10k) {
   EXPECT_EQ(q.nonManifoldEdges, 0u);
   EXPECT_EQ(q.nonManifoldVertices, 0u);
   EXPECT_TRUE(q.oriented);
-  EXPECT_GE(q.qualityMean, 0.88);
+  EXPECT_GE(q.qualityMean, 0.90);
   EXPECT_LT(q.shareBelow30, 0.01);
   // Every input vertex is near the mesh (the worst, 2.7 % of the diagonal, is on the wrist cap's rim).
   EXPECT_LT(q.distance.backwardMax / q.distance.diagonal, 0.04);

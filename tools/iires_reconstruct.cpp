@@ -109,6 +109,8 @@ int main(int argc, char** argv) {
                 << result.quality.toTable();
       std::cout << "  " << std::left << std::setw(30) << "small holes closed / kept" << result.holes.filled << " / "
                 << result.holes.kept << "\n";
+      std::cout << "  " << std::left << std::setw(30) << "Q<0.4 repairs moved / removed" << result.badTriangles.moved
+                << " / " << result.badTriangles.removed << "\n";
       std::cout << "  " << std::left << std::setw(30) << "time (s)";
       for (const auto& s : result.timings) std::cout << s.name << " " << std::setprecision(3) << s.seconds << "  ";
       std::cout << "\n";

@@ -106,6 +106,23 @@ bool triangulatePolygon(const TriangleMesh& mesh, const std::vector<Eigen::Vecto
   return true;
 }
 
+/// Distance from @p p to triangle (a, b, c).
+double pointTriangleDistance(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                             const Eigen::Vector3d& c) {
+  const Eigen::Vector3d n = (b - a).cross(c - a);
+  if (n.squaredNorm() > 0) {
+    const Eigen::Vector3d q = p - n * (p - a).dot(n) / n.squaredNorm();  // projection onto the plane
+    if ((b - a).cross(q - a).dot(n) >= 0 && (c - b).cross(q - b).dot(n) >= 0 && (a - c).cross(q - c).dot(n) >= 0)
+      return (p - q).norm();
+  }
+  auto segment = [&](const Eigen::Vector3d& x, const Eigen::Vector3d& y) {
+    const Eigen::Vector3d d = y - x;
+    const double t = d.squaredNorm() > 0 ? std::clamp((p - x).dot(d) / d.squaredNorm(), 0.0, 1.0) : 0.0;
+    return (p - x - t * d).norm();
+  };
+  return std::min({segment(a, b), segment(b, c), segment(c, a)});
+}
+
 }  // namespace
 
 void HoleFillingParams::validate() const {
@@ -271,6 +288,134 @@ HoleFillingReport fillSmallHoles(TriangleMesh& mesh, std::vector<Eigen::Vector3d
   }
   report.facesAdded = added.size();
   mesh.triangles.insert(mesh.triangles.end(), added.begin(), added.end());
+  return report;
+}
+
+BadTriangleReport repairBadTriangles(TriangleMesh& mesh, const std::vector<Eigen::Vector3d>& normals,
+                                     double minQuality, double maxDeviation) {
+  BadTriangleReport report;
+  if (!(minQuality > 0) || mesh.triangles.empty() || normals.size() != mesh.vertices.size()) return report;
+  auto& T = mesh.triangles;
+  auto& P = mesh.vertices;
+  double edgeSum = 0;
+  for (const auto& t : T)
+    for (int c = 0; c < 3; ++c) edgeSum += (P[vtx(t, c)] - P[vtx(t, (c + 1) % 3)]).norm();
+  const double tolerance = maxDeviation * edgeSum / (3.0 * static_cast<double>(T.size()));
+  std::vector<std::vector<std::uint32_t>> incident(P.size());
+  for (std::uint32_t f = 0; f < T.size(); ++f)
+    for (int c = 0; c < 3; ++c) incident[vtx(T[f], c)].push_back(f);
+  std::vector<char> removed(T.size(), 0);
+  auto quality = [&](std::uint32_t f) { return triangleQuality(P[vtx(T[f], 0)], P[vtx(T[f], 1)], P[vtx(T[f], 2)]); };
+  auto distanceTo = [&](const Eigen::Vector3d& x, const std::vector<Eigen::Vector3i>& faces) {
+    double d = std::numeric_limits<double>::max();
+    for (const auto& t : faces) d = std::min(d, pointTriangleDistance(x, P[vtx(t, 0)], P[vtx(t, 1)], P[vtx(t, 2)]));
+    return d;
+  };
+  std::vector<std::pair<double, std::uint32_t>> bad;
+  for (std::uint32_t f = 0; f < T.size(); ++f)
+    if (const double q = quality(f); q < minQuality) bad.emplace_back(q, f);
+  std::sort(bad.begin(), bad.end());
+  for (const auto& entry : bad) {
+    const std::uint32_t f = entry.second;
+    if (removed[f]) continue;
+    const double q0 = quality(f);  // an earlier repair nearby may have changed it
+    if (q0 >= minQuality) continue;
+    // Per vertex of the face with a closed disc fan: (1) moved within its tangent plane to its ring's centroid,
+    // (2) removed and its ring re-triangulated. The move (which keeps the vertex) wins when it reaches minQuality
+    // or does at least as well as the best removal.
+    double moveQuality = q0, removeQuality = q0;
+    std::uint32_t moveVertex = 0, removeVertex = 0;
+    Eigen::Vector3d moveTo = Eigen::Vector3d::Zero();
+    std::vector<Eigen::Vector3i> removeFaces;
+    for (int corner = 0; corner < 3; ++corner) {
+      const std::uint32_t v = vtx(T[f], corner);
+      // v's fan as a map a → b over its faces (v, a, b); it must be one closed, consistently oriented disc.
+      std::map<std::uint32_t, std::uint32_t> after;
+      double fanQuality = 1;
+      bool ok = true;
+      for (std::uint32_t g : incident[v]) {
+        int c = 0;
+        while (vtx(T[g], c) != v) ++c;
+        ok = ok && after.emplace(vtx(T[g], (c + 1) % 3), vtx(T[g], (c + 2) % 3)).second;
+        fanQuality = std::min(fanQuality, quality(g));
+      }
+      if (!ok || after.size() < 3) continue;
+      std::vector<std::uint32_t> ring{after.begin()->first};
+      while (ring.size() <= after.size()) {
+        const auto it = after.find(ring.back());
+        if (it == after.end()) break;
+        ring.push_back(it->second);
+      }
+      if (ring.size() != after.size() + 1 || ring.back() != ring.front()) continue;  // an open or pinched fan
+      ring.pop_back();
+      // (1) The move: the fan keeps its faces, none may flip against the vertex normal or its old normal.
+      {
+        Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+        for (std::uint32_t r : ring) centroid += P[r];
+        centroid /= static_cast<double>(ring.size());
+        const Eigen::Vector3d& n = normals[v];
+        const Eigen::Vector3d target = P[v] + (centroid - P[v]) - n * n.dot(centroid - P[v]);
+        double worst = 1;
+        std::vector<Eigen::Vector3i> fan;
+        for (std::size_t i = 0; i < ring.size(); ++i) {
+          const Eigen::Vector3d &a = P[ring[i]], &b = P[ring[(i + 1) % ring.size()]];
+          const Eigen::Vector3d before = (a - P[v]).cross(b - P[v]), now = (a - target).cross(b - target);
+          worst = now.dot(n) > 0 && now.dot(before) > 0 ? std::min(worst, triangleQuality(target, a, b)) : 0.0;
+          if (worst == 0) break;
+          fan.emplace_back(static_cast<int>(ring[i]), static_cast<int>(ring[(i + 1) % ring.size()]), static_cast<int>(v));
+        }
+        if (worst > std::max(moveQuality, fanQuality)) {
+          const Eigen::Vector3d old = P[v];
+          P[v] = target;
+          const bool near = distanceTo(old, fan) <= tolerance;
+          P[v] = old;
+          if (near) moveQuality = worst, moveVertex = v, moveTo = target;
+        }
+      }
+      // (2) The removal: edges among the ring's vertices other than v's spokes, and the faces across the ring.
+      std::unordered_set<std::uint64_t> edges;
+      std::unordered_map<std::uint64_t, Eigen::Vector3d> across;
+      for (std::uint32_t r : ring)
+        for (std::uint32_t g : incident[r]) {
+          const auto& t = T[g];
+          if (t[0] == static_cast<int>(v) || t[1] == static_cast<int>(v) || t[2] == static_cast<int>(v)) continue;
+          for (int c = 0; c < 3; ++c) {
+            edges.insert(undirectedKey(vtx(t, c), vtx(t, (c + 1) % 3)));
+            across[directedKey(vtx(t, c), vtx(t, (c + 1) % 3))] = faceNormal(mesh, vtx(t, 0), vtx(t, 1), vtx(t, 2)).normalized();
+          }
+        }
+      std::vector<Eigen::Vector3i> faces;
+      double ringQuality = 0;
+      if (!triangulatePolygon(mesh, normals, ring, edges, true, faces, &ringQuality, &across) ||
+          ringQuality <= std::max(removeQuality, fanQuality) || distanceTo(P[v], faces) > tolerance)
+        continue;
+      removeQuality = ringQuality, removeVertex = v, removeFaces = faces;
+    }
+    if (moveQuality > q0 && (moveQuality >= minQuality || moveQuality >= removeQuality)) {
+      P[moveVertex] = moveTo;
+      ++report.moved;
+      continue;
+    }
+    if (removeFaces.empty()) continue;
+    for (std::uint32_t g : std::vector<std::uint32_t>(incident[removeVertex])) {
+      removed[g] = 1;
+      for (int c = 0; c < 3; ++c) {
+        auto& list = incident[vtx(T[g], c)];
+        list.erase(std::find(list.begin(), list.end(), g));
+      }
+    }
+    for (const auto& t : removeFaces) {
+      const auto g = static_cast<std::uint32_t>(T.size());
+      T.push_back(t);
+      removed.push_back(0);
+      for (int c = 0; c < 3; ++c) incident[vtx(t, c)].push_back(g);
+    }
+    ++report.removed;
+  }
+  std::size_t w = 0;
+  for (std::size_t g = 0; g < T.size(); ++g)
+    if (!removed[g]) T[w++] = T[g];
+  T.resize(w);
   return report;
 }
 

@@ -6,6 +6,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "iires/intrinsic.hpp"
 #include "iires/normals.hpp"
 #include "iires/validate.hpp"
 
@@ -44,10 +45,18 @@ ReconstructMethod parseReconstructMethod(const std::string& name) {
   throw std::invalid_argument("unknown method '" + name + "' (expected local or advancing-front)");
 }
 
+ResampleParams meshResampling() {
+  ResampleParams p;
+  p.maxRelaxIterations = 48;
+  return p;
+}
+
 void ReconstructParams::validate() const {
   if (resample && targetCount < 4)
     throw std::invalid_argument("target count N must be at least 4 (got " + std::to_string(targetCount) + ")");
   if (threads < 0) throw std::invalid_argument("threads must be non-negative");
+  if (!(repairQuality >= 0 && repairQuality < 1)) throw std::invalid_argument("repairQuality must be in [0, 1)");
+  if (!(repairDeviation >= 0)) throw std::invalid_argument("repairDeviation must be non-negative");
   ResampleParams r = resampling;
   r.targetCount = std::max<std::size_t>(targetCount, 1);
   if (resample) r.validate();
@@ -76,6 +85,7 @@ std::string ReconstructResult::toJson() const {
        << ", \"proposed_by_3\": " << triangulation.proposedBy3 << ", \"proposed_by_2\": " << triangulation.proposedBy2
        << ", \"kept\": " << triangulation.kept << ", \"rejected_conflicts\": " << triangulation.rejectedConflicts
        << ", \"removed_fan_faces\": " << triangulation.removedFans << ", \"flips\": " << triangulation.flips << ", \"flips_after_filling\": " << flipsAfterFilling << "}";
+  os << ",\n  \"bad_triangles\": {\"vertices_moved\": " << badTriangles.moved << ", \"vertices_removed\": " << badTriangles.removed << "}";
   os << ",\n  \"holes\": {\"loops\": " << holes.loops << ", \"filled\": " << holes.filled
      << ", \"kept\": " << holes.kept << ", \"faces_added\": " << holes.facesAdded << ", \"vertices_added\": " << holes.verticesAdded << "}"
      << ",\n  \"orientation\": {\"components\": " << orientation.components
@@ -130,9 +140,14 @@ ReconstructResult reconstruct(const PointCloud& input, const ReconstructParams& 
   if (params.method == ReconstructMethod::kLocal) {
     TriangulateParams tp = params.local;
     tp.threads = params.threads;
-    // Euclidean 1-rings unless a rule is given. The resampler's intrinsic rule is not reused here: its geodesic
-    // coordinates split a unit sphere 1e7 from the origin into 7 components (precision), which drops triangles.
-    if (params.neighbourRule) tp.neighbourRule = params.neighbourRule;
+    if (params.neighbourRule) {
+      tp.neighbourRule = params.neighbourRule;
+    } else if (!tp.neighbourRule && result.resampling.geodesic) {
+      // The resampler's intrinsic rule (DESIGN §5.2): 1-rings never link across a thin gap or between objects.
+      IntrinsicParams ip = params.resampling.intrinsicRule;
+      ip.threads = params.threads;
+      tp.neighbourRule = std::make_shared<IntrinsicRule>(result.resampling.geodesic, ip);
+    }
     result.triangulation = triangulateLocal(result.samples, tp);
     result.mesh = std::move(result.triangulation.mesh);
     result.triangulation.mesh = TriangleMesh{};
@@ -160,6 +175,8 @@ ReconstructResult reconstruct(const PointCloud& input, const ReconstructParams& 
     if (params.method == ReconstructMethod::kLocal && params.local.flipMaxDihedral > 0 && result.holes.facesAdded)
       result.flipsAfterFilling = flipToDelaunay(result.mesh, params.local.flipMaxDihedral, params.local.maxFlipSweeps);
   }
+  if (params.repairQuality > 0)
+    result.badTriangles = repairBadTriangles(result.mesh, normals, params.repairQuality, params.repairDeviation);
   clock.end("holes", t);
 
   t = clock.begin("orient");

@@ -57,6 +57,24 @@ std::size_t removeExtraFans(TriangleMesh& mesh);
 /// stray islands a local method leaves inside a hole. @return number of faces removed.
 std::size_t removeSmallComponents(TriangleMesh& mesh, std::size_t minFaces);
 
+/// @brief What repairBadTriangles() did.
+struct BadTriangleReport {
+  std::size_t moved = 0;    ///< vertices moved within their tangent plane
+  std::size_t removed = 0;  ///< vertices removed (their ring re-triangulated; they stay in the list, unused)
+};
+
+/// @brief Raise the worst triangles (Q below @p minQuality, worst first) by changing one of their vertices whose
+/// fan is a closed, consistently oriented disc: either move it within its tangent plane (@p normals, one per
+/// vertex) to its ring's centroid, or remove it and re-triangulate its ring (the triangulation maximising the worst
+/// Q, faces agreeing with the normals, none folding onto the face across a ring edge). A change is taken only when
+/// it raises the worst Q of the vertex's fan above that of the old fan and of the bad triangle, keeps every fan
+/// face's orientation, and the old vertex position lies within @p maxDeviation × the mean edge length of the new
+/// faces (the surface stays in place). The move is preferred: it is taken when it reaches minQuality or does at
+/// least as well as the best removal.
+/// @note Deterministic. O(F + b·k³) for b bad triangles with rings of k vertices. Nothing happens without normals.
+BadTriangleReport repairBadTriangles(TriangleMesh& mesh, const std::vector<Eigen::Vector3d>& normals,
+                                     double minQuality, double maxDeviation);
+
 /// @brief Delaunay edge flips: flip an interior edge whose opposite angles sum to more than π when both faces
 /// and both new faces lie within @p maxDihedralDeg of each other (creases are kept), the new edge is new and
 /// the smallest angle improves. Sweeps until nothing flips or @p maxSweeps.

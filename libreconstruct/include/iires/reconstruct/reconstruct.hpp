@@ -31,21 +31,33 @@ std::string toString(ReconstructMethod method);
 /// @brief Parse "local" / "advancing-front". @throws std::invalid_argument otherwise.
 ReconstructMethod parseReconstructMethod(const std::string& name);
 
+/// @brief The resampler settings reconstruct() starts from: ResampleParams{} with a longer final Lloyd relaxation
+/// (maxRelaxIterations 48 instead of 16; it still stops once the spacing CV stops improving). Triangle shape
+/// follows the spacing's regularity: on a 100k sampling of fandisk at N = 10k, Q_avg 0.899 → 0.905 (the mean
+/// is set by the bulk, not the creases); see BENCHMARKS.md (issue 7) for the cost.
+ResampleParams meshResampling();
+
 /// @brief Parameters of reconstruct().
 struct ReconstructParams {
   std::size_t targetCount = 10000;  ///< N, the vertex count of the mesh when resampling (≥ 4)
   bool resample = true;             ///< resample isotropically to N first; false = triangulate the input points
   ReconstructMethod method = ReconstructMethod::kLocal;  ///< triangulation method
-  ResampleParams resampling;        ///< resampler settings (targetCount, seed, threads, rule are set from here)
-  TriangulateParams local;          ///< local method settings (threads and rule are set from here)
+  ResampleParams resampling = meshResampling();  ///< resampler settings (targetCount, seed, threads, rule are
+                                                 ///< set from here)
+  TriangulateParams local;          ///< local method settings (threads are set from here; its neighbourRule, when
+                                    ///< set, is kept, e.g. EuclideanRule for Euclidean 1-rings after resampling)
   AdvancingFrontParams advancingFront;  ///< advancing-front settings
   std::size_t minComponentFaces = 20;  ///< components with fewer faces are removed before hole filling (0 = keep)
   bool fillHoles = true;            ///< close small holes (loops short in edges and perimeter)
   HoleFillingParams holes;          ///< which loops count as small
+  /// Triangles with a worse Q are repaired by moving (or else removing) one of their vertices when that does better
+  /// and the surface moves by at most repairDeviation × the mean edge length (repairBadTriangles); 0 = off
+  double repairQuality = 0.4;
+  double repairDeviation = 0.25;    ///< see repairQuality (≥ 0)
   bool evaluate = true;             ///< compute the quality report (distance to the validated input cloud)
   MeshQualityParams quality;        ///< report settings (threads and seed are set from here)
   /// Neighbour rule for resampling and the 1-rings. nullptr = the resampler's default (intrinsic unless
-  /// resampling.intrinsic is false) and Euclidean 1-rings.
+  /// resampling.intrinsic is false), whose rule the 1-rings then use too; Euclidean 1-rings without resampling.
   std::shared_ptr<NeighbourRule> neighbourRule;
   std::uint64_t seed = 0;  ///< seed of the resampling and the report's mesh sampling; same seed → same mesh
   int threads = 0;         ///< 0 = all cores; the mesh does not depend on it
@@ -71,6 +83,7 @@ struct ReconstructResult {
   std::size_t smallComponentFaces = 0;  ///< faces of small components removed
   HoleFillingReport holes;           ///< small holes closed / kept
   std::size_t flipsAfterFilling = 0; ///< Delaunay flips after hole filling (local method)
+  BadTriangleReport badTriangles;    ///< vertices moved / removed to raise the worst triangles (repairBadTriangles)
   OrientationReport orientation;     ///< orientation diagnostics
   std::size_t unusedVertices = 0;    ///< samples no triangle uses (removed from the mesh)
   MeshQuality quality;               ///< the quality report (when params.evaluate)
