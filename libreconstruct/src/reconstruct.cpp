@@ -47,6 +47,7 @@ ReconstructMethod parseReconstructMethod(const std::string& name) {
 
 ResampleParams meshResampling() {
   ResampleParams p;
+  p.maxPasses = 8;
   p.maxRelaxIterations = 48;
   return p;
 }
