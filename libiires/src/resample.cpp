@@ -562,7 +562,7 @@ void Resampler::eliminate(Samples& s, std::size_t count) {
   const double maxSize = *std::max_element(sz.begin(), sz.end());
   KnnIndex index(s.pos);
   rule_.update(s.pos, s.nrm);  // only neighbours by the rule crowd each other (not across a thin gap)
-  std::vector<std::vector<std::pair<std::uint32_t, double>>> nb(s.size());
+  std::vector<std::vector<std::pair<std::uint32_t, float>>> nb(s.size());  // float: 8 bytes a pair (memory at 5M)
   parallelFor(s.size(), params_.threads, [&](std::size_t i) {
     std::vector<std::uint32_t> idx;
     std::vector<double> d2;
@@ -571,7 +571,7 @@ void Resampler::eliminate(Samples& s, std::size_t count) {
       if (idx[c] == i || !rule_.accept(i, idx[c])) continue;
       const double scale = 0.5 * (sz[i] + sz[idx[c]]), radius = 2.0 * rmax * scale;
       const double d = std::max(std::sqrt(d2[c]), 2.0 * rmin * scale);
-      if (d < radius) nb[i].emplace_back(idx[c], std::pow(1.0 - d / radius, 8.0));
+      if (d < radius) nb[i].emplace_back(idx[c], static_cast<float>(std::pow(1.0 - d / radius, 8.0)));
     }
   });
   std::vector<double> weight(s.size(), 0.0);

@@ -49,6 +49,7 @@ ResampleParams meshResampling() {
   ResampleParams p;
   p.maxPasses = 8;
   p.maxRelaxIterations = 48;
+  p.maxInputPerSample = 16;
   return p;
 }
 
