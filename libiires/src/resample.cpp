@@ -231,7 +231,7 @@ Rings Resampler::computeRings(const Samples& s, double cellRadius, const Relaxat
     if (!active(i)) return;
     // Per-thread scratch buffers (one thread-local lookup): this runs for every sample in every iteration.
     struct Scratch {
-      std::vector<std::uint32_t> idx, lab, tmpL;
+      std::vector<std::uint32_t> idx, lab, tmpL, coincident;
       std::vector<double> d2, angles;
       std::vector<std::pair<double, std::uint32_t>> byDistance;
       std::vector<std::pair<std::uint32_t, Eigen::Vector2d>> nb;
@@ -239,7 +239,7 @@ Rings Resampler::computeRings(const Samples& s, double cellRadius, const Relaxat
     };
     thread_local Scratch scratch;
     Scratch& sc = scratch;
-    auto &idx = sc.idx, &lab = sc.lab, &tmpL = sc.tmpL;
+    auto &idx = sc.idx, &lab = sc.lab, &tmpL = sc.tmpL, &coincident = sc.coincident;
     auto &d2 = sc.d2, &angles = sc.angles;
     auto &poly = sc.poly, &tmpV = sc.tmpV;
     auto& byDistance = sc.byDistance;
@@ -267,12 +267,17 @@ Rings Resampler::computeRings(const Samples& s, double cellRadius, const Relaxat
     // with its true 3-D distance, so that on curved patches Lloyd equalises real spacings rather than their
     // (shorter) tangent-plane projections.
     nb.clear();
+    coincident.clear();
     for (std::size_t c = 0; c < idx.size(); ++c) {
       const std::uint32_t j = idx[c];
       if (j == i || !rule_.accept(i, j)) continue;
       const Eigen::Vector3d d = s.pos[j] - s.pos[i];
       Eigen::Vector2d q(d.dot(u), d.dot(v));
       const double qn = q.norm(), dist = std::sqrt(d2[c]);
+      if (dist <= 1e-9 * cellRadius) {  // no cell between them: a ring edge of length 0, collapsed first
+        coincident.push_back(j);
+        continue;
+      }
       if (qn < 1e-12 * dist || qn == 0.0) continue;
       nb.emplace_back(j, q * (dist / qn));
     }
@@ -306,6 +311,8 @@ Rings Resampler::computeRings(const Samples& s, double cellRadius, const Relaxat
       const auto it = std::find_if(nb.begin(), nb.end(), [&](const auto& x) { return x.first == j; });
       angles.push_back(std::atan2(it->second.y(), it->second.x()));
     }
+    for (std::uint32_t j : coincident)
+      if (w < k) r.ring[i * static_cast<std::size_t>(k) + static_cast<std::size_t>(w++)] = j;
     // Open boundary: the 1-ring leaves an angular gap wider than 135° and the surface does not continue into
     // it (a probe half a cell into the gap leaves the cloud); the gap's bisector then points off the surface.
     // A gap with surface behind it is merely a sparse region (e.g. while upsampling) and stays open to moves.
