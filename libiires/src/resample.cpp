@@ -674,7 +674,8 @@ void Resampler::run(Samples& s, ResampleResult& result) {
   constexpr int kMaxCountPasses = 8;
   for (int pass = 0, atN = 0; atN < params_.maxPasses && pass < params_.maxPasses + kMaxCountPasses; ++pass) {
     if (params_.progress) params_.progress("resample", 0.8 * atN / params_.maxPasses);
-    atN += s.size() == n;
+    // At N, or off by what one balanced round of edits can leave (a collapse may find its samples taken).
+    atN += static_cast<double>(s.size() > n ? s.size() - n : n - s.size()) <= params_.maxEditShare * countD + 1;
     const std::vector<Edge> e = sortedEdges(edgeRings(s, l, relaxation));
     l = targetLength(e);
     ++result.passes;
