@@ -110,5 +110,66 @@ TEST(FuzzRegression, DenormalNearDuplicatesDoNotProduceNaN) {
   EXPECT_EQ(validateCloud(single, 4).duplicatesMerged, 1u);  // 1e-200 is 0
 }
 
+/// fuzz_resample-crash-b5f4b6ed (int16 mode with normals, scale 1000, N = 20, intrinsic, sharp edges, 6 fixed
+/// samples, seed 31): the input normals include zero vectors (the first of five duplicates at the origin keeps
+/// its zero normal), and the output had non-finite points and normals. Zero-length input normals
+/// now make the given normals unusable (they are recomputed), as non-finite ones do.
+TEST(FuzzRegression, ZeroLengthInputNormalsGiveUnitOutputNormals) {
+  const int rows[][6] = {
+      {500, 250, -300, -500, 170, -300},
+      {-300, 90, -300, -100, 50, -300},
+      {154, -500, -500, 250, -500, -300},
+      {170, -500, -100, 130, -500, -11164},
+      {25854, 12800, -11264, 11518, 23041, 10752},
+      {-2818, -22015, -25600, 3327, -32002, -25600},
+      {-11009, 13054, -25600, -25345, 2815, -25600},
+      {25855, 100, 50, -300, 300, 90},
+      {-300, 500, 170, -100, -500, 130},
+      {-100, -300, 50, -100, -100, 10},
+      {0, 0, 0, 0, 0, 0},
+      {0, 0, 0, 0, 0, 0},
+      {0, 0, 0, 0, 0, 0},
+      {0, 0, 0, 0, 0, 0},
+      {0, 0, 0, 0, 0, 0},
+      {0, 0, 0, -25600, 25855, 2560},
+      {90, 300, 500, 170, 500, -500},
+      {250, 500, -300, 170, 500, -100},
+      {130, 500, 100, 130, 500, 300}};
+  PointCloud cloud;
+  for (const auto& r : rows) {
+    cloud.points.emplace_back(1000.0 * r[0], 1000.0 * r[1], 1000.0 * r[2]);
+    cloud.normals.emplace_back(r[3], r[4], r[5]);
+  }
+  ResampleParams params;
+  params.targetCount = 20;
+  params.intrinsic = true;
+  params.preprocess = false;
+  params.sharpEdges = true;
+  params.mls.k = 3;
+  params.maxPasses = 0;
+  params.maxRelaxIterations = 12;
+  params.relaxPerPass = 1;
+  params.neighbours = 6;
+  params.seed = 31;
+  params.threads = 1;
+  for (int i = 0; i < 6; ++i) params.fixedSamples.push_back(cloud.points[i]);
+  const ResampleResult result = resample(cloud, params);
+  ASSERT_EQ(result.cloud.size(), 20u);
+  ASSERT_TRUE(result.cloud.hasNormals());
+  for (std::size_t i = 0; i < result.cloud.size(); ++i) {
+    EXPECT_TRUE(result.cloud.points[i].allFinite()) << i;
+    EXPECT_NEAR(result.cloud.normals[i].norm(), 1.0, 1e-6) << i;
+  }
+}
+
+TEST(FuzzRegression, ValidateDropsNormalsWhenOneIsZero) {
+  PointCloud cloud;
+  cloud.points = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  cloud.normals = {{0, 0, 1}, {0, 0, 1}, {0, 0, 0}, {0, 0, 1}};
+  validateCloud(cloud, 4);
+  EXPECT_EQ(cloud.size(), 4u);
+  EXPECT_TRUE(cloud.normals.empty());
+}
+
 }  // namespace
 }  // namespace iires::test

@@ -79,7 +79,7 @@ ValidationReport validateCloud(PointCloud& cloud, std::size_t minPoints, const s
       if (std::abs(p[k]) < kTinyCoordinate) p[k] = 0.0;
   const bool normalsUsable =
       cloud.hasNormals() && std::all_of(cloud.normals.begin(), cloud.normals.end(),
-                                        [](const Vector3d& n) { return n.allFinite(); });
+                                        [](const Vector3d& n) { return n.allFinite() && n.squaredNorm() > 0.0; });
   if (!normalsUsable) cloud.normals.clear();
 
   report.duplicatesMerged = mergeDuplicates(cloud);
