@@ -171,5 +171,32 @@ TEST(FuzzRegression, ValidateDropsNormalsWhenOneIsZero) {
   EXPECT_TRUE(cloud.normals.empty());
 }
 
+/// fuzz_resample-crash-020e56d2 (int16 mode, N = 3, Euclidean, pre-processing on, 2 passes, 8 final iterations):
+/// 26 scattered points whose 1-rings give the edge operations nothing to collapse, so the resampler threw "could
+/// not reach the requested count". Now a last-resort step drops the closest samples (or adds the input points
+/// farthest from them): exactly N finite points with unit normals.
+TEST(FuzzRegression, DegenerateRingsStillGiveExactlyN) {
+  PointCloud cloud;
+  cloud.points = {{-1524, 3326, 3326}, {-512, -300, 170}, {-500, -100, 130}, {-500, 100, 130}, {-500, 300, 170},
+                  {-500, 500, 250},    {-300, -500, 170}, {-300, -300, 90},  {-300, -100, 50},  {12244, 100, 50},
+                  {-300, 300, 90},     {-300, 500, 170},  {-100, -500, 130}, {-100, -300, 50},  {156, 500, -100},
+                  {10, 25678, 25600},  {2560, 25600, 42}, {300, 50, 100},    {500, 130, 300},   {-500, 170, 300},
+                  {-300, 90, 300},     {-100, 50, 300},   {100, 50, 300},    {300, 90, 300},    {500, 170, 500},
+                  {500, 500, 250}};
+  ResampleParams params;
+  params.targetCount = 3;
+  params.intrinsic = false;
+  params.maxPasses = 2;
+  params.maxRelaxIterations = 8;
+  params.threads = 1;
+  const ResampleResult r = resample(cloud, params);
+  ASSERT_EQ(r.cloud.size(), 3u);
+  ASSERT_EQ(r.cloud.normals.size(), 3u);
+  for (std::size_t i = 0; i < 3; ++i) {
+    EXPECT_TRUE(r.cloud.points[i].allFinite());
+    EXPECT_NEAR(r.cloud.normals[i].norm(), 1.0, 1e-6);
+  }
+}
+
 }  // namespace
 }  // namespace iires::test

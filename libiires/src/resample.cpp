@@ -179,6 +179,7 @@ class Resampler {
   void carry(Relaxation& state, const EditMap& edits, std::size_t count) const;
   Rings edgeRings(const Samples& s, double l, const Relaxation& state) const;
   void eliminate(Samples& s, std::size_t count);
+  void forceCount(Samples& s, Relaxation& relaxation) const;
 
   const std::vector<Eigen::Vector3d>& pts_;
   const std::vector<Eigen::Vector3d>& normals_;
@@ -611,6 +612,40 @@ void Resampler::eliminate(Samples& s, std::size_t count) {
   s = spatiallySorted(s, removed);
 }
 
+/// Last resort when the edge operations cannot reach N (a handful of points with degenerate 1-rings): drop the
+/// free samples closest to another sample, or add the input points farthest from the samples, one at a time.
+void Resampler::forceCount(Samples& s, Relaxation& relaxation) const {
+  const std::size_t n = params_.targetCount;
+  std::vector<char> removed(s.size(), 0);
+  for (std::size_t alive = s.size(); alive > n; --alive) {
+    std::size_t worst = s.size();
+    double worstD = std::numeric_limits<double>::max();
+    for (std::size_t i = 0; i < s.size(); ++i) {
+      if (removed[i] || s.fixed[i]) continue;
+      double d = std::numeric_limits<double>::max();
+      for (std::size_t j = 0; j < s.size(); ++j)
+        if (j != i && !removed[j]) d = std::min(d, (s.pos[i] - s.pos[j]).squaredNorm());
+      if (d < worstD) worstD = d, worst = i;
+    }
+    if (worst == s.size()) break;  // only fixed samples left (validate() keeps them ≤ N)
+    removed[worst] = 1;
+  }
+  Samples kept;
+  for (std::size_t i = 0; i < s.size(); ++i)
+    if (!removed[i]) kept.add(s.pos[i], s.nrm[i], s.fixed[i], std::move(s.cache[i]));
+  std::vector<double> toSamples(pts_.size(), std::numeric_limits<double>::max());
+  for (std::size_t q = 0; q < pts_.size(); ++q)
+    for (const Eigen::Vector3d& p : kept.pos) toSamples[q] = std::min(toSamples[q], (pts_[q] - p).squaredNorm());
+  while (kept.size() < n) {
+    const auto far = static_cast<std::size_t>(std::max_element(toSamples.begin(), toSamples.end()) - toSamples.begin());
+    kept.add(pts_[far], normals_[far], false);
+    for (std::size_t q = 0; q < pts_.size(); ++q) toSamples[q] = std::min(toSamples[q], (pts_[q] - pts_[far]).squaredNorm());
+  }
+  s = std::move(kept);
+  rule_.update(s.pos, s.nrm);
+  relaxation = {};
+}
+
 Samples Resampler::initialise(ResampleResult& result) {
   const std::size_t n = params_.targetCount;
   Samples s;
@@ -716,7 +751,7 @@ void Resampler::run(Samples& s, ResampleResult& result) {
     relax(s, l, 1, relaxation);
     ++result.relaxIterations;
   }
-  if (s.size() != n) throw std::runtime_error("resample: could not reach the requested count");
+  if (s.size() != n) forceCount(s, relaxation);
   // Lloyd relaxation in rounds of 4 iterations until the spacing CV has not improved for relaxPatience rounds.
   double best = std::numeric_limits<double>::max();
   for (int it = 0, stale = 0; it < params_.maxRelaxIterations && stale < params_.relaxPatience; it += 4) {
