@@ -440,8 +440,8 @@ EditMap Resampler::splitAndCollapse(Samples& s, const std::vector<Edge>& sorted,
       }
   }
   // The two diagonals of a cocircular quad (a regular grid of input vertices) are both 1-ring edges with one
-  // midpoint: split samples closer than a tenth of their edge to an earlier one are dropped, since coincident
-  // samples never see each other in a tangent-plane cell and would stay together.
+  // midpoint: split samples closer than a tenth of their edge to an earlier one are dropped (two coincident
+  // samples share one tangent-plane cell and would move together until a collapse joined them).
   if (newPos.size() > 1) {
     const KnnIndex index(newPos);
     std::vector<char> keep(newPos.size(), 1);
@@ -541,7 +541,6 @@ void Resampler::carry(Relaxation& state, const EditMap& edits, std::size_t count
   state.rings = std::move(r);
   state.active = std::move(active);
   state.stale = std::move(edited);
-  if (getenv("E4")) { state.stale.assign(count, 1); }
 }
 
 /// Rings for the edge operations, from a relaxation's last rings: cells bounded by their neighbours alone are
@@ -552,7 +551,6 @@ void Resampler::carry(Relaxation& state, const EditMap& edits, std::size_t count
 Rings Resampler::edgeRings(const Samples& s, double l, const Relaxation& state) const {
   if (!state.rings) return computeRings(s, 1.5 * l);
   Relaxation wide{state.rings, state.rings->open, 0, {}};
-  if (getenv("E1")) { for (std::size_t i = 0; i < s.size(); ++i) wide.active[i] |= state.active[i]; return computeRings(s, 1.5 * l, &wide, true); }
   return computeRings(s, 1.5 * l, &wide, false);
 }
 
@@ -562,7 +560,7 @@ void Resampler::eliminate(Samples& s, std::size_t count) {
   if (s.size() <= count) return;
   const double rmax = std::sqrt(surface_.area() / (2.0 * std::sqrt(3.0) * static_cast<double>(count)));
   const double ratio = static_cast<double>(count) / static_cast<double>(s.size());
-  const double rmin = getenv("E3") ? rmax * (1.0 - 0.65 * std::pow(ratio, 1.5)) : rmax * (1.0 - std::pow(ratio, 1.5)) * 0.65;  // Yuksel: γ = 1.5, β = 0.65
+  const double rmin = rmax * (1.0 - std::pow(ratio, 1.5)) * 0.65;  // Yuksel 2015: γ = 1.5, β = 0.65
   // Adaptive mode: the Poisson-disk radius of a pair scales with the mean size factor of its two samples.
   std::vector<double> sz(s.size(), 1.0);
   if (size_)
