@@ -439,28 +439,6 @@ EditMap Resampler::splitAndCollapse(Samples& s, const std::vector<Edge>& sorted,
         map.touched.push_back(batch[c]->a), map.touched.push_back(batch[c]->b);
       }
   }
-  // The two diagonals of a cocircular quad (a regular grid of input vertices) are both 1-ring edges with one
-  // midpoint: split samples closer than a tenth of their edge to an earlier one are dropped (two coincident
-  // samples share one tangent-plane cell and would move together until a collapse joined them).
-  if (newPos.size() > 1) {
-    const KnnIndex index(newPos);
-    std::vector<char> keep(newPos.size(), 1);
-    std::vector<std::uint32_t> idx;
-    std::vector<double> d2;
-    for (std::size_t c = 0; c < newPos.size(); ++c) {
-      const double len = (s.pos[map.touched[2 * c]] - s.pos[map.touched[2 * c + 1]]).norm();
-      index.radius(newPos[c], 0.1 * len, idx, d2);
-      for (std::uint32_t j : idx) keep[c] &= !(j < c && keep[j]);
-    }
-    std::size_t w = 0;
-    for (std::size_t c = 0; c < newPos.size(); ++c)
-      if (keep[c]) {
-        newPos[w] = newPos[c], newNrm[w] = newNrm[c];
-        map.touched[2 * w] = map.touched[2 * c], map.touched[2 * w + 1] = map.touched[2 * c + 1];
-        ++w;
-      }
-    newPos.resize(w), newNrm.resize(w), map.touched.resize(2 * w);
-  }
   std::vector<char> touched(s.size(), 0), removed(s.size(), 0);
   std::size_t collapsed = 0;
   for (const Edge& e : sorted) {
@@ -615,29 +593,35 @@ void Resampler::eliminate(Samples& s, std::size_t count) {
 void Resampler::forceCount(Samples& s, Relaxation& relaxation) const {
   const std::size_t n = params_.targetCount;
   std::vector<char> removed(s.size(), 0);
-  for (std::size_t alive = s.size(); alive > n; --alive) {
-    std::size_t worst = s.size();
-    double worstD = std::numeric_limits<double>::max();
-    for (std::size_t i = 0; i < s.size(); ++i) {
-      if (removed[i] || s.fixed[i]) continue;
-      double d = std::numeric_limits<double>::max();
-      for (std::size_t j = 0; j < s.size(); ++j)
-        if (j != i && !removed[j]) d = std::min(d, (s.pos[i] - s.pos[j]).squaredNorm());
-      if (d < worstD) worstD = d, worst = i;
-    }
-    if (worst == s.size()) break;  // only fixed samples left (validate() keeps them ≤ N)
-    removed[worst] = 1;
+  std::vector<std::uint32_t> idx;
+  std::vector<double> d2;
+  if (s.size() > n) {  // the free samples nearest another sample go first, one of each close pair
+    const KnnIndex index(s.pos);
+    std::vector<std::tuple<double, std::uint32_t, std::uint32_t>> crowded;  // (d², sample, its nearest)
+    for (std::uint32_t i = 0; i < s.size(); ++i)
+      if (!s.fixed[i] && index.knn(s.pos[i], 2, idx, d2) == 2) crowded.emplace_back(d2[1], i, idx[1]);
+    std::sort(crowded.begin(), crowded.end());
+    std::size_t excess = s.size() - n;
+    for (const bool pairwise : {true, false})
+      for (const auto& [d, i, nearest] : crowded)
+        if (excess > 0 && !removed[i] && !(pairwise && removed[nearest])) removed[i] = 1, --excess;
   }
   Samples kept;
   for (std::size_t i = 0; i < s.size(); ++i)
     if (!removed[i]) kept.add(s.pos[i], s.nrm[i], s.fixed[i], std::move(s.cache[i]));
-  std::vector<double> toSamples(pts_.size(), std::numeric_limits<double>::max());
-  for (std::size_t q = 0; q < pts_.size(); ++q)
-    for (const Eigen::Vector3d& p : kept.pos) toSamples[q] = std::min(toSamples[q], (pts_[q] - p).squaredNorm());
-  while (kept.size() < n) {
-    const auto far = static_cast<std::size_t>(std::max_element(toSamples.begin(), toSamples.end()) - toSamples.begin());
-    kept.add(pts_[far], normals_[far], false);
-    for (std::size_t q = 0; q < pts_.size(); ++q) toSamples[q] = std::min(toSamples[q], (pts_[q] - pts_[far]).squaredNorm());
+  if (kept.size() < n) {  // the input points farthest from the samples, one at a time
+    std::vector<double> toSamples(pts_.size(), std::numeric_limits<double>::max());
+    if (!kept.pos.empty()) {
+      const KnnIndex index(kept.pos);
+      for (std::size_t q = 0; q < pts_.size(); ++q)
+        if (index.knn(pts_[q], 1, idx, d2) == 1) toSamples[q] = d2[0];
+    }
+    while (kept.size() < n) {
+      const auto far = static_cast<std::size_t>(std::max_element(toSamples.begin(), toSamples.end()) - toSamples.begin());
+      kept.add(pts_[far], normals_[far], false);
+      for (std::size_t q = 0; q < pts_.size(); ++q)
+        toSamples[q] = std::min(toSamples[q], (pts_[q] - pts_[far]).squaredNorm());
+    }
   }
   s = std::move(kept);
   rule_.update(s.pos, s.nrm);
