@@ -2,10 +2,14 @@
 /// @file bench_util.hpp
 /// @brief Small helpers shared by the benchmark executables (not part of the library).
 
+#include <cstdlib>
+#include <functional>
+#include <iostream>
 #include <sstream>
 #include <string>
 #include <vector>
 
+#include "iires/io.hpp"
 #include "iires/sampling.hpp"
 #include "iires/types.hpp"
 
@@ -29,6 +33,43 @@ inline PointCloud scanLikeSampling(const TriangleMesh& mesh, std::size_t count, 
   PointCloud cloud = sampleMesh(mesh, sp);
   cloud.normals.clear();
   return cloud;
+}
+
+/// @brief The command line of the benchmarks that resample one mesh's sampling to several N:
+/// `MESH INPUT_COUNT N [N ...] [--density-ratio R] [--threads T]` plus options of their own, which @p option
+/// consumes (it gets the argument and may advance the index past a value; returns false for "not mine").
+/// Exits with code 2 and @p usage on too few arguments.
+struct GridArgs {
+  std::string meshPath;
+  std::size_t inputCount = 0;
+  std::vector<std::size_t> counts;
+  double ratio = 1.0;
+  int threads = 0;
+  /// The mesh file's name without its directory (the `model=` of the key=value lines).
+  std::string name() const { return meshPath.substr(meshPath.find_last_of('/') + 1); }
+};
+
+inline GridArgs parseGridArgs(int argc, char** argv, double defaultRatio, const std::string& usage,
+                              const std::function<bool(const std::string&, int&)>& option = {}) {
+  if (argc < 4) {
+    std::cerr << "usage: " << usage << "\n";
+    std::exit(2);
+  }
+  GridArgs g;
+  g.meshPath = argv[1];
+  g.inputCount = std::stoul(argv[2]);
+  g.ratio = defaultRatio;
+  for (int a = 3; a < argc; ++a) {
+    const std::string arg = argv[a];
+    if (arg == "--density-ratio" && a + 1 < argc) {
+      g.ratio = std::stod(argv[++a]);
+    } else if (arg == "--threads" && a + 1 < argc) {
+      g.threads = std::stoi(argv[++a]);
+    } else if (!option || !option(arg, a)) {
+      g.counts.push_back(std::stoul(arg));
+    }
+  }
+  return g;
 }
 
 }  // namespace iires::bench

@@ -6,7 +6,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <iostream>
 #include <string>
 #include <vector>
 
@@ -37,43 +36,35 @@ void report(const std::string& prefix, const std::string& method, const std::vec
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc < 4) {
-    std::cerr << "usage: resample_bench MESH INPUT_COUNT N [N ...] [--density-ratio R] [--fps-limit X] "
-                 "[--threads T]\n";
-    return 2;
-  }
-  const std::string meshPath = argv[1];
-  const std::size_t inputCount = std::stoul(argv[2]);
-  std::vector<std::size_t> counts;
-  double ratio = 5.0, fpsLimit = 2e10;
-  int threads = 0;
+  double fpsLimit = 2e10;
   bool peers = true;
-  for (int a = 3; a < argc; ++a) {
-    const std::string arg = argv[a];
-    if (arg == "--no-peers") {
-      peers = false;
-    } else if (arg == "--density-ratio" && a + 1 < argc) {
-      ratio = std::stod(argv[++a]);
-    } else if (arg == "--fps-limit" && a + 1 < argc) {
-      fpsLimit = std::stod(argv[++a]);
-    } else if (arg == "--threads" && a + 1 < argc) {
-      threads = std::stoi(argv[++a]);
-    } else {
-      counts.push_back(std::stoul(arg));
-    }
-  }
-  const iires::TriangleMesh mesh = iires::readMesh(meshPath);
+  const iires::bench::GridArgs args = iires::bench::parseGridArgs(
+      argc, argv, 5.0,
+      "resample_bench MESH INPUT_COUNT N [N ...] [--density-ratio R] [--fps-limit X] [--threads T] [--no-peers]",
+      [&](const std::string& arg, int& a) {
+        if (arg == "--no-peers") {
+          peers = false;
+          return true;
+        }
+        if (arg != "--fps-limit" || a + 1 >= argc) return false;
+        fpsLimit = std::stod(argv[++a]);
+        return true;
+      });
+  const std::size_t inputCount = args.inputCount;
+  const double ratio = args.ratio;
+  const int threads = args.threads;
+  const iires::TriangleMesh mesh = iires::readMesh(args.meshPath);
   const iires::PointCloud cloud = iires::bench::scanLikeSampling(mesh, inputCount, ratio);
   iires::MeshSamplingParams rp;
   rp.count = 300000;
   rp.seed = 2;
   const auto reference = iires::sampleMesh(mesh, rp).points;
   const iires::MeshDistance distance(mesh);
-  const std::string name = meshPath.substr(meshPath.find_last_of('/') + 1);
+  const std::string name = args.name();
 
   open3d::geometry::PointCloud o3d;
   o3d.points_ = cloud.points;
-  for (std::size_t n : counts) {
+  for (std::size_t n : args.counts) {
     const std::string prefix = "model=" + name + " input=" + std::to_string(inputCount) + " N=" + std::to_string(n);
     iires::ResampleParams p;
     p.targetCount = n;

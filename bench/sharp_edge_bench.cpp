@@ -15,7 +15,6 @@
 
 #include <chrono>
 #include <cstdio>
-#include <iostream>
 #include <iterator>
 #include <string>
 #include <utility>
@@ -84,38 +83,28 @@ std::vector<Point> wlop(const std::vector<Point>& input, std::size_t n) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc < 4) {
-    std::cerr << "usage: sharp_edge_bench MESH INPUT_COUNT N [N ...] [--density-ratio R] [--threads T] "
-                 "[--methods iires,iires_sharp,cgal_wlop,cgal_ear]\n";
-    return 2;
-  }
-  const std::string meshPath = argv[1];
-  const std::size_t inputCount = std::stoul(argv[2]);
-  std::vector<std::size_t> counts;
-  double ratio = 1.0;
-  int threads = 0;
   std::string methods = "iires,iires_sharp,cgal_wlop,cgal_ear";
-  for (int a = 3; a < argc; ++a) {
-    const std::string arg = argv[a];
-    if (arg == "--methods" && a + 1 < argc) {
-      methods = argv[++a];
-    } else if (arg == "--density-ratio" && a + 1 < argc) {
-      ratio = std::stod(argv[++a]);
-    } else if (arg == "--threads" && a + 1 < argc) {
-      threads = std::stoi(argv[++a]);
-    } else {
-      counts.push_back(std::stoul(arg));
-    }
-  }
-  const iires::TriangleMesh mesh = iires::readMesh(meshPath);
+  const iires::bench::GridArgs args = iires::bench::parseGridArgs(
+      argc, argv, 1.0,
+      "sharp_edge_bench MESH INPUT_COUNT N [N ...] [--density-ratio R] [--threads T] "
+      "[--methods iires,iires_sharp,cgal_wlop,cgal_ear]",
+      [&](const std::string& arg, int& a) {
+        if (arg != "--methods" || a + 1 >= argc) return false;
+        methods = argv[++a];
+        return true;
+      });
+  const std::size_t inputCount = args.inputCount;
+  const double ratio = args.ratio;
+  const int threads = args.threads;
+  const iires::TriangleMesh mesh = iires::readMesh(args.meshPath);
   const iires::PointCloud cloud = iires::bench::scanLikeSampling(mesh, inputCount, ratio);
   const iires::MeshDistance distance(mesh);
   const Reference ref{&distance, iires::sharpMeshEdges(mesh, 45.0)};
-  const std::string name = meshPath.substr(meshPath.find_last_of('/') + 1);
+  const std::string name = args.name();
   auto run = [&](const std::string& method) { return ("," + methods + ",").find("," + method + ",") != std::string::npos; };
   const std::vector<Point> cgalInput = toCgal(cloud.points);
 
-  for (std::size_t n : counts) {
+  for (std::size_t n : args.counts) {
     char buf[160];
     std::snprintf(buf, sizeof buf, "model=%s input=%zu density_ratio=%g N=%zu", name.c_str(), inputCount, ratio, n);
     const std::string prefix = buf;
