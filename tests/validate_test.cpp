@@ -139,5 +139,16 @@ TEST(Validate, MergesManyDuplicates) {
   EXPECT_EQ(std::adjacent_find(sorted.begin(), sorted.end()), sorted.end());
 }
 
+// −0 and +0 are the same coordinate: such points are duplicates (the merge hashes bit patterns, so it must
+// normalise the sign of zero first).
+TEST(Validate, SignedZeroesAreTheSamePoint) {
+  PointCloud cloud = tetrahedron();
+  cloud.points.push_back({-0.0, 0.0, -0.0});  // == tetrahedron's (0, 0, 0)
+  cloud.points.push_back({1.0, -0.0, 0.0});   // == (1, 0, 0)
+  const ValidationReport report = validateCloud(cloud, 4);
+  EXPECT_EQ(report.duplicatesMerged, 2u);
+  EXPECT_EQ(cloud.size(), 4u);
+}
+
 }  // namespace
 }  // namespace iires

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <nanoflann.hpp>
 
+#include "iires/radix_sort.hpp"
+
 namespace iires {
 namespace {
 
@@ -96,14 +98,14 @@ std::vector<std::uint32_t> mortonOrder(const std::vector<Eigen::Vector3d>& point
   for (const auto& p : points) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
   const double extent = (hi - lo).maxCoeff();
   const double scale = extent > 0 ? 2097151.0 / extent : 0.0;
-  std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed(points.size());
+  std::vector<KeyedIndex> keyed(points.size());
   for (std::size_t i = 0; i < points.size(); ++i) {
     const Eigen::Vector3d q = (points[i] - lo) * scale;
     keyed[i] = {spreadBits(static_cast<std::uint64_t>(q.x())) | spreadBits(static_cast<std::uint64_t>(q.y())) << 1 |
                     spreadBits(static_cast<std::uint64_t>(q.z())) << 2,
                 static_cast<std::uint32_t>(i)};
   }
-  std::sort(keyed.begin(), keyed.end());
+  radixSort(keyed);  // stable: ties keep index order
   for (std::size_t i = 0; i < keyed.size(); ++i) order[i] = keyed[i].second;
   return order;
 }

@@ -46,7 +46,7 @@ MlsSurface::MlsSurface(const std::vector<Eigen::Vector3d>& points, const std::ve
 MlsSurface::~MlsSurface() = default;
 
 Eigen::Vector3d MlsSurface::project(const Eigen::Vector3d& x0, Eigen::Vector3d* normalOut, double* offSurface,
-                                    const Eigen::Vector3d* hint, MlsCache* cache) const {
+                                    const Eigen::Vector3d* hint, MlsCache* cache, int iterations) const {
   // Per-thread scratch: this runs for every sample in every relaxation iteration.
   thread_local std::vector<std::uint32_t> idx;
   thread_local std::vector<double> d2, w;
@@ -60,7 +60,8 @@ Eigen::Vector3d MlsSurface::project(const Eigen::Vector3d& x0, Eigen::Vector3d* 
     lastH = cache->h;
     d2.resize(idx.size());
   }
-  for (int it = 0; it < std::max(1, params_.iterations); ++it) {
+  const int steps = std::max(1, iterations > 0 ? iterations : params_.iterations);
+  for (int it = 0; it < steps; ++it) {
     // Re-centre the neighbourhood only when the estimate moved by more than a quarter kernel width.
     if (lastH == 0 || (x - queried).squaredNorm() > 0.0625 * lastH * lastH) {
       index_.knn(x, static_cast<std::size_t>(params_.k), idx, d2);

@@ -16,6 +16,7 @@
 
 #include "iires/knn.hpp"
 #include "iires/parallel.hpp"
+#include "iires/radix_sort.hpp"
 #include "iires/tangent_cell.hpp"
 #include "iires/validate.hpp"
 
@@ -110,11 +111,17 @@ std::vector<std::uint32_t> voxelThin(const std::vector<Eigen::Vector3d>& pts, co
       toCentre[i] = (q - Eigen::Vector3d(ix + 0.5, iy + 0.5, iz + 0.5)).squaredNorm();
     });
   };
-  auto occupied = [&](double size) {
+  std::vector<KeyedIndex> byCell(n);  // (cell key, point), sorted by key; equal keys keep index order
+  auto sortCells = [&](double size) {
     computeKeys(size);
-    std::vector<std::uint64_t> sorted(keys);
-    std::sort(sorted.begin(), sorted.end());
-    return static_cast<std::size_t>(std::unique(sorted.begin(), sorted.end()) - sorted.begin());
+    for (std::size_t i = 0; i < n; ++i) byCell[i] = {keys[i], static_cast<std::uint32_t>(i)};
+    radixSort(byCell);
+  };
+  auto occupied = [&](double size) {
+    sortCells(size);
+    std::size_t cells = 0;
+    for (std::size_t r = 0; r < n; ++r) cells += r == 0 || byCell[r].first != byCell[r - 1].first;
+    return cells;
   };
   // Occupied cells scale like cell⁻² on a surface.
   for (int step = 0; step < 8; ++step) {
@@ -122,16 +129,16 @@ std::vector<std::uint32_t> voxelThin(const std::vector<Eigen::Vector3d>& pts, co
     if (ratio > 0.85 && ratio < 1.2) break;
     cell *= std::sqrt(std::clamp(ratio, 0.25, 4.0));
   }
-  computeKeys(cell);
-  // Per cell the point nearest its centre (ties: the lowest index).
-  std::vector<std::uint32_t> order(n);
-  std::iota(order.begin(), order.end(), 0u);
-  std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
-    return std::tie(keys[a], toCentre[a], a) < std::tie(keys[b], toCentre[b], b);
-  });
+  sortCells(cell);
+  // Per cell the point nearest its centre (ties: the lowest index, the first of its run).
   std::vector<std::uint32_t> chosen;
-  for (std::size_t r = 0; r < n; ++r)
-    if (r == 0 || keys[order[r]] != keys[order[r - 1]]) chosen.push_back(order[r]);
+  for (std::size_t r = 0; r < n; ++r) {
+    const std::uint32_t i = byCell[r].second;
+    if (r == 0 || byCell[r].first != byCell[r - 1].first)
+      chosen.push_back(i);
+    else if (toCentre[i] < toCentre[chosen.back()])
+      chosen.back() = i;
+  }
   std::sort(chosen.begin(), chosen.end());
   return chosen;
 }
@@ -173,7 +180,8 @@ class Resampler {
   Rings computeRings(const Samples& s, double cellRadius, const Relaxation* relaxation = nullptr,
                      bool requery = true) const;
   std::vector<Edge> edges(const Samples& s, const Rings& r) const;
-  double relax(Samples& s, double l, int iterations, Relaxation& state);
+  /// @p projectionSteps: MLS projection steps per move (0 = MlsParams::iterations).
+  double relax(Samples& s, double l, int iterations, Relaxation& state, int projectionSteps = 0);
   EditMap splitAndCollapse(Samples& s, const std::vector<Edge>& sorted, std::size_t splits, double minSplit,
                            std::size_t collapses, double maxCollapse, ResampleResult& result);
   void carry(Relaxation& state, const EditMap& edits, std::size_t count) const;
@@ -352,7 +360,7 @@ std::vector<Edge> Resampler::edges(const Samples& s, const Rings& r) const {
 /// Only active samples are recomputed: a sample whose cell neighbours and itself all moved by less than
 /// kStillMove·l last time has (nearly) the same cell and centroid, and keeps them. Late in the relaxation most
 /// samples are still, so an iteration costs a fraction of the first ones.
-double Resampler::relax(Samples& s, double l, int iterations, Relaxation& state) {
+double Resampler::relax(Samples& s, double l, int iterations, Relaxation& state, int projectionSteps) {
   constexpr double kStillMove = 0.005;  // in units of l
   constexpr int kRequeryEvery = 4;     // iterations between fresh k-d tree candidate lists
   const std::size_t n = s.size(), k = static_cast<std::size_t>(params_.neighbours);
@@ -373,7 +381,7 @@ double Resampler::relax(Samples& s, double l, int iterations, Relaxation& state)
       for (int attempt = 0; attempt < 3; ++attempt) {
         Eigen::Vector3d nn;
         double off = 0;
-        const Eigen::Vector3d p = surface_.project(target, &nn, &off, &s.nrm[i], &s.cache[i]);
+        const Eigen::Vector3d p = surface_.project(target, &nn, &off, &s.nrm[i], &s.cache[i], projectionSteps);
         // A boundary sample never ends farther out than it was (the projection itself may push it there,
         // where the MLS surface only extrapolates past the last input points) and stays closer to the cloud.
         if (off <= (r.outward[i].isZero() ? kOffSurfaceLimit : 0.5 * kOffSurfaceLimit) &&
@@ -721,7 +729,8 @@ void Resampler::run(Samples& s, ResampleResult& result) {
       }
     }
     edit(e, splits, minSplit, collapses, maxCollapse);
-    relax(s, l, params_.relaxPerPass, relaxation);
+    // One projection step per move while the passes still edit the set; the final relaxation below projects fully.
+    relax(s, l, params_.relaxPerPass, relaxation, 1);
     result.relaxIterations += params_.relaxPerPass;
   }
   // Exact-count finish: collapse the shortest or split the longest edges until |S| == N.

@@ -3,32 +3,45 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
-#include <numeric>
+#include <cstring>
 #include <sstream>
-#include <tuple>
 #include <vector>
+
+#include "iires/radix_sort.hpp"
 
 namespace iires {
 namespace {
 
 using Eigen::Vector3d;
 
-bool lexicographicLess(const Vector3d& a, const Vector3d& b) {
-  return std::tie(a.x(), a.y(), a.z()) < std::tie(b.x(), b.y(), b.z());
-}
-
 /// Removes exact duplicate positions, keeping the first occurrence and the normals of the kept points.
-/// @return the number of points removed. O(n log n): duplicates are adjacent after a stable sort.
+/// @return the number of points removed. O(n): points are sorted by a hash of their coordinates (radix sort,
+/// stable), so duplicates share a run; within a run a point is a duplicate when an earlier one equals it.
 std::size_t mergeDuplicates(PointCloud& cloud) {
   const std::size_t n = cloud.size();
-  std::vector<std::size_t> order(n);
-  std::iota(order.begin(), order.end(), 0);
-  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
-    return lexicographicLess(cloud.points[a], cloud.points[b]);
-  });
+  std::vector<KeyedIndex> byHash(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    std::uint64_t h = 0x9e3779b97f4a7c15ull;
+    for (int k = 0; k < 3; ++k) {
+      const double c = cloud.points[i][k] + 0.0;  // −0 and +0 compare equal: hash them alike
+      std::uint64_t bits;
+      std::memcpy(&bits, &c, sizeof bits);
+      h = (h ^ bits) * 0xbf58476d1ce4e5b9ull;
+      h ^= h >> 31;
+    }
+    byHash[i] = {h, static_cast<std::uint32_t>(i)};
+  }
+  radixSort(byHash);
   std::vector<bool> keep(n, true);
-  for (std::size_t k = 1; k < n; ++k)
-    if (cloud.points[order[k]] == cloud.points[order[k - 1]]) keep[order[k]] = false;
+  for (std::size_t begin = 0, end = 0; begin < n; begin = end) {
+    while (end < n && byHash[end].first == byHash[begin].first) ++end;
+    for (std::size_t a = begin + 1; a < end; ++a)  // indices ascend within a run
+      for (std::size_t b = begin; b < a; ++b)
+        if (keep[byHash[b].second] && cloud.points[byHash[a].second] == cloud.points[byHash[b].second]) {
+          keep[byHash[a].second] = false;
+          break;
+        }
+  }
 
   std::size_t kept = 0;
   for (std::size_t i = 0; i < n; ++i) {

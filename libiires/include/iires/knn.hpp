@@ -43,7 +43,7 @@ class KnnIndex {
 
 /// @brief A permutation that puts points in Morton (Z-curve) order: points close in space end up close in
 /// memory, so loops over them and k-d tree queries from them stay in cache. Ties keep index order.
-/// @note O(n log n); deterministic.
+/// @note O(n) (radix sort of the 63-bit codes); deterministic.
 std::vector<std::uint32_t> mortonOrder(const std::vector<Eigen::Vector3d>& points);
 
 }  // namespace iires

@@ -43,8 +43,10 @@ class MlsSurface {
   /// input points whose normals face away from it (another sheet: across a thin gap, between fingers) get no
   /// weight. Without a hint the nearest input point's normal is used.
   /// @p cache (optional) saves the k-NN search when the point was projected from nearby before.
+  /// @p iterations (optional, > 0) overrides MlsParams::iterations: one step is enough for a point that was on
+  /// the surface before a small move (a relaxation step), the full count for a point from anywhere.
   Eigen::Vector3d project(const Eigen::Vector3d& x, Eigen::Vector3d* normal = nullptr, double* offSurface = nullptr,
-                          const Eigen::Vector3d* hint = nullptr, MlsCache* cache = nullptr) const;
+                          const Eigen::Vector3d* hint = nullptr, MlsCache* cache = nullptr, int iterations = 0) const;
 
   const KnnIndex& index() const { return index_; }
   /// @brief Mean distance from an input point to its nearest neighbour (the input spacing).

@@ -1,0 +1,48 @@
+// Tests for radix_sort.hpp: the same order as a stable comparison sort, for keys that use few or all bits.
+#include "iires/radix_sort.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <random>
+
+namespace iires {
+namespace {
+
+std::vector<KeyedIndex> keyed(const std::vector<std::uint64_t>& keys) {
+  std::vector<KeyedIndex> out;
+  for (std::size_t i = 0; i < keys.size(); ++i) out.push_back({keys[i], static_cast<std::uint32_t>(i)});
+  return out;
+}
+
+void expectLikeStableSort(const std::vector<std::uint64_t>& keys) {
+  std::vector<KeyedIndex> items = keyed(keys), expected = items;
+  std::stable_sort(expected.begin(), expected.end(),
+                   [](const KeyedIndex& a, const KeyedIndex& b) { return a.first < b.first; });
+  radixSort(items);
+  EXPECT_EQ(items, expected);
+}
+
+TEST(RadixSort, MatchesStableSortOnFullWidthKeys) {
+  std::mt19937_64 rng(3);
+  std::vector<std::uint64_t> keys(20000);
+  for (auto& k : keys) k = rng();
+  expectLikeStableSort(keys);
+}
+
+TEST(RadixSort, EqualKeysKeepTheirInputOrder) {
+  std::mt19937_64 rng(5);
+  std::vector<std::uint64_t> keys(20000);
+  for (auto& k : keys) k = (rng() % 37) << 40 | (rng() % 3);  // many ties, digits 1 and 3 constant
+  expectLikeStableSort(keys);
+}
+
+TEST(RadixSort, ConstantAndTinyInputs) {
+  expectLikeStableSort({});
+  expectLikeStableSort({42});
+  expectLikeStableSort(std::vector<std::uint64_t>(1000, 0xdeadbeefcafef00dull));  // every digit constant
+  expectLikeStableSort({~0ull, 0, ~0ull, 1, 0});
+}
+
+}  // namespace
+}  // namespace iires
