@@ -81,8 +81,8 @@ struct Edge {
 /// narrower than the cell) each keep a point.
 std::vector<std::uint32_t> voxelThin(const std::vector<Eigen::Vector3d>& pts, const std::vector<Eigen::Vector3d>& normals,
                                      std::size_t target, double cell, std::uint64_t seed, int threads) {
-  Eigen::Vector3d lo = pts[0];
-  for (const auto& p : pts) lo = lo.cwiseMin(p);
+  Eigen::Vector3d lo = pts[0], hi = pts[0];
+  for (const auto& p : pts) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
   // A seed shifts the grid by a fraction of a cell in each axis (seed 0: no shift).
   Eigen::Vector3d shift = Eigen::Vector3d::Zero();
   for (int a = 0; seed && a < 3; ++a) {
@@ -99,22 +99,25 @@ std::vector<std::uint32_t> voxelThin(const std::vector<Eigen::Vector3d>& pts, co
     return static_cast<std::uint64_t>(2 * axis + (normals[i][axis] < 0 ? 1 : 0));
   };
   // Cell key of every point (and its squared distance to the cell centre), computed in parallel; cells are
-  // then found by sorting the keys, not by a hash map (several times faster on millions of points).
-  std::vector<std::uint64_t> keys(n);
+  // then found by radix-sorting the keys. Keys number the grid's cells densely (few radix passes) unless the
+  // grid is too large for that, then they mix the three cell coordinates.
+  std::vector<KeyedIndex> byCell(n);  // (cell key, point), sorted by key; equal keys keep index order
   std::vector<double> toCentre(n);
-  auto computeKeys = [&](double size) {
+  double sortedFor = 0;  // the cell size byCell is sorted for
+  auto sortCells = [&](double size) {
+    if (size == sortedFor) return;
+    sortedFor = size;
+    const Eigen::Vector3d dims = (hi - lo) / size + Eigen::Vector3d::Constant(2.0);
+    const bool dense = dims.prod() < 0x1.0p58;
+    const auto ny = static_cast<std::uint64_t>(dims.y()), nz = static_cast<std::uint64_t>(dims.z());
     parallelFor(n, threads, [&](std::size_t i) {
       const Eigen::Vector3d q = (pts[i] - lo) / size + shift;
       const auto ix = static_cast<std::uint64_t>(q.x()), iy = static_cast<std::uint64_t>(q.y()),
                  iz = static_cast<std::uint64_t>(q.z());
-      keys[i] = ((ix << 42) ^ (iy << 21) ^ iz) * 8 + normalClass(i);
+      const std::uint64_t cellKey = dense ? (ix * ny + iy) * nz + iz : (ix << 42) ^ (iy << 21) ^ iz;
+      byCell[i] = {cellKey * 8 + normalClass(i), static_cast<std::uint32_t>(i)};
       toCentre[i] = (q - Eigen::Vector3d(ix + 0.5, iy + 0.5, iz + 0.5)).squaredNorm();
     });
-  };
-  std::vector<KeyedIndex> byCell(n);  // (cell key, point), sorted by key; equal keys keep index order
-  auto sortCells = [&](double size) {
-    computeKeys(size);
-    for (std::size_t i = 0; i < n; ++i) byCell[i] = {keys[i], static_cast<std::uint32_t>(i)};
     radixSort(byCell);
   };
   auto occupied = [&](double size) {
@@ -129,7 +132,7 @@ std::vector<std::uint32_t> voxelThin(const std::vector<Eigen::Vector3d>& pts, co
     if (ratio > 0.85 && ratio < 1.2) break;
     cell *= std::sqrt(std::clamp(ratio, 0.25, 4.0));
   }
-  sortCells(cell);
+  sortCells(cell);  // (already sorted when the loop stopped on it)
   // Per cell the point nearest its centre (ties: the lowest index, the first of its run).
   std::vector<std::uint32_t> chosen;
   for (std::size_t r = 0; r < n; ++r) {
@@ -822,7 +825,7 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
   const StageClock clock(result.timings, params.progress);
 
   auto t = clock.begin("validate");
-  const ValidationReport report = validateCloud(cloud, 4, "input");
+  const ValidationReport report = validateCloud(cloud, 4, "input", params.threads);
   result.duplicatesMerged = report.duplicatesMerged;
   clock.end("validate", t);
 

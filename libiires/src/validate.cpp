@@ -7,6 +7,7 @@
 #include <sstream>
 #include <vector>
 
+#include "iires/parallel.hpp"
 #include "iires/radix_sort.hpp"
 
 namespace iires {
@@ -17,10 +18,10 @@ using Eigen::Vector3d;
 /// Removes exact duplicate positions, keeping the first occurrence and the normals of the kept points.
 /// @return the number of points removed. O(n): points are sorted by a hash of their coordinates (radix sort,
 /// stable), so duplicates share a run; within a run a point is a duplicate when an earlier one equals it.
-std::size_t mergeDuplicates(PointCloud& cloud) {
+std::size_t mergeDuplicates(PointCloud& cloud, int threads) {
   const std::size_t n = cloud.size();
   std::vector<KeyedIndex> byHash(n);
-  for (std::size_t i = 0; i < n; ++i) {
+  parallelFor(n, threads, [&](std::size_t i) {
     std::uint64_t h = 0x9e3779b97f4a7c15ull;
     for (int k = 0; k < 3; ++k) {
       const double c = cloud.points[i][k] + 0.0;  // −0 and +0 compare equal: hash them alike
@@ -30,7 +31,7 @@ std::size_t mergeDuplicates(PointCloud& cloud) {
       h ^= h >> 31;
     }
     byHash[i] = {h, static_cast<std::uint32_t>(i)};
-  }
+  });
   radixSort(byHash);
   std::vector<bool> keep(n, true);
   for (std::size_t begin = 0, end = 0; begin < n; begin = end) {
@@ -67,35 +68,50 @@ bool collinear(const std::vector<Vector3d>& points) {
   return eigenvalues[2] <= 0 || eigenvalues[1] <= 1e-12 * eigenvalues[2];
 }
 
+/// The lowest index i < n with bad(i), or n when there is none (in parallel; independent of the thread count).
+template <typename Pred>
+std::size_t firstWhere(std::size_t n, int threads, Pred bad) {
+  const auto count = static_cast<long long>(n);
+  long long first = count;
+#pragma omp parallel for reduction(min : first) num_threads(resolveThreads(threads))
+  for (long long i = 0; i < count; ++i)
+    if (bad(static_cast<std::size_t>(i))) first = std::min(first, i);
+  return static_cast<std::size_t>(first);
+}
+
 }  // namespace
 
-ValidationReport validateCloud(PointCloud& cloud, std::size_t minPoints, const std::string& what) {
+ValidationReport validateCloud(PointCloud& cloud, std::size_t minPoints, const std::string& what, int threads) {
   ValidationReport report;
   report.inputPoints = cloud.size();
   if (cloud.empty()) throw InputError(what + ": the cloud is empty");
-  for (std::size_t i = 0; i < cloud.size(); ++i) {
-    if (!cloud.points[i].allFinite())
-      throw InputError(what + ": point " + std::to_string(i) + " has a non-finite coordinate (NaN or Inf)");
-    // Finite but so large that squared distances, covariances and MLS moments overflow to Inf/NaN (a fuzzer
-    // find: one point at 5e244 turned the whole output into NaN).
-    if (cloud.points[i].cwiseAbs().maxCoeff() > kMaxCoordinate) {
-      std::ostringstream os;
-      os << what << ": point " << i << " has a coordinate of magnitude " << cloud.points[i].cwiseAbs().maxCoeff()
-         << ", beyond the supported " << kMaxCoordinate << " (squared distances would overflow)";
-      throw InputError(os.str());
-    }
+  // The first point that is non-finite, or finite but so large that squared distances, covariances and MLS
+  // moments overflow to Inf/NaN (a fuzzer find: one point at 5e244 turned the whole output into NaN).
+  const std::size_t n = cloud.size();
+  const std::size_t bad = firstWhere(n, threads, [&](std::size_t i) {
+    return !cloud.points[i].allFinite() || cloud.points[i].cwiseAbs().maxCoeff() > kMaxCoordinate;
+  });
+  if (bad < n) {
+    const Vector3d& p = cloud.points[bad];
+    if (!p.allFinite())
+      throw InputError(what + ": point " + std::to_string(bad) + " has a non-finite coordinate (NaN or Inf)");
+    std::ostringstream os;
+    os << what << ": point " << bad << " has a coordinate of magnitude " << p.cwiseAbs().maxCoeff()
+       << ", beyond the supported " << kMaxCoordinate << " (squared distances would overflow)";
+    throw InputError(os.str());
   }
   // Denormal-scale coordinates (a fuzzer find: a cluster of points ~1e-310 apart) make differences whose
   // squares underflow to 0, and normalising them gives NaN; below kTinyCoordinate a coordinate is 0.
-  for (Vector3d& p : cloud.points)
+  parallelFor(n, threads, [&](std::size_t i) {
     for (int k = 0; k < 3; ++k)
-      if (std::abs(p[k]) < kTinyCoordinate) p[k] = 0.0;
-  const bool normalsUsable =
-      cloud.hasNormals() && std::all_of(cloud.normals.begin(), cloud.normals.end(),
-                                        [](const Vector3d& n) { return n.allFinite() && n.squaredNorm() > 0.0; });
+      if (std::abs(cloud.points[i][k]) < kTinyCoordinate) cloud.points[i][k] = 0.0;
+  });
+  const bool normalsUsable = cloud.hasNormals() && firstWhere(n, threads, [&](std::size_t i) {
+                               return !cloud.normals[i].allFinite() || !(cloud.normals[i].squaredNorm() > 0.0);
+                             }) == n;
   if (!normalsUsable) cloud.normals.clear();
 
-  report.duplicatesMerged = mergeDuplicates(cloud);
+  report.duplicatesMerged = mergeDuplicates(cloud, threads);
   report.outputPoints = cloud.size();
   if (cloud.size() < minPoints)
     throw InputError(what + ": needs at least " + std::to_string(minPoints) +

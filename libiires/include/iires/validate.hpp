@@ -30,7 +30,9 @@ constexpr double kTinyCoordinate = 1e-150;
 /// the covariance is at most 1e-12 times the first; one or two distinct points are collinear too).
 /// @note Normals holding NaN/Inf, or not one per point, are dropped (cleared) rather than rejected.
 /// Coordinates of magnitude below kTinyCoordinate are set to 0 before duplicates are merged.
-/// O(n log n): duplicates are found by sorting. The order of the kept points is unchanged.
-ValidationReport validateCloud(PointCloud& cloud, std::size_t minPoints, const std::string& what = "input");
+/// O(n): duplicates are found by a radix sort of coordinate hashes. The order of the kept points is unchanged.
+/// @param threads threads for the per-point checks (0 = all cores); the result does not depend on it.
+ValidationReport validateCloud(PointCloud& cloud, std::size_t minPoints, const std::string& what = "input",
+                               int threads = 0);
 
 }  // namespace iires
