@@ -112,7 +112,11 @@ Eigen::Vector3d MlsSurface::project(const Eigen::Vector3d& x0, Eigen::Vector3d* 
         atb += wrow * d.dot(normal);
       }
       for (int r = 3; r < 6; ++r) ata(r, r) += 1e-3 * wsum;  // mild ridge: flat when under-determined
-      const Eigen::Matrix<double, 6, 1> c = ata.ldlt().solve(atb);
+      // The ridge makes the system positive definite: Cholesky (unrolled at this fixed size) is several times
+      // cheaper than a pivoting LDLT, which remains the fallback when the plane part is degenerate.
+      const Eigen::LLT<Eigen::Matrix<double, 6, 6>> llt(ata);
+      const Eigen::Matrix<double, 6, 1> c =
+          llt.info() == Eigen::Success ? Eigen::Matrix<double, 6, 1>(llt.solve(atb)) : ata.ldlt().solve(atb).eval();
       if (c.allFinite()) {
         const Eigen::Vector3d d = (x - a) / h;
         const double pu = d.dot(u), pv = d.dot(v);
