@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <numeric>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -146,7 +147,7 @@ MlsPlane fitMlsPlane(const Eigen::Vector3d& p, const std::vector<Eigen::Vector3d
                           pointNormal, sharpness);
 }
 
-DenoiseResult denoise(const PointCloud& input, const DenoiseParams& params) {
+DenoiseResult denoise(const PointCloud& input, const DenoiseParams& params, const KnnIndex* givenIndex) {
   params.validate();
   const auto start = Clock::now();
   const std::size_t k = static_cast<std::size_t>(params.neighbours);
@@ -170,11 +171,20 @@ DenoiseResult denoise(const PointCloud& input, const DenoiseParams& params) {
   std::vector<std::uint32_t> found(n);
   std::vector<double> h(n, 0.0), nearest(n, 0.0);
   {
-    const KnnIndex index(in);
+    // A given tree indexes the caller's order: query it with the caller's point and map the answers to ours.
+    std::optional<KnnIndex> own;
+    const KnnIndex& index = givenIndex ? *givenIndex : own.emplace(in);
+    std::vector<std::uint32_t> rankOf;
+    if (givenIndex) {
+      rankOf.resize(n);
+      for (std::size_t a = 0; a < n; ++a) rankOf[order[a]] = static_cast<std::uint32_t>(a);
+    }
     parallelFor(n, params.threads, [&](std::size_t i) {
       std::vector<std::uint32_t> idx;
       std::vector<double> d2;
       const std::size_t f = index.knn(in[i], K, idx, d2);
+      if (givenIndex)
+        for (std::uint32_t& j : idx) j = rankOf[j];
       std::copy(idx.begin(), idx.begin() + static_cast<long>(f), nbr.begin() + static_cast<long>(i * K));
       std::fill(nbr.begin() + static_cast<long>(i * K + f), nbr.begin() + static_cast<long>((i + 1) * K),
                 static_cast<std::uint32_t>(i));

@@ -464,6 +464,7 @@ std::int64_t GeodesicCoordinates::nearest(const Eigen::Vector3d& query, double* 
   const std::int64_t i = impl_->index->nearest(query, sqDist);
   return i < 0 ? i : static_cast<std::int64_t>(impl_->order[static_cast<std::size_t>(i)]);
 }
+const KnnIndex* GeodesicCoordinates::pointIndex() const { return impl_->sortedCopy.empty() ? impl_->index.get() : nullptr; }
 const GeodesicParams& GeodesicCoordinates::params() const { return impl_->params; }
 int GeodesicCoordinates::dimensions() const { return impl_->params.satellites; }
 float GeodesicCoordinates::coordinate(std::size_t i, int s) const {

@@ -14,15 +14,15 @@ constexpr double kMaxQuadricHeight = 2.0;     // kernel widths: a quadric fit be
 }
 
 MlsSurface::MlsSurface(const std::vector<Eigen::Vector3d>& points, const std::vector<Eigen::Vector3d>& normals,
-                       const MlsParams& params)
-    : points_(points), normals_(normals), params_(params), index_(points) {
+                       const MlsParams& params, const KnnIndex* index)
+    : points_(points), normals_(normals), params_(params), index_(index ? index : &own_.emplace(points)) {
   const std::size_t n = points.size();
   h_.assign(n, 0.0);
   std::vector<double> nearest(n, 0.0);
   parallelFor(n, 0, [&](std::size_t i) {
     std::vector<std::uint32_t> idx;
     std::vector<double> d2;
-    const std::size_t found = index_.knn(points[i], kKernelNeighbour + 1, idx, d2);
+    const std::size_t found = index_->knn(points[i], kKernelNeighbour + 1, idx, d2);
     if (found < 2) return;
     h_[i] = std::sqrt(d2[found - 1]);
     nearest[i] = std::sqrt(d2[1]);
@@ -64,7 +64,7 @@ Eigen::Vector3d MlsSurface::project(const Eigen::Vector3d& x0, Eigen::Vector3d* 
   for (int it = 0; it < steps; ++it) {
     // Re-centre the neighbourhood only when the estimate moved by more than a quarter kernel width.
     if (lastH == 0 || (x - queried).squaredNorm() > 0.0625 * lastH * lastH) {
-      index_.knn(x, static_cast<std::size_t>(params_.k), idx, d2);
+      index_->knn(x, static_cast<std::size_t>(params_.k), idx, d2);
       queried = x;
       lastH = 0;
     } else {

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <optional>
 #include <stdexcept>
 
 #include "iires/denoise.hpp"
@@ -82,7 +83,7 @@ void OutlierParams::validate() const {
   if (threads < 0) fail("threads must be >= 0 (0 = all cores)");
 }
 
-OutlierResult processOutliers(const PointCloud& input, const OutlierParams& params) {
+OutlierResult processOutliers(const PointCloud& input, const OutlierParams& params, const KnnIndex* given) {
   params.validate();
   const auto start = Clock::now();
   const std::size_t k = static_cast<std::size_t>(params.k);
@@ -101,7 +102,8 @@ OutlierResult processOutliers(const PointCloud& input, const OutlierParams& para
   std::vector<std::uint32_t> count(n);
   std::vector<double> spacing(n);
   {
-    KnnIndex index(P);
+    std::optional<KnnIndex> own;
+    const KnnIndex& index = given ? *given : own.emplace(P);
     forEachPoint([&](std::size_t i) {
       std::vector<std::uint32_t> idx;
       std::vector<double> d2;

@@ -35,7 +35,10 @@ PreprocessResult preprocess(const PointCloud& input, const PreprocessParams& par
 
   PreprocessResult result;
   result.inputPoints = input.size();
-  OutlierResult outliers = processOutliers(input, op);  // eq. (4)–(5)
+  // One k-d tree for both stages, unless the outlier stage moved or removed points.
+  const KnnIndex index(input.points);
+  OutlierResult outliers = processOutliers(input, op, &index);  // eq. (4)–(5)
+  const bool unchanged = outliers.found == 0;
   result.outliersFound = outliers.found;
   result.outliersPulled = outliers.pulled;
   result.outliersRemoved = outliers.removed;
@@ -45,7 +48,7 @@ PreprocessResult preprocess(const PointCloud& input, const PreprocessParams& par
     // cleanDisplacement input spacings on average, the cloud is already clean and further sweeps would only
     // erode tight curvature (folds, thin parts, sparse clouds) — denoise() keeps the positions then.
     dp.cleanDisplacement = params.cleanDisplacement;
-    DenoiseResult denoised = denoise(outliers.cloud, dp);
+    DenoiseResult denoised = denoise(outliers.cloud, dp, unchanged ? &index : nullptr);
     result.denoiseSeconds = denoised.seconds;
     result.cleanInput = denoised.cleanInput;
     result.denoiseIterations = denoised.iterations;

@@ -865,10 +865,6 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
   }
   clock.end("normals", t);
 
-  t = clock.begin("surface");
-  const MlsSurface surface(cloud.points, cloud.normals, params.mls);
-  clock.end("surface", t);
-
   std::shared_ptr<NeighbourRule> rule = params.neighbourRule;
   if (!rule && params.intrinsic) {
     t = clock.begin("geodesic");
@@ -882,6 +878,11 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
     clock.end("geodesic", t);
   }
   if (!rule) rule = std::make_shared<EuclideanRule>();
+
+  t = clock.begin("surface");  // on the geodesic graph's k-d tree when there is one (same points, same order)
+  const MlsSurface surface(cloud.points, cloud.normals, params.mls,
+                           result.geodesic ? result.geodesic->pointIndex() : nullptr);
+  clock.end("surface", t);
 
   std::optional<CurvatureResult> curvature;
   if (params.mode == ResampleMode::kCurvature) {

@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "iires/knn.hpp"
 #include "iires/types.hpp"
 
 namespace iires {
@@ -102,8 +103,9 @@ struct DenoiseResult {
 /// already found (orientNormals()). Internally the points are processed in Morton order (cache locality).
 /// @throws InputError when the cloud is empty, holds NaN/Inf, or has fewer than neighbours + 1 points;
 /// std::invalid_argument for bad parameters.
+/// @param index (optional) a k-d tree over exactly input.points, borrowed, to save building one
 /// @note O(n k log n) for the neighbour search plus O(n k) per sweep. Deterministic: every sweep reads the
 /// previous positions only, so the output does not depend on the thread count.
-DenoiseResult denoise(const PointCloud& input, const DenoiseParams& params = {});
+DenoiseResult denoise(const PointCloud& input, const DenoiseParams& params = {}, const KnnIndex* index = nullptr);
 
 }  // namespace iires

@@ -4,6 +4,7 @@
 
 #include <Eigen/Core>
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include "iires/knn.hpp"
@@ -28,11 +29,12 @@ struct MlsCache {
 /// @brief Projection onto the MLS surface of a cloud with oriented normals.
 /// The kernel is θ(d) = exp(−d²/h²) (paper eq. 2) with h per input point = its distance to its 8th
 /// neighbour, clamped to the 90th percentile so an outlier cannot inflate it (DESIGN §3.3).
-/// @note Holds a k-d tree over the input; the cloud must outlive the surface. project() is thread-safe.
+/// @note Holds a k-d tree over the input (or borrows @p index, a tree over exactly these points, which must
+/// then outlive the surface); the cloud must outlive the surface. project() is thread-safe.
 class MlsSurface {
  public:
   MlsSurface(const std::vector<Eigen::Vector3d>& points, const std::vector<Eigen::Vector3d>& normals,
-             const MlsParams& params = {});
+             const MlsParams& params = {}, const KnnIndex* index = nullptr);
   ~MlsSurface();
 
   /// @brief Project @p x onto the surface. @p normal (optional) receives the surface normal there,
@@ -48,7 +50,7 @@ class MlsSurface {
   Eigen::Vector3d project(const Eigen::Vector3d& x, Eigen::Vector3d* normal = nullptr, double* offSurface = nullptr,
                           const Eigen::Vector3d* hint = nullptr, MlsCache* cache = nullptr, int iterations = 0) const;
 
-  const KnnIndex& index() const { return index_; }
+  const KnnIndex& index() const { return *index_; }
   /// @brief Mean distance from an input point to its nearest neighbour (the input spacing).
   double meanSpacing() const { return meanSpacing_; }
   /// @brief Estimated surface area: Σ over points of the area each represents (π r₈² / 8).
@@ -60,7 +62,8 @@ class MlsSurface {
   const std::vector<Eigen::Vector3d>& points_;
   const std::vector<Eigen::Vector3d>& normals_;
   MlsParams params_;
-  KnnIndex index_;
+  std::optional<KnnIndex> own_;
+  const KnnIndex* index_;
   std::vector<double> h_;
   double meanSpacing_ = 0;
   double area_ = 0;

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "iires/knn.hpp"
 #include "iires/types.hpp"
 
 namespace iires {
@@ -76,7 +77,9 @@ struct OutlierResult {
 /// like q's normal when the input has normals.
 /// @throws InputError when the cloud is empty, holds NaN/Inf, or has fewer than planeNeighbours + 1
 /// points; std::invalid_argument for bad parameters.
+/// @param index (optional) a k-d tree over exactly input.points, borrowed, to save building one
 /// @note O(n k log n). Deterministic for any thread count.
-OutlierResult processOutliers(const PointCloud& input, const OutlierParams& params = {});
+OutlierResult processOutliers(const PointCloud& input, const OutlierParams& params = {},
+                              const KnnIndex* index = nullptr);
 
 }  // namespace iires
