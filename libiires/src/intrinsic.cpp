@@ -25,12 +25,13 @@ IntrinsicRule::IntrinsicRule(std::shared_ptr<const GeodesicCoordinates> geo, con
   if (!geo_) throw std::invalid_argument("IntrinsicRule: geodesic coordinates are null");
   params_.validate();
   tolerance_ = params_.toleranceSpacings * geo_->spacing();
+  dims_ = static_cast<std::size_t>(geo_->dimensions());
 }
 
 void IntrinsicRule::update(const std::vector<Eigen::Vector3d>& samples, const std::vector<Eigen::Vector3d>&) {
   const std::size_t n = samples.size();
   pos_ = samples;
-  const std::size_t dims = static_cast<std::size_t>(geo_->dimensions());
+  const std::size_t dims = dims_;
   dense_.assign(n, 0);
   comp_.assign(n, 0);
   coords_.assign(n * dims, 0.0f);
@@ -56,24 +57,22 @@ bool IntrinsicRule::consistent(const float* ga, const float* gb, double d) const
   if (maxDistance_ > 0 && d > maxDistance_) return false;
   // |gₛ(p) − gₛ(q)| ≤ d_geo(p, q) ≈ |p − q| for true neighbours (paper §3.2).
   const double limit = params_.slope * d + tolerance_;
-  for (int s = 0; s < geo_->dimensions(); ++s)
+  for (std::size_t s = 0; s < dims_; ++s)
     if (std::abs(static_cast<double>(ga[s]) - gb[s]) > limit) return false;
   return true;
 }
 
 bool IntrinsicRule::accept(std::size_t i, std::size_t j) const {
   if (i == j) return true;
-  const std::size_t dims = static_cast<std::size_t>(geo_->dimensions());
-  return comp_[i] == comp_[j] && consistent(&coords_[i * dims], &coords_[j * dims], (pos_[i] - pos_[j]).norm());
+  return comp_[i] == comp_[j] && consistent(&coords_[i * dims_], &coords_[j * dims_], (pos_[i] - pos_[j]).norm());
 }
 
 bool IntrinsicRule::acceptPoints(const Eigen::Vector3d& p, const Eigen::Vector3d& q) const {
   const std::int64_t a = geo_->nearest(p), b = geo_->nearest(q);
   if (a < 0 || b < 0 || geo_->component(static_cast<std::size_t>(a)) != geo_->component(static_cast<std::size_t>(b)))
     return false;
-  const std::size_t dims = static_cast<std::size_t>(geo_->dimensions());
-  return consistent(&geo_->coordinates()[static_cast<std::size_t>(a) * dims],
-                    &geo_->coordinates()[static_cast<std::size_t>(b) * dims], (p - q).norm());
+  return consistent(&geo_->coordinates()[static_cast<std::size_t>(a) * dims_],
+                    &geo_->coordinates()[static_cast<std::size_t>(b) * dims_], (p - q).norm());
 }
 
 }  // namespace iires

@@ -71,6 +71,7 @@ class IntrinsicRule final : public NeighbourRule {
   IntrinsicParams params_;
   double tolerance_ = 0;
   double maxDistance_ = 0;
+  std::size_t dims_ = 0;  // geo_->dimensions(), asked once (accept() runs for every candidate pair)
   std::vector<Eigen::Vector3d> pos_;
   std::vector<std::uint32_t> dense_, comp_;  // per sample: its nearest dense point and that point's component
   std::vector<float> coords_;        // per sample: that point's geodesic coordinates, sample-major
