@@ -369,20 +369,13 @@ void GeodesicCoordinates::Impl::build() {
   knnDist = {};
   keep = {};
 
-  // --- 4. Satellites and fields (paper §3.2): per component, satellite 1 is the point farthest (in space) from
-  // the component's centroid, an extreme point to start the farthest-point sampling from; satellite s+1 is the
-  // point geodesically farthest from satellites 1..s on their accurate fields, which are the coordinates gₛ
-  // themselves. Components run in parallel.
+  // --- 4. Satellites and fields (paper §3.2): per component, satellite 1 is the point geodesically farthest
+  // from its first point; satellite s+1 the farthest from satellites 1..s (farthest-point sampling on the
+  // accurate fields, which are the coordinates gₛ themselves). Components run in parallel.
   t = Clock::now();
   const int m = params.satellites;
-  std::vector<std::size_t> firstMember(count + 1, 0);  // members of component c: member[firstMember[c] ..]
-  for (std::size_t i = 0; i < n; ++i) ++firstMember[comp[i] + 1];
-  for (std::size_t c = 0; c < count; ++c) firstMember[c + 1] += firstMember[c];
-  std::vector<std::uint32_t> member(n);
-  {
-    std::vector<std::size_t> fillAt(firstMember.begin(), firstMember.end() - 1);
-    for (std::size_t i = 0; i < n; ++i) member[fillAt[comp[i]]++] = static_cast<std::uint32_t>(i);  // ascending
-  }
+  std::vector<std::uint32_t> seed(count, kNone);
+  for (std::size_t o = n; o-- > 0;) seed[comp[rank[o]]] = rank[o];
   std::vector<std::vector<std::uint32_t>> sat(count);
   std::vector<float> field(n * static_cast<std::size_t>(m), kInf);  // internal order
   const int nThreads = std::max(1, std::min<int>(resolveThreads(threads), static_cast<int>(std::min<std::size_t>(count, 1024))));
@@ -395,23 +388,21 @@ void GeodesicCoordinates::Impl::build() {
     for (long long c = 0; c < static_cast<long long>(count); ++c) {
       const auto t0 = Clock::now();
       std::vector<std::uint32_t>& sc = sat[static_cast<std::size_t>(c)];
-      const std::uint32_t* members = member.data() + firstMember[static_cast<std::size_t>(c)];
-      const std::size_t size = firstMember[static_cast<std::size_t>(c) + 1] - firstMember[static_cast<std::size_t>(c)];
-      minDist.assign(size, kInf);
+      sweep.run(graph, pos, seed[static_cast<std::size_t>(c)], false);  // plain Dijkstra is enough for a seed
+      std::vector<std::uint32_t> members = sweep.visited();
+      std::sort(members.begin(), members.end());
+      minDist.assign(members.size(), kInf);
       auto pickFarthest = [&](auto value) {
         std::size_t best = 0;
-        for (std::size_t x = 1; x < size; ++x)
+        for (std::size_t x = 1; x < members.size(); ++x)
           if (value(x) > value(best)) best = x;  // ties: lowest internal index (members are sorted)
         return members[best];
       };
-      Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
-      for (std::size_t x = 0; x < size; ++x) centroid += zp[members[x]];
-      centroid /= static_cast<double>(size);
-      sc.push_back(pickFarthest([&](std::size_t x) { return (zp[members[x]] - centroid).squaredNorm(); }));
+      sc.push_back(pickFarthest([&](std::size_t x) { return sweep.distance(members[x]); }));
       seedSeconds += secondsSince(t0);
       for (int s = 0; s < m; ++s) {
         sweep.run(graph, pos, sc.back(), params.fastMarching);
-        for (std::size_t x = 0; x < size; ++x) {
+        for (std::size_t x = 0; x < members.size(); ++x) {
           const float d = sweep.distance(members[x]);
           field[members[x] * static_cast<std::size_t>(m) + static_cast<std::size_t>(s)] = d;
           minDist[x] = std::min(minDist[x], d);
