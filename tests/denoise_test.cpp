@@ -238,3 +238,22 @@ TEST(Denoise, BunnyWithNoiseAndOutliersEndToEnd) {
 }
 
 }  // namespace
+
+// A borrowed k-d tree (preprocess() shares one between the outlier and the denoising stage) gives the output of
+// denoise()'s own tree, also for a cloud not in Morton order (its answers are mapped to the internal order).
+TEST(Denoise, BorrowedIndexGivesTheSameOutput) {
+  PointCloud cloud = iires::test::sphereCloud(4000, 1.0, 6);
+  std::mt19937_64 rng(2);
+  std::normal_distribution<double> g(0.0, 0.004);
+  for (auto& p : cloud.points) p *= 1.0 + g(rng);
+  cloud.normals.clear();
+  const iires::KnnIndex index(cloud.points);
+  const auto own = iires::denoise(cloud);
+  const auto borrowed = iires::denoise(cloud, {}, &index);
+  ASSERT_EQ(own.cloud.size(), borrowed.cloud.size());
+  double worst = 0;
+  for (std::size_t i = 0; i < own.cloud.size(); ++i)
+    worst = std::max(worst, (own.cloud.points[i] - borrowed.cloud.points[i]).norm());
+  EXPECT_LT(worst, 1e-12);
+  EXPECT_EQ(own.iterations, borrowed.iterations);
+}

@@ -2,7 +2,11 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
+
 #include <random>
+
+#include "iires/knn.hpp"
 
 #include "shapes.hpp"
 
@@ -31,6 +35,31 @@ TEST(MlsSurface, ProjectsOntoSphere) {
     // Input spacing is ~0.013; the quadric fit is far more accurate than the plane fit.
     EXPECT_LT(worst, degree == 2 ? 2e-4 : 2e-3) << "degree " << degree;
   }
+}
+
+// A borrowed tree over the same points answers like the surface's own; one projection step from a point that
+// was on the surface before a small move lands close to the full projection (the relaxation relies on it).
+TEST(MlsSurface, BorrowedIndexAndSingleStepProjection) {
+  const auto cloud = iires::test::sphereCloud(20000, 1.0, 12);
+  const iires::KnnIndex index(cloud.points);
+  const iires::MlsSurface own(cloud.points, cloud.normals);
+  const iires::MlsSurface borrowed(cloud.points, cloud.normals, {}, &index);
+  EXPECT_EQ(&borrowed.index(), &index);
+  EXPECT_DOUBLE_EQ(own.area(), borrowed.area());
+  std::mt19937_64 rng(4);
+  std::normal_distribution<double> g(0.0, 1.0);
+  double worstStep = 0;
+  for (int i = 0; i < 200; ++i) {
+    Eigen::Vector3d d(g(rng), g(rng), g(rng));
+    d.normalize();
+    const Eigen::Vector3d x = own.project(d);
+    EXPECT_EQ(x, borrowed.project(d));
+    const Eigen::Vector3d t = d.unitOrthogonal();
+    const Eigen::Vector3d moved = x + 0.01 * t;  // a relaxation-sized move along the tangent plane
+    worstStep = std::max(worstStep, (own.project(moved, nullptr, nullptr, nullptr, nullptr, 1) - own.project(moved)).norm());
+  }
+  EXPECT_LT(worstStep, 1e-4);  // input spacing ~0.013
+  EXPECT_GT(worstStep, 0.0);   // the step count is honoured (one step is not the full projection)
 }
 
 TEST(MlsSurface, FlagsPointsBeyondAnOpenBoundary) {
