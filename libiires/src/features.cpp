@@ -34,6 +34,8 @@ struct Crease {
   bool valid = false;
   Eigen::Vector3d point = Eigen::Vector3d::Zero();  ///< the query point projected onto the line
   Eigen::Vector3d direction = Eigen::Vector3d::Zero();
+  Eigen::Vector3d normalA = Eigen::Vector3d::Zero(), normalB = Eigen::Vector3d::Zero();  ///< the two planes
+  double offsetA = 0, offsetB = 0;                                                      ///< normal·x = offset
 };
 
 /// Plane through the (weighted) centroid of @p pts (indices into @p points) by PCA; returns the (weighted) RMS
@@ -121,6 +123,10 @@ bool twoPlaneTest(const std::vector<Eigen::Vector3d>& points, const std::vector<
   crease.valid = true;
   crease.point = x;
   crease.direction = dir / sinAngle;
+  crease.normalA = pa;
+  crease.normalB = pb;
+  crease.offsetA = oa;
+  crease.offsetB = ob;
   return true;
 }
 
@@ -622,6 +628,129 @@ void FeatureParams::validate() const {
   if (!(maxOffCrease >= 0.0)) fail("maxOffCrease must be >= 0");
 }
 
+namespace {
+
+/// Continue every open run of chain samples (@p out, consecutive samples of one chain in @p owner) along its
+/// crease: from the end sample, step forward by the run's end spacing, fit the two sheets' local planes there
+/// (the snap fit) and put the next sample on their intersection, while the fit passes the detector's thresholds,
+/// its crease runs along the run (within maxChainTurn) and the new sample is not within 0.75 steps of a sample
+/// already placed (then the gap to another chain, or to the run's own other end, is bridged). Fills the stretches
+/// of a crease the detector missed and brings the ends as close to their corners as the two-plane fit holds.
+/// Sequential in a fixed order (each end sees the samples traced before it): deterministic.
+void traceChainEnds(const PointCloud& cloud, const KnnIndex& index, double h, const FeatureParams& params,
+                    std::vector<Eigen::Vector3d>& out, std::vector<std::uint32_t>& owner) {
+  struct Run {
+    std::uint32_t chain;
+    std::vector<Eigen::Vector3d> pts;
+  };
+  std::vector<Run> runs;
+  for (std::size_t a = 0; a < out.size();) {
+    std::size_t b = a;
+    while (b + 1 < out.size() && owner[b + 1] == owner[a]) ++b;
+    runs.push_back({owner[a], std::vector<Eigen::Vector3d>(out.begin() + static_cast<long>(a), out.begin() + static_cast<long>(b + 1))});
+    a = b + 1;
+  }
+  std::vector<Eigen::Vector3d> all(out);  // every sample placed so far (brute-force proximity: a few thousand)
+  const double cosTurn = std::cos(params.maxChainTurn * kDeg);
+  std::vector<std::uint32_t> idx, behind, ahead;
+  std::vector<double> d2;
+  for (Run& run : runs) {
+    if (run.pts.size() < 2) continue;
+    for (int side = 0; side < 2; ++side) {
+      std::vector<Eigen::Vector3d> added;
+      Eigen::Vector3d tip = side ? run.pts.back() : run.pts.front();
+      const Eigen::Vector3d prev = side ? run.pts[run.pts.size() - 2] : run.pts[1];
+      const double step = (tip - prev).norm();
+      if (!(step > 1e-9 * h)) continue;
+      Eigen::Vector3d dir = (tip - prev) / step;
+      auto nearPlaced = [&](const Eigen::Vector3d& y) {
+        for (const auto& q : all)
+          if ((q - y).squaredNorm() < 0.5625 * step * step && (q - tip).squaredNorm() > 1e-24) return true;
+        return false;
+      };
+      for (int guard = 0; guard < 100000; ++guard) {
+        Eigen::Vector3d y = tip + step * dir;
+        Crease c;
+        bool ok = true, oneSided = false;
+        for (int it = 0; it < 2 && ok; ++it) {  // fitted at the prediction, then re-centred on the crease
+          index.radius(y, params.radius * h, idx, d2);
+          if (idx.size() > 200) idx.resize(200);
+          ok = twoPlaneTest(cloud.points, cloud.normals, y, idx, h, params, c, params.snapSigma * h) &&
+               std::abs(c.direction.dot(dir)) >= cosTurn;
+          if (!ok) {
+            // Near a corner the ball ahead holds a third sheet: fit the two sheets on the half-ball behind.
+            behind.clear();
+            for (std::uint32_t j : idx)
+              if ((cloud.points[j] - y).dot(dir) <= 0) behind.push_back(j);
+            ok = twoPlaneTest(cloud.points, cloud.normals, y, behind, h, params, c, params.snapSigma * h) &&
+                 std::abs(c.direction.dot(dir)) >= cosTurn;
+            oneSided = ok;
+          }
+          if (ok) y = c.point;
+        }
+        if (!ok) break;
+        if ((y - tip).dot(dir) < 0.5 * step) break;  // the crease does not lead on
+        if (nearPlaced(y)) break;                   // bridged to a sample already placed
+        if (oneSided) {
+          // Points ahead that neither plane explains belong to a third sheet: the crease ends where the line
+          // meets that sheet's plane (a corner); without them the two sheets go on and so does the trace.
+          ahead.clear();
+          std::size_t aheadCount = 0;
+          const double tol = 3.0 * params.maxResidual * h;
+          for (std::uint32_t j : idx) {
+            const Eigen::Vector3d& q = cloud.points[j];
+            if ((q - y).dot(dir) <= 0) continue;
+            ++aheadCount;
+            if (std::abs(c.normalA.dot(q) - c.offsetA) > tol && std::abs(c.normalB.dot(q) - c.offsetB) > tol)
+              ahead.push_back(j);
+          }
+          if (ahead.size() >= 4 && ahead.size() * 6 >= aheadCount) {
+            Eigen::Vector3d n3;
+            double o3 = 0;
+            const double r3 = fitPlane(cloud.points, ahead, y, 0, dir, n3, o3);
+            const double along = n3.dot(c.direction);
+            if (r3 <= 2.0 * params.maxResidual * h && std::abs(along) > 0.3) {
+              const double t = (o3 - n3.dot(y)) / along;  // y + t·direction on the third plane
+              Eigen::Vector3d corner = y + t * c.direction;
+              const double ahead3 = (corner - tip).dot(dir);
+              double nearest = 0;
+              index.nearest(corner, &nearest);
+              if (ahead3 > 0 && ahead3 < step + params.radius * h && std::sqrt(nearest) <= params.maxOffCrease * h) {
+                // Fill tip → corner at ≤ step spacing (the corner itself unless a placed sample is there).
+                const bool cornerTaken = nearPlaced(corner);
+                const double gap = (corner - tip).norm();
+                const int pieces = std::max(1, static_cast<int>(std::ceil(gap / step - 0.25)));
+                for (int k = 1; k <= pieces; ++k) {
+                  const Eigen::Vector3d q = tip + (corner - tip) * (static_cast<double>(k) / pieces);
+                  if (nearPlaced(q) && k < pieces) break;
+                  if (k == pieces && cornerTaken) break;
+                  added.push_back(q);
+                  all.push_back(q);
+                }
+              }
+            }
+            break;
+          }
+        }
+        added.push_back(y);
+        all.push_back(y);
+        dir = (c.direction.dot(dir) < 0 ? -c.direction : c.direction);
+        tip = y;
+      }
+      if (side)
+        run.pts.insert(run.pts.end(), added.begin(), added.end());
+      else
+        run.pts.insert(run.pts.begin(), added.rbegin(), added.rend());
+    }
+  }
+  out.clear();
+  owner.clear();
+  for (const Run& run : runs)
+    for (const auto& q : run.pts) out.push_back(q), owner.push_back(run.chain);
+}
+
+}  // namespace
+
 std::vector<Eigen::Vector3d> snapToCreases(const PointCloud& cloud, const std::vector<Eigen::Vector3d>& samples,
                                            const std::vector<std::uint32_t>& chainOfSample, double spacing,
                                            const FeatureParams& params, std::vector<std::uint32_t>* chainOut) {
@@ -710,6 +839,7 @@ std::vector<Eigen::Vector3d> snapToCreases(const PointCloud& cloud, const std::v
   std::vector<std::uint32_t> owner;
   for (std::size_t i = 0; i < n; ++i)
     if (keep[i]) out.push_back(moved[i]), owner.push_back(chainOfSample[i]);
+  traceChainEnds(cloud, index, h, params, out, owner);
   // 3. Corners: two chain ends whose crease lines, continued forward, meet within a few spacings of both get
   // a sample where they meet (the end samples of chains stop short of a corner, where the two-plane fit fails).
   struct End {
