@@ -17,6 +17,7 @@
 #include <stdexcept>
 #include <string>
 #include <tuple>
+#include <cstdio>
 #include <unordered_map>
 
 #include "iires/knn.hpp"
@@ -28,6 +29,20 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 constexpr double kDeg = M_PI / 180.0;
+
+/// The spacing the fits at @p y work with: the global spacing @p h, or the local one (mean distance to the 6
+/// nearest points) where the sampling is sparser, so a neighbourhood of `radius` spacings always holds about
+/// the same number of points (non-uniform scans: a fixed radius leaves the sparse parts with too few).
+double localSpacing(const KnnIndex& index, const Eigen::Vector3d& y, double h) {
+  std::vector<std::uint32_t> idx;
+  std::vector<double> d2;
+  index.knn(y, 7, idx, d2);
+  double sum = 0;
+  int m = 0;
+  for (std::size_t t = 0; t < idx.size() && m < 6; ++t)
+    if (d2[t] > 0) sum += std::sqrt(d2[t]), ++m;
+  return m > 0 ? std::max(h, sum / m) : h;
+}
 
 /// The crease at a point: the intersection line of two fitted planes.
 struct Crease {
@@ -63,12 +78,18 @@ double fitPlane(const std::vector<Eigen::Vector3d>& points, const std::vector<st
 /// Two-plane fit of the neighbourhood @p nbr of the point @p p (the normal-variation test). Returns whether the
 /// point is on a crease by the thresholds in @p prm; fills @p crease. @p sigma > 0: the plane fits weight each
 /// point by exp(−d²/σ²), d its distance to p (local planes: less bias from curved sheets); 0 = unweighted.
+#ifdef IIRES_TRACE_DEBUG
+thread_local bool dbgFit = false;
+#define DBGF(...) do { if (dbgFit) std::fprintf(stderr, __VA_ARGS__); } while (0)
+#else
+#define DBGF(...) do {} while (0)
+#endif
 bool twoPlaneTest(const std::vector<Eigen::Vector3d>& points, const std::vector<Eigen::Vector3d>& normals,
                   const Eigen::Vector3d& p, const std::vector<std::uint32_t>& nbr, double h, const FeatureParams& prm,
                   Crease& crease, double sigma = 0) {
   crease = Crease{};
   const std::size_t m = nbr.size();
-  if (m < 8) return false;
+  if (m < 8) { DBGF("  fit: m %zu\n", m); return false; }
   // Seeds of the 2-means on normals: the normal farthest from the mean, then the one farthest from it.
   Eigen::Vector3d mean = Eigen::Vector3d::Zero();
   for (std::uint32_t j : nbr) mean += normals[j];
@@ -79,7 +100,7 @@ bool twoPlaneTest(const std::vector<Eigen::Vector3d>& points, const std::vector<
   for (std::size_t t = 1; t < m; ++t)
     if (normals[nbr[t]].dot(normals[nbr[a]]) < normals[nbr[b]].dot(normals[nbr[a]])) b = t;
   Eigen::Vector3d na = normals[nbr[a]], nb = normals[nbr[b]];
-  if (na.dot(nb) > std::cos(prm.angle * kDeg)) return false;  // the neighbours' normals vary too little
+  if (na.dot(nb) > std::cos(prm.angle * kDeg)) { DBGF("  fit: normals vary little\n"); return false; }  // the neighbours' normals vary too little
   std::vector<char> side(m, 0);
   for (int it = 0; it < 5; ++it) {
     Eigen::Vector3d sa = Eigen::Vector3d::Zero(), sb = Eigen::Vector3d::Zero();
@@ -100,7 +121,7 @@ bool twoPlaneTest(const std::vector<Eigen::Vector3d>& points, const std::vector<
     ca.clear();
     cb.clear();
     for (std::size_t t = 0; t < m; ++t) (side[t] == 0 ? ca : cb).push_back(nbr[t]);
-    if (ca.size() < minCount || cb.size() < minCount) return false;
+    if (ca.size() < minCount || cb.size() < minCount) { DBGF("  fit: share %zu %zu of %zu\n", ca.size(), cb.size(), m); return false; }
     ra = fitPlane(points, ca, p, sigma, na, pa, oa);
     rb = fitPlane(points, cb, p, sigma, nb, pb, ob);
     if (it == 2) break;
@@ -109,7 +130,7 @@ bool twoPlaneTest(const std::vector<Eigen::Vector3d>& points, const std::vector<
       side[t] = da <= db ? 0 : 1;
     }
   }
-  if (ra > prm.maxResidual * h || rb > prm.maxResidual * h) return false;
+  if (ra > prm.maxResidual * h || rb > prm.maxResidual * h) { DBGF("  fit: residual %.3f %.3f h\n", ra / h, rb / h); return false; }
   const Eigen::Vector3d dir = pa.cross(pb);
   const double sinAngle = dir.norm();
   if (pa.dot(pb) > std::cos(prm.angle * kDeg) || sinAngle < 1e-6) return false;
@@ -119,7 +140,7 @@ bool twoPlaneTest(const std::vector<Eigen::Vector3d>& points, const std::vector<
   const Eigen::Vector2d rhs(oa - pa.dot(p), ob - pb.dot(p));
   const Eigen::Vector2d ab = g.inverse() * rhs;
   const Eigen::Vector3d x = p + ab(0) * pa + ab(1) * pb;
-  if ((x - p).norm() > prm.maxLineDistance * h) return false;
+  if ((x - p).norm() > prm.maxLineDistance * h) { DBGF("  fit: line distance %.3f h\n", (x - p).norm() / h); return false; }
   crease.valid = true;
   crease.point = x;
   crease.direction = dir / sinAngle;
@@ -634,119 +655,360 @@ namespace {
 /// crease: from the end sample, step forward by the run's end spacing, fit the two sheets' local planes there
 /// (the snap fit) and put the next sample on their intersection, while the fit passes the detector's thresholds,
 /// its crease runs along the run (within maxChainTurn) and the new sample is not within 0.75 steps of a sample
-/// already placed (then the gap to another chain, or to the run's own other end, is bridged). Fills the stretches
-/// of a crease the detector missed and brings the ends as close to their corners as the two-plane fit holds.
-/// Sequential in a fixed order (each end sees the samples traced before it): deterministic.
+/// already placed (then the gap to another chain, or to the run's own other end, is bridged). Where the full
+/// ball fails, the two sheets are fitted on the half-ball behind the prediction; if the points ahead that
+/// neither plane explains fit a third plane, the crease ends at a corner on it: the gap to the corner is filled,
+/// a corner sample placed, and the corner's two other creases (the third plane's intersections with the two
+/// sheets, on the side where each sheet lies) are followed as new runs: along the known planes while the points
+/// around stay explained by them, handing over to the stepped fit once it holds. Fills the stretches of a crease
+/// the detector missed, brings the ends into their corners and recovers short creases between corners.
+/// New runs get chain indices after the existing ones. Sequential in a fixed order (each trace sees the
+/// samples placed before it): deterministic.
 void traceChainEnds(const PointCloud& cloud, const KnnIndex& index, double h, const FeatureParams& params,
                     std::vector<Eigen::Vector3d>& out, std::vector<std::uint32_t>& owner) {
   struct Run {
     std::uint32_t chain;
-    std::vector<Eigen::Vector3d> pts;
+    std::vector<Eigen::Vector3d> front, pts;  // front: traced off the first sample, outward order
   };
   std::vector<Run> runs;
+  std::uint32_t nextChain = 0;
   for (std::size_t a = 0; a < out.size();) {
     std::size_t b = a;
     while (b + 1 < out.size() && owner[b + 1] == owner[a]) ++b;
-    runs.push_back({owner[a], std::vector<Eigen::Vector3d>(out.begin() + static_cast<long>(a), out.begin() + static_cast<long>(b + 1))});
+    nextChain = std::max(nextChain, owner[a] + 1);
+    // A chain's run is split where samples were dropped (a gap over 1.6 × its median spacing): the pieces'
+    // ends are traced like the chain's, so the gap is filled from both sides.
+    std::vector<double> gaps;
+    for (std::size_t t = a; t < b; ++t) gaps.push_back((out[t + 1] - out[t]).norm());
+    double median = 0;
+    if (!gaps.empty()) {
+      std::vector<double> sorted(gaps);
+      std::nth_element(sorted.begin(), sorted.begin() + static_cast<long>(sorted.size() / 2), sorted.end());
+      median = sorted[sorted.size() / 2];
+    }
+    std::size_t first = a;
+    for (std::size_t t = a; t <= b; ++t)
+      if (t == b || gaps[t - a] > 1.6 * median) {
+        runs.push_back({owner[a], {}, std::vector<Eigen::Vector3d>(out.begin() + static_cast<long>(first), out.begin() + static_cast<long>(t + 1))});
+        first = t + 1;
+      }
     a = b + 1;
+  }
+  struct Job {
+    std::size_t run;
+    bool back;  // appends to the run's back (else to its front list)
+    Eigen::Vector3d tip, dir;
+    double step;
+  };
+  std::vector<Job> jobs;
+  for (std::size_t r = 0; r < runs.size(); ++r) {
+    const auto& p = runs[r].pts;
+    if (p.size() < 2) continue;
+    for (int side = 0; side < 2; ++side) {
+      const Eigen::Vector3d tip = side ? p.back() : p.front(), prev = side ? p[p.size() - 2] : p[1];
+      const double step = (tip - prev).norm();
+      if (step > 1e-9 * h) jobs.push_back({r, side == 1, tip, (tip - prev) / step, step});
+    }
   }
   std::vector<Eigen::Vector3d> all(out);  // every sample placed so far (brute-force proximity: a few thousand)
   const double cosTurn = std::cos(params.maxChainTurn * kDeg);
+  // A point within 3·maxResidual local spacings of a fitted plane is on its sheet.
   std::vector<std::uint32_t> idx, behind, ahead;
   std::vector<double> d2;
-  for (Run& run : runs) {
-    if (run.pts.size() < 2) continue;
-    for (int side = 0; side < 2; ++side) {
-      std::vector<Eigen::Vector3d> added;
-      Eigen::Vector3d tip = side ? run.pts.back() : run.pts.front();
-      const Eigen::Vector3d prev = side ? run.pts[run.pts.size() - 2] : run.pts[1];
-      const double step = (tip - prev).norm();
-      if (!(step > 1e-9 * h)) continue;
-      Eigen::Vector3d dir = (tip - prev) / step;
-      auto nearPlaced = [&](const Eigen::Vector3d& y) {
-        for (const auto& q : all)
-          if ((q - y).squaredNorm() < 0.5625 * step * step && (q - tip).squaredNorm() > 1e-24) return true;
-        return false;
+  auto nearPlaced = [&](const Eigen::Vector3d& y, const Eigen::Vector3d& except, double step) {
+    for (const auto& q : all)
+      if ((q - y).squaredNorm() < 0.5625 * step * step && (q - except).squaredNorm() > 1e-24) return true;
+    return false;
+  };
+  // The regular stepped fit at y (full ball, else the half-ball behind along dir).
+  double hl = h;  // the local spacing at the last fit (localSpacing)
+  auto fitAt = [&](Eigen::Vector3d& y, const Eigen::Vector3d& dir, Crease& c, bool& oneSided) {
+#ifdef IIRES_TRACE_DEBUG
+    dbgFit = true;
+    struct Off { ~Off() { dbgFit = false; } } off;
+#endif
+    bool ok = true;
+    oneSided = false;
+    hl = localSpacing(index, y, h);
+    for (int it = 0; it < 2 && ok; ++it) {  // fitted at the prediction, then re-centred on the crease
+      index.radius(y, params.radius * hl, idx, d2);
+      if (idx.size() > 200) idx.resize(200);
+      ok = twoPlaneTest(cloud.points, cloud.normals, y, idx, hl, params, c, params.snapSigma * hl) &&
+           std::abs(c.direction.dot(dir)) >= cosTurn;
+      oneSided = false;
+      if (!ok) {
+        behind.clear();
+        for (std::uint32_t j : idx)
+          if ((cloud.points[j] - y).dot(dir) <= 0) behind.push_back(j);
+        ok = twoPlaneTest(cloud.points, cloud.normals, y, behind, hl, params, c, params.snapSigma * hl) &&
+             std::abs(c.direction.dot(dir)) >= cosTurn;
+        oneSided = ok;
+      }
+      if (ok) y = c.point;
+    }
+    return ok;
+  };
+  for (std::size_t jb = 0; jb < jobs.size(); ++jb) {
+    const Job job = jobs[jb];
+    std::vector<Eigen::Vector3d> added;
+    Eigen::Vector3d tip = job.tip, dir = job.dir;
+    const double step = job.step;
+    // A corner ahead of @p o on the crease of @p c: points ahead (within the ball one step on) that neither
+    // plane explains belong to a third sheet; the crease ends where its line meets that sheet's plane.
+    // On success the gap from the tip is filled, the corner placed and its two other creases followed.
+    auto cornerAhead = [&](const Crease& c, const Eigen::Vector3d& o, std::vector<Eigen::Vector3d>& added) {
+      const Eigen::Vector3d y = o + 0.5 * step * dir;
+      const double hc = localSpacing(index, y, h), tolc = 3.0 * params.maxResidual * hc;
+      const double reachC = params.radius * hc + 0.5 * step;
+      // A third sheet's point: off both planes, with a normal unlike both, and not on the (rounded) crease.
+      const double cosSheet = std::cos(0.5 * params.angle * kDeg);
+      auto unexplained = [&](std::uint32_t j) {
+        const Eigen::Vector3d& q = cloud.points[j];
+        const Eigen::Vector3d& nq = cloud.normals[j];
+        const Eigen::Vector3d off = q - c.point - c.direction * (q - c.point).dot(c.direction);
+        return std::abs(c.normalA.dot(q) - c.offsetA) > tolc && std::abs(c.normalB.dot(q) - c.offsetB) > tolc &&
+               std::abs(nq.dot(c.normalA)) < cosSheet && std::abs(nq.dot(c.normalB)) < cosSheet && off.norm() > hc;
       };
-      for (int guard = 0; guard < 100000; ++guard) {
-        Eigen::Vector3d y = tip + step * dir;
-        Crease c;
-        bool ok = true, oneSided = false;
-        for (int it = 0; it < 2 && ok; ++it) {  // fitted at the prediction, then re-centred on the crease
-          index.radius(y, params.radius * h, idx, d2);
-          if (idx.size() > 200) idx.resize(200);
-          ok = twoPlaneTest(cloud.points, cloud.normals, y, idx, h, params, c, params.snapSigma * h) &&
-               std::abs(c.direction.dot(dir)) >= cosTurn;
-          if (!ok) {
-            // Near a corner the ball ahead holds a third sheet: fit the two sheets on the half-ball behind.
-            behind.clear();
-            for (std::uint32_t j : idx)
-              if ((cloud.points[j] - y).dot(dir) <= 0) behind.push_back(j);
-            ok = twoPlaneTest(cloud.points, cloud.normals, y, behind, h, params, c, params.snapSigma * h) &&
-                 std::abs(c.direction.dot(dir)) >= cosTurn;
-            oneSided = ok;
-          }
-          if (ok) y = c.point;
-        }
-        if (!ok) break;
-        if ((y - tip).dot(dir) < 0.5 * step) break;  // the crease does not lead on
-        if (nearPlaced(y)) break;                   // bridged to a sample already placed
-        if (oneSided) {
-          // Points ahead that neither plane explains belong to a third sheet: the crease ends where the line
-          // meets that sheet's plane (a corner); without them the two sheets go on and so does the trace.
+      index.radius(y, reachC, idx, d2);
+      if (idx.size() > 400) idx.resize(400);
+      behind.clear();
+      for (std::uint32_t j : idx)
+        if ((cloud.points[j] - o).dot(dir) <= 0) behind.push_back(j);
+      bool placed = false;
+      ahead.clear();
+      std::size_t aheadCount = 0;
+      for (std::uint32_t j : idx) {
+        const Eigen::Vector3d& q = cloud.points[j];
+        if ((q - o).dot(dir) <= 0) continue;  // ahead of the tip
+        ++aheadCount;
+        if (unexplained(j)) ahead.push_back(j);
+      }
+#ifdef IIRES_TRACE_DEBUG
+      std::fprintf(stderr, "cornerAhead o (%.4f %.4f %.4f): %zu/%zu\n", o.x(), o.y(), o.z(), ahead.size(), aheadCount);
+#endif
+      if (ahead.size() >= 6) {
+        Eigen::Vector3d n3;
+        double o3 = 0, r3 = 0, along = 0;
+        Eigen::Vector3d corner = c.point;
+        // The third sheet's plane, refitted to the unexplained points around the corner estimate.
+        for (int it = 0; it < 3; ++it) {
+          if (ahead.size() < 6) break;
+          r3 = fitPlane(cloud.points, ahead, y, 0, dir, n3, o3);
+          along = n3.dot(c.direction);
+          if (std::abs(along) <= 0.3) break;
+          corner = c.point + ((o3 - n3.dot(c.point)) / along) * c.direction;  // the crease line meets it
+          if (it == 2) break;
+          std::vector<std::uint32_t> around;
+          std::vector<double> ad2;
+          index.radius(corner, params.radius * hc, around, ad2);
           ahead.clear();
-          std::size_t aheadCount = 0;
-          const double tol = 3.0 * params.maxResidual * h;
-          for (std::uint32_t j : idx) {
-            const Eigen::Vector3d& q = cloud.points[j];
-            if ((q - y).dot(dir) <= 0) continue;
-            ++aheadCount;
-            if (std::abs(c.normalA.dot(q) - c.offsetA) > tol && std::abs(c.normalB.dot(q) - c.offsetB) > tol)
-              ahead.push_back(j);
+          for (std::uint32_t j : around)
+            if (unexplained(j)) ahead.push_back(j);
+        }
+#ifdef IIRES_TRACE_DEBUG
+        std::fprintf(stderr, "third plane at (%.4f %.4f %.4f): %zu/%zu ahead unexplained r3 %.3f along %.3f\n", y.x(), y.y(), y.z(), ahead.size(), aheadCount, r3 / h, along);
+#endif
+        if (r3 <= 2.0 * params.maxResidual * hc && std::abs(along) > 0.3) {
+          // The corner as the three sheets' common point: the points around it go to the nearest of the three
+          // planes, each plane is refitted to its points (twice), and the planes are intersected.
+          Crease cc = c;
+          {
+            Eigen::Vector3d pn[3] = {c.normalA, c.normalB, n3};
+            double po[3] = {c.offsetA, c.offsetB, o3};
+            std::vector<std::uint32_t> around, part[3];
+            std::vector<double> ad2;
+            index.radius(corner, params.radius * hc, around, ad2);
+            for (int it = 0; it < 2; ++it) {
+              for (auto& pt : part) pt.clear();
+              for (std::uint32_t j : around) {
+                int best = 0;
+                double bd = 1e300;
+                for (int k = 0; k < 3; ++k) {
+                  const double dk = std::abs(pn[k].dot(cloud.points[j]) - po[k]);
+                  if (dk < bd) bd = dk, best = k;
+                }
+                if (bd <= tolc) part[best].push_back(j);
+              }
+              Eigen::Vector3d tn[3];
+              double to[3];
+              bool fitted = true;
+              for (int k = 0; k < 3 && fitted; ++k)
+                fitted = part[k].size() >= 5 &&
+                         fitPlane(cloud.points, part[k], corner, 0, pn[k], tn[k], to[k]) <= 2.0 * params.maxResidual * hc;
+              if (!fitted) break;
+              Eigen::Matrix3d m;
+              m << tn[0].transpose(), tn[1].transpose(), tn[2].transpose();
+              if (std::abs(m.determinant()) < 0.1) break;
+              const Eigen::Vector3d k3 = m.inverse() * Eigen::Vector3d(to[0], to[1], to[2]);
+              if ((k3 - corner).norm() > hc) break;
+              for (int k = 0; k < 3; ++k) pn[k] = tn[k], po[k] = to[k];
+              corner = k3;
+            }
+            cc.normalA = pn[0];
+            cc.normalB = pn[1];
+            cc.offsetA = po[0];
+            cc.offsetB = po[1];
+            const Eigen::Vector3d d = pn[0].cross(pn[1]);
+            if (d.norm() > 1e-6) cc.direction = d.normalized() * (d.dot(c.direction) < 0 ? -1.0 : 1.0);
+            n3 = pn[2];
+            o3 = po[2];
           }
-          if (ahead.size() >= 4 && ahead.size() * 6 >= aheadCount) {
-            Eigen::Vector3d n3;
-            double o3 = 0;
-            const double r3 = fitPlane(cloud.points, ahead, y, 0, dir, n3, o3);
-            const double along = n3.dot(c.direction);
-            if (r3 <= 2.0 * params.maxResidual * h && std::abs(along) > 0.3) {
-              const double t = (o3 - n3.dot(y)) / along;  // y + t·direction on the third plane
-              Eigen::Vector3d corner = y + t * c.direction;
-              const double ahead3 = (corner - tip).dot(dir);
-              double nearest = 0;
-              index.nearest(corner, &nearest);
-              if (ahead3 > 0 && ahead3 < step + params.radius * h && std::sqrt(nearest) <= params.maxOffCrease * h) {
-                // Fill tip → corner at ≤ step spacing (the corner itself unless a placed sample is there).
-                const bool cornerTaken = nearPlaced(corner);
-                const double gap = (corner - tip).norm();
-                const int pieces = std::max(1, static_cast<int>(std::ceil(gap / step - 0.25)));
-                for (int k = 1; k <= pieces; ++k) {
-                  const Eigen::Vector3d q = tip + (corner - tip) * (static_cast<double>(k) / pieces);
-                  if (nearPlaced(q) && k < pieces) break;
-                  if (k == pieces && cornerTaken) break;
-                  added.push_back(q);
-                  all.push_back(q);
+          const double ahead3 = (corner - tip).dot(dir);
+          double nearest = 0;
+          index.nearest(corner, &nearest);
+          if (ahead3 > 0 && ahead3 < step + params.radius * hc && std::sqrt(nearest) <= params.maxOffCrease * hc) {
+            // Fill tip → corner at ≤ step spacing (the corner itself unless a placed sample is there). A traced
+            // tip closer than half a step to the corner moves onto it; an original one stands for it.
+            bool cornerTaken = false;
+            if ((corner - tip).norm() < 0.5 * step) {
+              if (!added.empty() && all.back() == added.back()) {
+                added.back() = corner;
+                all.back() = corner;
+                tip = corner;
+              }
+              cornerTaken = true;
+            }
+            const bool takenByOther = nearPlaced(corner, tip, step);  // its branches are followed already
+            cornerTaken = cornerTaken || takenByOther;
+            const double gap = (corner - tip).norm();
+            const int pieces = std::max(1, static_cast<int>(std::ceil(gap / step - 0.25)));
+            for (int k = 1; k <= pieces; ++k) {
+              const Eigen::Vector3d q = tip + (corner - tip) * (static_cast<double>(k) / pieces);
+              if (k == pieces ? cornerTaken : nearPlaced(q, tip, step)) break;
+              added.push_back(q);
+              all.push_back(q);
+            }
+            placed = true;
+            if (!takenByOther) {
+              // The corner's other two creases: third plane ∩ each sheet, leaving on the side where the sheet
+              // lies (its points' offset from the crease line, within its plane).
+              const std::vector<std::uint32_t> halfBall = behind;  // fitAt below reuses `behind`
+              for (int sheet = 0; sheet < 2; ++sheet) {
+                const Eigen::Vector3d nS = sheet ? cc.normalB : cc.normalA;
+                const double oS = sheet ? cc.offsetB : cc.offsetA;
+                const Eigen::Vector3d nO = sheet ? cc.normalA : cc.normalB;
+                const double oO = sheet ? cc.offsetA : cc.offsetB;
+                Eigen::Vector3d u = nS.cross(n3);
+                if (u.norm() < 0.3) continue;
+                u.normalize();
+                Eigen::Vector3d side = Eigen::Vector3d::Zero();
+                for (std::uint32_t j : halfBall) {
+                  const Eigen::Vector3d& q = cloud.points[j];
+                  const double dS = std::abs(nS.dot(q) - oS), dO = std::abs(nO.dot(q) - oO);
+                  if (dS <= tolc && dS < dO) side += q - y;
+                }
+                const Eigen::Vector3d w = nS.cross(cc.direction);  // in the sheet, across the crease
+                const double sgn = side.dot(w);
+                if (std::abs(sgn) < 1e-12 * h) continue;
+                if (u.dot(w) * sgn < 0) u = -u;
+#ifdef IIRES_TRACE_DEBUG
+                std::fprintf(stderr, "corner (%.4f %.4f %.4f) sheet %d u (%.3f %.3f %.3f)\n", corner.x(), corner.y(), corner.z(), sheet, u.x(), u.y(), u.z());
+#endif
+                // Follow the branch along the known planes while its neighbourhood stays explained.
+                Run branch{nextChain++, {}, {}};
+                Eigen::Vector3d bt = corner;
+                bool handOver = false;
+                Crease bc;
+                for (int k = 1; k * step <= 3.0 * params.radius * hc; ++k) {
+                  Eigen::Vector3d by = corner + (k * step) * u;
+                  if (nearPlaced(by, bt, step)) break;
+                  double nb = 0;
+                  index.nearest(by, &nb);
+                  if (std::sqrt(nb) > params.maxLineDistance * hc) break;
+                  std::vector<std::uint32_t> bidx;
+                  std::vector<double> bd2;
+                  index.radius(by, params.radius * hc, bidx, bd2);
+                  std::size_t unexplained = 0;
+                  for (std::uint32_t j : bidx) {
+                    const Eigen::Vector3d& q = cloud.points[j];
+                    if (std::abs(nS.dot(q) - oS) > tolc && std::abs(n3.dot(q) - o3) > tolc &&
+                        std::abs(nO.dot(q) - oO) > tolc)
+                      ++unexplained;
+                  }
+#ifdef IIRES_TRACE_DEBUG
+                  std::fprintf(stderr, "  k %d unexplained %zu/%zu near %.3f\n", k, unexplained, bidx.size(), std::sqrt(nb) / h);
+#endif
+                  if (unexplained * 6 > bidx.size()) break;
+                  Eigen::Vector3d fy = by;
+                  bool bOne = false;
+                  if (fitAt(fy, u, bc, bOne) && !bOne && (fy - by).norm() <= params.maxLineDistance * hc) {
+                    handOver = !nearPlaced(fy, bt, step);
+                    if (handOver) by = fy;
+                  }
+                  branch.pts.push_back(by);
+                  all.push_back(by);
+                  bt = by;
+                  if (handOver) break;
+                }
+                if (branch.pts.empty()) continue;
+                runs.push_back(std::move(branch));
+                if (handOver) {
+                  const Eigen::Vector3d bd = bc.direction.dot(u) < 0 ? -bc.direction : bc.direction;
+                  jobs.push_back({runs.size() - 1, true, bt, bd, step});
                 }
               }
             }
-            break;
           }
         }
-        added.push_back(y);
-        all.push_back(y);
-        dir = (c.direction.dot(dir) < 0 ? -c.direction : c.direction);
-        tip = y;
       }
-      if (side)
-        run.pts.insert(run.pts.end(), added.begin(), added.end());
-      else
-        run.pts.insert(run.pts.begin(), added.rbegin(), added.rend());
+      return placed;
+    };
+    Crease last;  // the planes at the tip (the last full fit)
+    {
+      Eigen::Vector3d y = tip;
+      bool one = false;
+      if (!fitAt(y, dir, last, one) || one) last.valid = false;
     }
+    for (int guard = 0; guard < 100000; ++guard) {
+      Eigen::Vector3d y = tip + step * dir;
+      Crease c;
+      bool oneSided = false;
+      bool ok = fitAt(y, dir, c, oneSided) && (y - tip).dot(dir) >= 0.5 * step;  // and the crease leads on
+#ifdef IIRES_TRACE_DEBUG
+      if (!ok || oneSided) std::fprintf(stderr, "trace at (%.4f %.4f %.4f): ok %d oneSided %d\n", y.x(), y.y(), y.z(), ok, oneSided);
+#endif
+      if (ok && nearPlaced(y, tip, step)) break;  // bridged to a sample already placed
+      if (!ok || oneSided) {
+        // Near a corner: fitted on the half-ball behind, or not at all (then the tip's planes go on).
+        if (ok ? cornerAhead(c, y - step * dir, added) : (last.valid && cornerAhead(last, tip, added))) break;
+        if (!ok) {
+          // A fit fails now and then on a random sampling (a lopsided neighbourhood): the crease goes on if the
+          // full fit holds one or two steps further; the skipped samples go on the straight line to it.
+          bool resumed = false;
+          for (int skip = 2; skip <= 3 && !resumed; ++skip) {
+            Eigen::Vector3d z = tip + (skip * step) * dir;
+            Crease cz;
+            bool one = false;
+            if (!fitAt(z, dir, cz, one) || one || (z - tip).dot(dir) < (skip - 0.5) * step) continue;
+            if (nearPlaced(z, tip, step)) break;
+            for (int k = 1; k < skip; ++k) {
+              const Eigen::Vector3d q = tip + (z - tip) * (static_cast<double>(k) / skip);
+              added.push_back(q);
+              all.push_back(q);
+            }
+            y = z;
+            c = cz;
+            oneSided = false;
+            resumed = true;
+          }
+          if (!resumed) break;
+        }
+      }
+      added.push_back(y);
+      all.push_back(y);
+      if (!oneSided) last = c;
+      dir = (c.direction.dot(dir) < 0 ? -c.direction : c.direction);
+      tip = y;
+    }
+    Run& run = runs[job.run];
+    (job.back ? run.pts : run.front).insert(job.back ? run.pts.end() : run.front.end(), added.begin(), added.end());
   }
   out.clear();
   owner.clear();
-  for (const Run& run : runs)
+  for (const Run& run : runs) {
+    for (std::size_t t = run.front.size(); t-- > 0;) out.push_back(run.front[t]), owner.push_back(run.chain);
     for (const auto& q : run.pts) out.push_back(q), owner.push_back(run.chain);
+  }
 }
 
 }  // namespace
@@ -765,6 +1027,7 @@ std::vector<Eigen::Vector3d> snapToCreases(const PointCloud& cloud, const std::v
   // 1. Each sample onto the intersection of its two sheets' local planes (the detector's thresholds).
   std::vector<Eigen::Vector3d> moved(samples);
   std::vector<char> good(n, 0);
+  std::vector<Eigen::Vector3d> creaseDir(n, Eigen::Vector3d::Zero());  // of the fit that placed each good sample
   parallelFor(n, params.threads, [&](std::size_t i) {
     std::vector<std::uint32_t> idx;
     std::vector<double> d2;
@@ -777,19 +1040,20 @@ std::vector<Eigen::Vector3d> snapToCreases(const PointCloud& cloud, const std::v
     Eigen::Vector3d along = samples[after] - samples[before];
     if (along.norm() > 0) along.normalize();  // stays 0 for a lone sample: no jump then
     bool onCrease = false;
+    const double hl = localSpacing(index, samples[i], h);
     for (const FeatureParams* prm : {&params, static_cast<const FeatureParams*>(&far)}) {
       moved[i] = samples[i];
       onCrease = true;
       for (int it = 0; it < 2 && onCrease; ++it) {  // re-centred once: the second fit is centred on the crease
-        index.radius(moved[i], params.radius * h, idx, d2);
+        index.radius(moved[i], params.radius * hl, idx, d2);
         if (idx.size() > 200) idx.resize(200);
         Crease c;
-        onCrease = twoPlaneTest(cloud.points, cloud.normals, moved[i], idx, h, it == 0 ? *prm : params, c,
-                                params.snapSigma * h);
+        onCrease = twoPlaneTest(cloud.points, cloud.normals, moved[i], idx, hl, it == 0 ? *prm : params, c,
+                                params.snapSigma * hl);
         // A jump must land on a crease running along the chain (not on another crease meeting it at a corner).
         if (onCrease && prm == &far && std::abs(c.direction.dot(along)) < std::cos(params.maxChainTurn * kDeg))
           onCrease = false;
-        if (onCrease) moved[i] = c.point;
+        if (onCrease) moved[i] = c.point, creaseDir[i] = c.direction;
       }
       if (onCrease) break;
     }
@@ -802,12 +1066,13 @@ std::vector<Eigen::Vector3d> snapToCreases(const PointCloud& cloud, const std::v
     loose.angle = 1.0;
     loose.maxResidual = 2.0 * params.maxResidual;
     loose.minClusterShare = 0.5 * params.minClusterShare;
-    index.radius(samples[i], params.radius * h, idx, d2);
+    index.radius(samples[i], params.radius * hl, idx, d2);
     if (idx.size() > 200) idx.resize(200);
     Crease c;
-    if (twoPlaneTest(cloud.points, cloud.normals, samples[i], idx, h, loose, c, params.snapSigma * h) &&
-        (c.point - samples[i]).norm() <= 0.25 * h) {
+    if (twoPlaneTest(cloud.points, cloud.normals, samples[i], idx, hl, loose, c, params.snapSigma * hl) &&
+        (c.point - samples[i]).norm() <= 0.25 * hl) {
       moved[i] = c.point;
+      creaseDir[i] = c.direction;
       good[i] = 1;
     }
   });
@@ -829,6 +1094,10 @@ std::vector<Eigen::Vector3d> snapToCreases(const PointCloud& cloud, const std::v
       }
     if (prev == n || next == n) continue;
     const Eigen::Vector3d ab = moved[next] - moved[prev];
+    // On a curved crease the chord cuts inside: its sagitta ≈ L·θ/8 (θ the turn between the two ends' crease
+    // directions) must stay below the detector's residual bound.
+    const double cosTurn = std::min(1.0, std::abs(creaseDir[prev].dot(creaseDir[next])));
+    if (ab.norm() * std::acos(cosTurn) / 8.0 > params.maxResidual * h) continue;
     const double t = std::clamp((samples[i] - moved[prev]).dot(ab) / std::max(ab.squaredNorm(), 1e-300), 0.0, 1.0);
     const Eigen::Vector3d onChord = moved[prev] + t * ab;
     if ((onChord - samples[i]).norm() > params.maxLineDistance * h) continue;  // the neighbours disagree
@@ -889,6 +1158,11 @@ std::vector<Eigen::Vector3d> snapToCreases(const PointCloud& cloud, const std::v
       double nearest = 0;
       index.nearest(corner, &nearest);
       if (std::sqrt(nearest) > params.maxOffCrease * h) continue;  // the lines meet off the surface
+      // A corner the tracing already placed (or any sample there): nothing to add.
+      bool taken = false;
+      for (const auto& q : out)
+        if ((q - corner).norm() < 0.5 * std::min(ea.step, eb.step)) taken = true;
+      if (taken) continue;
       bool dup = false;
       for (const auto& q : cornerPoints)
         if ((q - corner).norm() < h) dup = true, corner = q;
@@ -945,16 +1219,17 @@ FeatureResult detectFeatures(const PointCloud& cloud, const FeatureParams& param
   KnnIndex index(pts);
   std::vector<char> flag(n, 0);
   std::vector<Crease> creases(n);
-  auto neighbourhood = [&](std::size_t i, std::vector<std::uint32_t>& idx) {
+  auto neighbourhood = [&](std::size_t i, std::vector<std::uint32_t>& idx, double hi) {
     std::vector<double> d2;
-    index.radius(pts[i], params.radius * h, idx, d2);
+    index.radius(pts[i], params.radius * hi, idx, d2);
     if (idx.size() > 200) idx.resize(200);  // nearest first; bounds the cost in dense clusters
   };
   if (params.detector == FeatureDetector::NormalVariation) {
     parallelFor(n, params.threads, [&](std::size_t i) {
       std::vector<std::uint32_t> idx;
-      neighbourhood(i, idx);
-      flag[i] = twoPlaneTest(pts, nrm, pts[i], idx, h, params, creases[i]) ? 1 : 0;
+      const double hi = localSpacing(index, pts[i], h);
+      neighbourhood(i, idx, hi);
+      flag[i] = twoPlaneTest(pts, nrm, pts[i], idx, hi, params, creases[i]) ? 1 : 0;
     });
   } else {
     const auto cov = computeVcm(pts, params.vcmOffset * h, params.vcmConvolution * h, params.threads);
@@ -969,7 +1244,7 @@ FeatureResult detectFeatures(const PointCloud& cloud, const FeatureParams& param
       loose.maxLineDistance = params.radius;
       loose.maxResidual = 1e9;
       std::vector<std::uint32_t> idx;
-      neighbourhood(i, idx);
+      neighbourhood(i, idx, h);
       twoPlaneTest(pts, nrm, pts[i], idx, h, loose, creases[i]);
     });
   }
