@@ -701,8 +701,30 @@ void traceChainEnds(const PointCloud& cloud, const KnnIndex& index, double h, co
     double step;
   };
   std::vector<Job> jobs;
+  std::vector<double> steps;  // the runs' end spacings: a lone sample's runs get their median
+  for (const Run& run : runs)
+    if (run.pts.size() >= 2) steps.push_back((run.pts[1] - run.pts[0]).norm());
+  double typicalStep = 0;
+  if (!steps.empty()) {
+    std::nth_element(steps.begin(), steps.begin() + static_cast<long>(steps.size() / 2), steps.end());
+    typicalStep = steps[steps.size() / 2];
+  }
   for (std::size_t r = 0; r < runs.size(); ++r) {
     const auto& p = runs[r].pts;
+    if (p.size() == 1 && typicalStep > 0) {
+      // A lone sample (a piece of a chain between two gaps): traced both ways along its own crease.
+      std::vector<std::uint32_t> idx;
+      std::vector<double> d2;
+      const double hs = localSpacing(index, p[0], h);
+      index.radius(p[0], params.radius * hs, idx, d2);
+      if (idx.size() > 200) idx.resize(200);
+      Crease c;
+      if (twoPlaneTest(cloud.points, cloud.normals, p[0], idx, hs, params, c, params.snapSigma * hs)) {
+        jobs.push_back({r, false, p[0], -c.direction, typicalStep});
+        jobs.push_back({r, true, p[0], c.direction, typicalStep});
+      }
+      continue;
+    }
     if (p.size() < 2) continue;
     for (int side = 0; side < 2; ++side) {
       const Eigen::Vector3d tip = side ? p.back() : p.front(), prev = side ? p[p.size() - 2] : p[1];
@@ -911,10 +933,16 @@ void traceChainEnds(const PointCloud& cloud, const KnnIndex& index, double h, co
                 Crease bc;
                 for (int k = 1; k * step <= 3.0 * params.radius * hc; ++k) {
                   Eigen::Vector3d by = corner + (k * step) * u;
+#ifdef IIRES_TRACE_DEBUG
+                  if (nearPlaced(by, bt, step)) std::fprintf(stderr, "  branch k %d bridged\n", k);
+#endif
                   if (nearPlaced(by, bt, step)) break;
                   double nb = 0;
                   index.nearest(by, &nb);
-                  if (std::sqrt(nb) > params.maxLineDistance * hc) break;
+#ifdef IIRES_TRACE_DEBUG
+                  if (std::sqrt(nb) > 1.5 * hc) std::fprintf(stderr, "  branch k %d off surface %.3f\n", k, std::sqrt(nb) / hc);
+#endif
+                  if (std::sqrt(nb) > 1.5 * hc) break;  // past the surface (a random sampling leaves ~h gaps)
                   std::vector<std::uint32_t> bidx;
                   std::vector<double> bd2;
                   index.radius(by, params.radius * hc, bidx, bd2);
@@ -953,6 +981,9 @@ void traceChainEnds(const PointCloud& cloud, const KnnIndex& index, double h, co
       }
       return placed;
     };
+#ifdef IIRES_TRACE_DEBUG
+    std::fprintf(stderr, "job %zu run %zu tip (%.4f %.4f %.4f) dir (%.3f %.3f %.3f) step %.4f\n", jb, job.run, tip.x(), tip.y(), tip.z(), dir.x(), dir.y(), dir.z(), step);
+#endif
     Crease last;  // the planes at the tip (the last full fit)
     {
       Eigen::Vector3d y = tip;
@@ -960,12 +991,26 @@ void traceChainEnds(const PointCloud& cloud, const KnnIndex& index, double h, co
       if (!fitAt(y, dir, last, one) || one) last.valid = false;
     }
     for (int guard = 0; guard < 100000; ++guard) {
-      Eigen::Vector3d y = tip + step * dir;
+      const Eigen::Vector3d predicted = tip + step * dir;
+      Eigen::Vector3d y = predicted;
       Crease c;
       bool oneSided = false;
-      bool ok = fitAt(y, dir, c, oneSided) && (y - tip).dot(dir) >= 0.5 * step;  // and the crease leads on
+      // The prediction lies on the crease but for its bend over one step: a fit far off it found another line.
+      bool ok = fitAt(y, dir, c, oneSided);
+      if (ok) {
+        // One step on along the fitted line (the nearest point of the line to the prediction slides along it
+        // where the crease bends; a sample a few steps ahead would leave a gap behind it).
+        const double cd = c.direction.dot(dir);
+        const double t = (step - (y - tip).dot(dir)) / cd;
+        if (std::abs(cd) > 0.95 && std::abs(t) <= step) y += t * c.direction;
+        ok = (y - tip).dot(dir) >= 0.5 * step &&  // the crease leads on
+             (y - predicted).norm() <= 0.5 * step + 0.25 * hl;  // far off the prediction: another line
+      }
 #ifdef IIRES_TRACE_DEBUG
       if (!ok || oneSided) std::fprintf(stderr, "trace at (%.4f %.4f %.4f): ok %d oneSided %d\n", y.x(), y.y(), y.z(), ok, oneSided);
+#endif
+#ifdef IIRES_TRACE_DEBUG
+      if (ok && nearPlaced(y, tip, step)) std::fprintf(stderr, "bridged at (%.4f %.4f %.4f)\n", y.x(), y.y(), y.z());
 #endif
       if (ok && nearPlaced(y, tip, step)) break;  // bridged to a sample already placed
       if (!ok || oneSided) {
