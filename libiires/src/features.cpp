@@ -17,7 +17,6 @@
 #include <stdexcept>
 #include <string>
 #include <tuple>
-#include <cstdio>
 #include <unordered_map>
 
 #include "iires/knn.hpp"
@@ -78,18 +77,12 @@ double fitPlane(const std::vector<Eigen::Vector3d>& points, const std::vector<st
 /// Two-plane fit of the neighbourhood @p nbr of the point @p p (the normal-variation test). Returns whether the
 /// point is on a crease by the thresholds in @p prm; fills @p crease. @p sigma > 0: the plane fits weight each
 /// point by exp(−d²/σ²), d its distance to p (local planes: less bias from curved sheets); 0 = unweighted.
-#ifdef IIRES_TRACE_DEBUG
-thread_local bool dbgFit = false;
-#define DBGF(...) do { if (dbgFit) std::fprintf(stderr, __VA_ARGS__); } while (0)
-#else
-#define DBGF(...) do {} while (0)
-#endif
 bool twoPlaneTest(const std::vector<Eigen::Vector3d>& points, const std::vector<Eigen::Vector3d>& normals,
                   const Eigen::Vector3d& p, const std::vector<std::uint32_t>& nbr, double h, const FeatureParams& prm,
                   Crease& crease, double sigma = 0) {
   crease = Crease{};
   const std::size_t m = nbr.size();
-  if (m < 8) { DBGF("  fit: m %zu\n", m); return false; }
+  if (m < 8) return false;
   // Seeds of the 2-means on normals: the normal farthest from the mean, then the one farthest from it.
   Eigen::Vector3d mean = Eigen::Vector3d::Zero();
   for (std::uint32_t j : nbr) mean += normals[j];
@@ -100,7 +93,7 @@ bool twoPlaneTest(const std::vector<Eigen::Vector3d>& points, const std::vector<
   for (std::size_t t = 1; t < m; ++t)
     if (normals[nbr[t]].dot(normals[nbr[a]]) < normals[nbr[b]].dot(normals[nbr[a]])) b = t;
   Eigen::Vector3d na = normals[nbr[a]], nb = normals[nbr[b]];
-  if (na.dot(nb) > std::cos(prm.angle * kDeg)) { DBGF("  fit: normals vary little\n"); return false; }  // the neighbours' normals vary too little
+  if (na.dot(nb) > std::cos(prm.angle * kDeg)) return false;  // the neighbours' normals vary too little
   std::vector<char> side(m, 0);
   for (int it = 0; it < 5; ++it) {
     Eigen::Vector3d sa = Eigen::Vector3d::Zero(), sb = Eigen::Vector3d::Zero();
@@ -121,7 +114,7 @@ bool twoPlaneTest(const std::vector<Eigen::Vector3d>& points, const std::vector<
     ca.clear();
     cb.clear();
     for (std::size_t t = 0; t < m; ++t) (side[t] == 0 ? ca : cb).push_back(nbr[t]);
-    if (ca.size() < minCount || cb.size() < minCount) { DBGF("  fit: share %zu %zu of %zu\n", ca.size(), cb.size(), m); return false; }
+    if (ca.size() < minCount || cb.size() < minCount) return false;
     ra = fitPlane(points, ca, p, sigma, na, pa, oa);
     rb = fitPlane(points, cb, p, sigma, nb, pb, ob);
     if (it == 2) break;
@@ -130,7 +123,7 @@ bool twoPlaneTest(const std::vector<Eigen::Vector3d>& points, const std::vector<
       side[t] = da <= db ? 0 : 1;
     }
   }
-  if (ra > prm.maxResidual * h || rb > prm.maxResidual * h) { DBGF("  fit: residual %.3f %.3f h\n", ra / h, rb / h); return false; }
+  if (ra > prm.maxResidual * h || rb > prm.maxResidual * h) return false;
   const Eigen::Vector3d dir = pa.cross(pb);
   const double sinAngle = dir.norm();
   if (pa.dot(pb) > std::cos(prm.angle * kDeg) || sinAngle < 1e-6) return false;
@@ -140,7 +133,7 @@ bool twoPlaneTest(const std::vector<Eigen::Vector3d>& points, const std::vector<
   const Eigen::Vector2d rhs(oa - pa.dot(p), ob - pb.dot(p));
   const Eigen::Vector2d ab = g.inverse() * rhs;
   const Eigen::Vector3d x = p + ab(0) * pa + ab(1) * pb;
-  if ((x - p).norm() > prm.maxLineDistance * h) { DBGF("  fit: line distance %.3f h\n", (x - p).norm() / h); return false; }
+  if ((x - p).norm() > prm.maxLineDistance * h) return false;
   crease.valid = true;
   crease.point = x;
   crease.direction = dir / sinAngle;
@@ -734,7 +727,6 @@ void traceChainEnds(const PointCloud& cloud, const KnnIndex& index, double h, co
   }
   std::vector<Eigen::Vector3d> all(out);  // every sample placed so far (brute-force proximity: a few thousand)
   const double cosTurn = std::cos(params.maxChainTurn * kDeg);
-  // A point within 3·maxResidual local spacings of a fitted plane is on its sheet.
   std::vector<std::uint32_t> idx, behind, ahead;
   std::vector<double> d2;
   auto nearPlaced = [&](const Eigen::Vector3d& y, const Eigen::Vector3d& except, double step) {
@@ -745,10 +737,6 @@ void traceChainEnds(const PointCloud& cloud, const KnnIndex& index, double h, co
   // The regular stepped fit at y (full ball, else the half-ball behind along dir).
   double hl = h;  // the local spacing at the last fit (localSpacing)
   auto fitAt = [&](Eigen::Vector3d& y, const Eigen::Vector3d& dir, Crease& c, bool& oneSided) {
-#ifdef IIRES_TRACE_DEBUG
-    dbgFit = true;
-    struct Off { ~Off() { dbgFit = false; } } off;
-#endif
     bool ok = true;
     oneSided = false;
     hl = localSpacing(index, y, h);
@@ -775,9 +763,11 @@ void traceChainEnds(const PointCloud& cloud, const KnnIndex& index, double h, co
     std::vector<Eigen::Vector3d> added;
     Eigen::Vector3d tip = job.tip, dir = job.dir;
     const double step = job.step;
-    // A corner ahead of @p o on the crease of @p c: points ahead (within the ball one step on) that neither
-    // plane explains belong to a third sheet; the crease ends where its line meets that sheet's plane.
-    // On success the gap from the tip is filled, the corner placed and its two other creases followed.
+    // A corner ahead of @p o on the crease of @p c: points ahead of o (in the ball half a step on, radius + half
+    // a step) that neither plane explains belong to a third sheet (off both planes by 3·maxResidual, a normal
+    // unlike both, off the rounded crease); its plane is fitted, the corner refined as the three planes'
+    // intersection. On success the gap from the tip is filled, the corner placed and its two other creases
+    // followed.
     auto cornerAhead = [&](const Crease& c, const Eigen::Vector3d& o, std::vector<Eigen::Vector3d>& added) {
       const Eigen::Vector3d y = o + 0.5 * step * dir;
       const double hc = localSpacing(index, y, h), tolc = 3.0 * params.maxResidual * hc;
@@ -798,16 +788,8 @@ void traceChainEnds(const PointCloud& cloud, const KnnIndex& index, double h, co
         if ((cloud.points[j] - o).dot(dir) <= 0) behind.push_back(j);
       bool placed = false;
       ahead.clear();
-      std::size_t aheadCount = 0;
-      for (std::uint32_t j : idx) {
-        const Eigen::Vector3d& q = cloud.points[j];
-        if ((q - o).dot(dir) <= 0) continue;  // ahead of the tip
-        ++aheadCount;
-        if (unexplained(j)) ahead.push_back(j);
-      }
-#ifdef IIRES_TRACE_DEBUG
-      std::fprintf(stderr, "cornerAhead o (%.4f %.4f %.4f): %zu/%zu\n", o.x(), o.y(), o.z(), ahead.size(), aheadCount);
-#endif
+      for (std::uint32_t j : idx)
+        if ((cloud.points[j] - o).dot(dir) > 0 && unexplained(j)) ahead.push_back(j);  // ahead of the tip
       if (ahead.size() >= 6) {
         Eigen::Vector3d n3;
         double o3 = 0, r3 = 0, along = 0;
@@ -827,9 +809,6 @@ void traceChainEnds(const PointCloud& cloud, const KnnIndex& index, double h, co
           for (std::uint32_t j : around)
             if (unexplained(j)) ahead.push_back(j);
         }
-#ifdef IIRES_TRACE_DEBUG
-        std::fprintf(stderr, "third plane at (%.4f %.4f %.4f): %zu/%zu ahead unexplained r3 %.3f along %.3f\n", y.x(), y.y(), y.z(), ahead.size(), aheadCount, r3 / h, along);
-#endif
         if (r3 <= 2.0 * params.maxResidual * hc && std::abs(along) > 0.3) {
           // The corner as the three sheets' common point: the points around it go to the nearest of the three
           // planes, each plane is refitted to its points (twice), and the planes are intersected.
@@ -923,9 +902,6 @@ void traceChainEnds(const PointCloud& cloud, const KnnIndex& index, double h, co
                 const double sgn = side.dot(w);
                 if (std::abs(sgn) < 1e-12 * h) continue;
                 if (u.dot(w) * sgn < 0) u = -u;
-#ifdef IIRES_TRACE_DEBUG
-                std::fprintf(stderr, "corner (%.4f %.4f %.4f) sheet %d u (%.3f %.3f %.3f)\n", corner.x(), corner.y(), corner.z(), sheet, u.x(), u.y(), u.z());
-#endif
                 // Follow the branch along the known planes while its neighbourhood stays explained.
                 Run branch{nextChain++, {}, {}};
                 Eigen::Vector3d bt = corner;
@@ -933,15 +909,9 @@ void traceChainEnds(const PointCloud& cloud, const KnnIndex& index, double h, co
                 Crease bc;
                 for (int k = 1; k * step <= 3.0 * params.radius * hc; ++k) {
                   Eigen::Vector3d by = corner + (k * step) * u;
-#ifdef IIRES_TRACE_DEBUG
-                  if (nearPlaced(by, bt, step)) std::fprintf(stderr, "  branch k %d bridged\n", k);
-#endif
                   if (nearPlaced(by, bt, step)) break;
                   double nb = 0;
                   index.nearest(by, &nb);
-#ifdef IIRES_TRACE_DEBUG
-                  if (std::sqrt(nb) > 1.5 * hc) std::fprintf(stderr, "  branch k %d off surface %.3f\n", k, std::sqrt(nb) / hc);
-#endif
                   if (std::sqrt(nb) > 1.5 * hc) break;  // past the surface (a random sampling leaves ~h gaps)
                   std::vector<std::uint32_t> bidx;
                   std::vector<double> bd2;
@@ -953,9 +923,6 @@ void traceChainEnds(const PointCloud& cloud, const KnnIndex& index, double h, co
                         std::abs(nO.dot(q) - oO) > tolc)
                       ++unexplained;
                   }
-#ifdef IIRES_TRACE_DEBUG
-                  std::fprintf(stderr, "  k %d unexplained %zu/%zu near %.3f\n", k, unexplained, bidx.size(), std::sqrt(nb) / h);
-#endif
                   if (unexplained * 6 > bidx.size()) break;
                   Eigen::Vector3d fy = by;
                   bool bOne = false;
@@ -981,9 +948,6 @@ void traceChainEnds(const PointCloud& cloud, const KnnIndex& index, double h, co
       }
       return placed;
     };
-#ifdef IIRES_TRACE_DEBUG
-    std::fprintf(stderr, "job %zu run %zu tip (%.4f %.4f %.4f) dir (%.3f %.3f %.3f) step %.4f\n", jb, job.run, tip.x(), tip.y(), tip.z(), dir.x(), dir.y(), dir.z(), step);
-#endif
     Crease last;  // the planes at the tip (the last full fit)
     {
       Eigen::Vector3d y = tip;
@@ -1006,12 +970,6 @@ void traceChainEnds(const PointCloud& cloud, const KnnIndex& index, double h, co
         ok = (y - tip).dot(dir) >= 0.5 * step &&  // the crease leads on
              (y - predicted).norm() <= 0.5 * step + 0.25 * hl;  // far off the prediction: another line
       }
-#ifdef IIRES_TRACE_DEBUG
-      if (!ok || oneSided) std::fprintf(stderr, "trace at (%.4f %.4f %.4f): ok %d oneSided %d\n", y.x(), y.y(), y.z(), ok, oneSided);
-#endif
-#ifdef IIRES_TRACE_DEBUG
-      if (ok && nearPlaced(y, tip, step)) std::fprintf(stderr, "bridged at (%.4f %.4f %.4f)\n", y.x(), y.y(), y.z());
-#endif
       if (ok && nearPlaced(y, tip, step)) break;  // bridged to a sample already placed
       if (!ok || oneSided) {
         // Near a corner: fitted on the half-ball behind, or not at all (then the tip's planes go on).
