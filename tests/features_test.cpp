@@ -7,6 +7,7 @@
 #include <string>
 
 #include "iires/io.hpp"
+#include "iires/knn.hpp"
 #include "iires/normals.hpp"
 #include "iires/sampling.hpp"
 #include "shapes.hpp"
@@ -221,6 +222,59 @@ TEST(Features, TracingFromOneChainCoversTheCubesEdges) {
   }
   for (std::size_t i = 0; i < out.size(); ++i)
     for (std::size_t j = i + 1; j < out.size(); ++j) EXPECT_GT((out[i] - out[j]).norm(), 0.5 * step) << i << " " << j;
+}
+
+// A scan 5× denser at one end than at the other: the fits take the local spacing where the sampling is sparser
+// than the median, so the sparse end's creases are found (and sampled) as well as the dense end's.
+TEST(Features, NonUniformCubeEdgesFoundInTheSparsePart) {
+  const auto mesh = cubeMesh();
+  iires::MeshSamplingParams sp;
+  sp.count = 60000;
+  sp.seed = 7;
+  sp.densityRatio = 5.0;
+  iires::PointCloud cloud = iires::sampleMesh(mesh, sp);
+  cloud.normals = iires::estimateNormals(cloud.points);
+  const auto edges = iires::sharpMeshEdges(mesh, 45.0);
+  FeatureParams p;
+  p.sampleSpacing = 0.04;
+  const auto r = iires::detectFeatures(cloud, p);
+  // Raw recall on the sparsest part: points within 0.5 local spacings of an edge, detected. The local spacing
+  // is measured as the detector does (mean distance to the 6 nearest).
+  const iires::KnnIndex index(cloud.points);
+  std::vector<char> flagged(cloud.size(), 0);
+  for (auto i : r.detectedIndices) flagged[i] = 1;
+  std::size_t nearSparse = 0, foundSparse = 0;
+  std::vector<std::uint32_t> idx;
+  std::vector<double> d2;
+  double sparsest = 0;
+  std::vector<double> local(cloud.size());
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    index.knn(cloud.points[i], 7, idx, d2);
+    double sum = 0;
+    for (std::size_t t = 1; t < idx.size(); ++t) sum += std::sqrt(d2[t]);
+    local[i] = sum / 6.0;
+    sparsest = std::max(sparsest, local[i]);
+  }
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    if (local[i] < 1.5 * r.spacing) continue;  // the sparse part only
+    if (iires::distanceToSegments(cloud.points[i], edges) > 0.5 * local[i]) continue;
+    ++nearSparse;
+    foundSparse += flagged[i];
+  }
+  ASSERT_GT(nearSparse, 50u);
+  const double recall = static_cast<double>(foundSparse) / static_cast<double>(nearSparse);
+  std::printf("non-uniform cube: h=%.4f sparsest local spacing %.4f; sparse-part edge points %zu, raw recall %.3f\n",
+              r.spacing, sparsest, nearSparse, recall);
+  EXPECT_GE(recall, 0.85);
+  // The samples cover all 12 edges, into the corners (every edge point within 0.75 sample spacings).
+  double worst = 0;
+  for (const auto& q : iires::sampleSegments(edges, 0.005)) {
+    double best = 1e300;
+    for (const auto& x : r.samples) best = std::min(best, (x - q).norm());
+    worst = std::max(worst, best);
+  }
+  EXPECT_LE(worst, 0.75 * p.sampleSpacing);
+  for (const auto& x : r.samples) EXPECT_LE(iires::distanceToSegments(x, edges), 0.4 * r.spacing) << x.transpose();
 }
 
 TEST(Features, SphereHasNoFeatures) {
