@@ -7,6 +7,7 @@
 #include <string>
 
 #include "iires/io.hpp"
+#include "iires/knn.hpp"
 #include "iires/normals.hpp"
 #include "iires/sampling.hpp"
 #include "shapes.hpp"
@@ -167,19 +168,113 @@ TEST(Features, SnapToCreasesOnACube) {
   std::size_t onChain0 = 0, corners = 0;
   for (std::size_t i = 0; i < out.size(); ++i) {
     EXPECT_LE(iires::distanceToSegments(out[i], edges), 0.25 * h) << out[i].transpose();
+    EXPECT_LE(out[i].maxCoeff(), 1.0 + 0.25 * h) << out[i].transpose();  // the samples off the surface are gone
     const bool corner = (out[i] - Eigen::Vector3d(1, 1, 1)).norm() < 0.5 * h;
     corners += corner;
     onChain0 += owner[i] == 0 && !corner;
   }
-  EXPECT_EQ(onChain0, 16u);  // the two samples off the surface are gone
+  EXPECT_GE(onChain0, 16u);  // the given ones on the edge, and what tracing added along it
   EXPECT_EQ(corners, 1u);
-  EXPECT_EQ(out.size(), 33u);
+  // Nothing crowds: samples of different chains are at least half the chains' spacing apart.
+  for (std::size_t i = 0; i < out.size(); ++i)
+    for (std::size_t j = i + 1; j < out.size(); ++j)
+      EXPECT_GT((out[i] - out[j]).norm(), 0.025) << out[i].transpose() << " / " << out[j].transpose() << " chains " << owner[i] << " " << owner[j];
   // Deterministic for any thread count.
   p.threads = 1;
   const auto one = iires::snapToCreases(cloud, samples, chain, h, p);
   p.threads = 2;
   EXPECT_EQ(one, iires::snapToCreases(cloud, samples, chain, h, p));
   EXPECT_THROW(iires::snapToCreases(cloud, samples, {0u}, h, p), std::invalid_argument);
+}
+
+// One short chain in the middle of one cube edge: tracing continues it along its crease into both corners,
+// places the corners on the three planes' intersection and follows the corners' other creases, so the samples
+// cover the whole edge graph (12 edges, 8 corners), every one on an edge, none crowding another.
+TEST(Features, TracingFromOneChainCoversTheCubesEdges) {
+  const auto mesh = cubeMesh();
+  const auto cloud = sampledWithEstimatedNormals(mesh, 60000);
+  const auto edges = iires::sharpMeshEdges(mesh, 45.0);
+  ASSERT_EQ(edges.size(), 12u);
+  FeatureParams p;
+  const double h = iires::estimateSpacing(cloud.points);
+  const double step = 0.04;
+  std::vector<Eigen::Vector3d> samples;
+  for (int t = 0; t <= 5; ++t) samples.emplace_back(1.0, 0.4 + step * t, 1.0);  // edge x = z = 1
+  const std::vector<std::uint32_t> chain(samples.size(), 0u);
+  const auto out = iires::snapToCreases(cloud, samples, chain, h, p);
+  // On the edges up to the two-plane fit's noise with ~15 neighbours (0.4 h; snapped given samples: 0.25 h).
+  for (const auto& q : out) EXPECT_LE(iires::distanceToSegments(q, edges), 0.4 * h) << q.transpose();
+  // Every point of every edge is within one step of a sample (a gap of 2 steps would leave 1 step).
+  const auto dense = iires::sampleSegments(edges, 0.1 * h);
+  double worst = 0;
+  Eigen::Vector3d at = Eigen::Vector3d::Zero();
+  for (const auto& q : dense) {
+    double best = 1e300;
+    for (const auto& x : out) best = std::min(best, (x - q).norm());
+    if (best > worst) worst = best, at = q;
+  }
+  EXPECT_LE(worst, step) << "worst covered edge point " << at.transpose();
+  // The corners are placed (within h/4 of each cube vertex there is a sample).
+  for (const auto& v : mesh.vertices) {
+    double best = 1e300;
+    for (const auto& x : out) best = std::min(best, (x - v).norm());
+    EXPECT_LE(best, 0.25 * h) << "corner " << v.transpose();
+  }
+  for (std::size_t i = 0; i < out.size(); ++i)
+    for (std::size_t j = i + 1; j < out.size(); ++j) EXPECT_GT((out[i] - out[j]).norm(), 0.5 * step) << i << " " << j;
+}
+
+// A scan 5× denser at one end than at the other: the fits take the local spacing where the sampling is sparser
+// than the median, so the sparse end's creases are found (and sampled) as well as the dense end's.
+TEST(Features, NonUniformCubeEdgesFoundInTheSparsePart) {
+  const auto mesh = cubeMesh();
+  iires::MeshSamplingParams sp;
+  sp.count = 60000;
+  sp.seed = 7;
+  sp.densityRatio = 5.0;
+  iires::PointCloud cloud = iires::sampleMesh(mesh, sp);
+  cloud.normals = iires::estimateNormals(cloud.points);
+  const auto edges = iires::sharpMeshEdges(mesh, 45.0);
+  FeatureParams p;
+  p.sampleSpacing = 0.04;
+  const auto r = iires::detectFeatures(cloud, p);
+  // Raw recall on the sparsest part: points within 0.5 local spacings of an edge, detected. The local spacing
+  // is measured as the detector does (mean distance to the 6 nearest).
+  const iires::KnnIndex index(cloud.points);
+  std::vector<char> flagged(cloud.size(), 0);
+  for (auto i : r.detectedIndices) flagged[i] = 1;
+  std::size_t nearSparse = 0, foundSparse = 0;
+  std::vector<std::uint32_t> idx;
+  std::vector<double> d2;
+  double sparsest = 0;
+  std::vector<double> local(cloud.size());
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    index.knn(cloud.points[i], 7, idx, d2);
+    double sum = 0;
+    for (std::size_t t = 1; t < idx.size(); ++t) sum += std::sqrt(d2[t]);
+    local[i] = sum / 6.0;
+    sparsest = std::max(sparsest, local[i]);
+  }
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    if (local[i] < 1.5 * r.spacing) continue;  // the sparse part only
+    if (iires::distanceToSegments(cloud.points[i], edges) > 0.5 * local[i]) continue;
+    ++nearSparse;
+    foundSparse += flagged[i];
+  }
+  ASSERT_GT(nearSparse, 50u);
+  const double recall = static_cast<double>(foundSparse) / static_cast<double>(nearSparse);
+  std::printf("non-uniform cube: h=%.4f sparsest local spacing %.4f; sparse-part edge points %zu, raw recall %.3f\n",
+              r.spacing, sparsest, nearSparse, recall);
+  EXPECT_GE(recall, 0.85);
+  // The samples cover all 12 edges, into the corners (every edge point within 0.75 sample spacings).
+  double worst = 0;
+  for (const auto& q : iires::sampleSegments(edges, 0.005)) {
+    double best = 1e300;
+    for (const auto& x : r.samples) best = std::min(best, (x - q).norm());
+    worst = std::max(worst, best);
+  }
+  EXPECT_LE(worst, 0.75 * p.sampleSpacing);
+  for (const auto& x : r.samples) EXPECT_LE(iires::distanceToSegments(x, edges), 0.4 * r.spacing) << x.transpose();
 }
 
 TEST(Features, SphereHasNoFeatures) {

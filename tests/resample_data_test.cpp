@@ -183,13 +183,18 @@ TEST(SharpEdges, HeldOnTheCreasesAndCloserToTheMeshThanIsotropic) {
   const iires::MeshDistance distance(mesh);
   const auto err = distance.distances(r.cloud.points), isoErr = distance.distances(iso.cloud.points);
   EXPECT_LT(err.mean, isoErr.mean);
-  // Issue 5 asks for a max error not worse than isotropic mode's. NOT met on this input since the resampler's
-  // active-set relaxation (2026-11-22): 0.0039 vs 0.0027 of the diagonal, from samples held on a crease;
-  // bench/sharp_edge_bench showed 10 of 12 runs not worse before it. Bounded here so it cannot get worse.
-  EXPECT_LE(err.max, 1.5 * isoErr.max);
+  // Issue 5 asks for a max error not worse than isotropic mode's. Met on this input since the chain ends are
+  // traced into their corners (h5, 2026-12-01: 0.71 × isotropic's max; before: 1.44 ×, from samples held near a
+  // corner). Not met in every bench/sharp_edge_bench row (see BENCHMARKS.md / the h5 report).
+  EXPECT_LE(err.max, isoErr.max);
   const auto edges = iires::sampleSegments(iires::sharpMeshEdges(mesh, 45.0), 0.01 * r.spacing.mean);
   const auto cover = iires::coverage(edges, r.cloud.points), isoCover = iires::coverage(edges, iso.cloud.points);
   EXPECT_LT(cover.mean / r.spacing.mean, 0.6 * isoCover.mean / iso.spacing.mean);
+  // The worst-covered edge point: 0.80 spacings measured (isotropic 0.85); issue 5 asks for ≤ 0.5, not met here.
+  EXPECT_LE(cover.max / r.spacing.mean, 0.85);
+  RecordProperty("err_max_ratio", std::to_string(err.max / isoErr.max));
+  RecordProperty("edge_max_per_spacing", std::to_string(cover.max / r.spacing.mean));
+  RecordProperty("iso_edge_max_per_spacing", std::to_string(isoCover.max / iso.spacing.mean));
 }
 
 }  // namespace

@@ -29,11 +29,27 @@ using Clock = std::chrono::steady_clock;
 double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 constexpr double kDeg = M_PI / 180.0;
 
+/// The spacing the fits at @p y work with: the global spacing @p h, or the local one (mean distance to the 6
+/// nearest points) where the sampling is sparser, so a neighbourhood of `radius` spacings always holds about
+/// the same number of points (non-uniform scans: a fixed radius leaves the sparse parts with too few).
+double localSpacing(const KnnIndex& index, const Eigen::Vector3d& y, double h) {
+  std::vector<std::uint32_t> idx;
+  std::vector<double> d2;
+  index.knn(y, 7, idx, d2);
+  double sum = 0;
+  int m = 0;
+  for (std::size_t t = 0; t < idx.size() && m < 6; ++t)
+    if (d2[t] > 0) sum += std::sqrt(d2[t]), ++m;
+  return m > 0 ? std::max(h, sum / m) : h;
+}
+
 /// The crease at a point: the intersection line of two fitted planes.
 struct Crease {
   bool valid = false;
   Eigen::Vector3d point = Eigen::Vector3d::Zero();  ///< the query point projected onto the line
   Eigen::Vector3d direction = Eigen::Vector3d::Zero();
+  Eigen::Vector3d normalA = Eigen::Vector3d::Zero(), normalB = Eigen::Vector3d::Zero();  ///< the two planes
+  double offsetA = 0, offsetB = 0;                                                      ///< normal·x = offset
 };
 
 /// Plane through the (weighted) centroid of @p pts (indices into @p points) by PCA; returns the (weighted) RMS
@@ -121,6 +137,10 @@ bool twoPlaneTest(const std::vector<Eigen::Vector3d>& points, const std::vector<
   crease.valid = true;
   crease.point = x;
   crease.direction = dir / sinAngle;
+  crease.normalA = pa;
+  crease.normalB = pb;
+  crease.offsetA = oa;
+  crease.offsetB = ob;
   return true;
 }
 
@@ -622,6 +642,380 @@ void FeatureParams::validate() const {
   if (!(maxOffCrease >= 0.0)) fail("maxOffCrease must be >= 0");
 }
 
+namespace {
+
+/// Continue every open run of chain samples (@p out, consecutive samples of one chain in @p owner) along its
+/// crease: from the end sample, step forward by the run's end spacing, fit the two sheets' local planes there
+/// (the snap fit) and put the next sample on their intersection, while the fit passes the detector's thresholds,
+/// its crease runs along the run (within maxChainTurn) and the new sample is not within 0.75 steps of a sample
+/// already placed (then the gap to another chain, or to the run's own other end, is bridged). Where the full
+/// ball fails, the two sheets are fitted on the half-ball behind the prediction; if the points ahead that
+/// neither plane explains fit a third plane, the crease ends at a corner on it: the gap to the corner is filled,
+/// a corner sample placed, and the corner's two other creases (the third plane's intersections with the two
+/// sheets, on the side where each sheet lies) are followed as new runs: along the known planes while the points
+/// around stay explained by them, handing over to the stepped fit once it holds. Fills the stretches of a crease
+/// the detector missed, brings the ends into their corners and recovers short creases between corners.
+/// New runs get chain indices after the existing ones. Sequential in a fixed order (each trace sees the
+/// samples placed before it): deterministic.
+void traceChainEnds(const PointCloud& cloud, const KnnIndex& index, double h, const FeatureParams& params,
+                    std::vector<Eigen::Vector3d>& out, std::vector<std::uint32_t>& owner) {
+  struct Run {
+    std::uint32_t chain;
+    std::vector<Eigen::Vector3d> front, pts;  // front: traced off the first sample, outward order
+  };
+  std::vector<Run> runs;
+  std::uint32_t nextChain = 0;
+  for (std::size_t a = 0; a < out.size();) {
+    std::size_t b = a;
+    while (b + 1 < out.size() && owner[b + 1] == owner[a]) ++b;
+    nextChain = std::max(nextChain, owner[a] + 1);
+    // A chain's run is split where samples were dropped (a gap over 1.6 × its median spacing): the pieces'
+    // ends are traced like the chain's, so the gap is filled from both sides.
+    std::vector<double> gaps;
+    for (std::size_t t = a; t < b; ++t) gaps.push_back((out[t + 1] - out[t]).norm());
+    double median = 0;
+    if (!gaps.empty()) {
+      std::vector<double> sorted(gaps);
+      std::nth_element(sorted.begin(), sorted.begin() + static_cast<long>(sorted.size() / 2), sorted.end());
+      median = sorted[sorted.size() / 2];
+    }
+    std::size_t first = a;
+    for (std::size_t t = a; t <= b; ++t)
+      if (t == b || gaps[t - a] > 1.6 * median) {
+        runs.push_back({owner[a], {}, std::vector<Eigen::Vector3d>(out.begin() + static_cast<long>(first), out.begin() + static_cast<long>(t + 1))});
+        first = t + 1;
+      }
+    a = b + 1;
+  }
+  struct Job {
+    std::size_t run;
+    bool back;  // appends to the run's back (else to its front list)
+    Eigen::Vector3d tip, dir;
+    double step;
+  };
+  std::vector<Job> jobs;
+  std::vector<double> steps;  // the runs' end spacings: a lone sample's runs get their median
+  for (const Run& run : runs)
+    if (run.pts.size() >= 2) steps.push_back((run.pts[1] - run.pts[0]).norm());
+  double typicalStep = 0;
+  if (!steps.empty()) {
+    std::nth_element(steps.begin(), steps.begin() + static_cast<long>(steps.size() / 2), steps.end());
+    typicalStep = steps[steps.size() / 2];
+  }
+  for (std::size_t r = 0; r < runs.size(); ++r) {
+    const auto& p = runs[r].pts;
+    if (p.size() == 1 && typicalStep > 0) {
+      // A lone sample (a piece of a chain between two gaps): traced both ways along its own crease.
+      std::vector<std::uint32_t> idx;
+      std::vector<double> d2;
+      const double hs = localSpacing(index, p[0], h);
+      index.radius(p[0], params.radius * hs, idx, d2);
+      if (idx.size() > 200) idx.resize(200);
+      Crease c;
+      if (twoPlaneTest(cloud.points, cloud.normals, p[0], idx, hs, params, c, params.snapSigma * hs)) {
+        jobs.push_back({r, false, p[0], -c.direction, typicalStep});
+        jobs.push_back({r, true, p[0], c.direction, typicalStep});
+      }
+      continue;
+    }
+    if (p.size() < 2) continue;
+    for (int side = 0; side < 2; ++side) {
+      const Eigen::Vector3d tip = side ? p.back() : p.front(), prev = side ? p[p.size() - 2] : p[1];
+      const double step = (tip - prev).norm();
+      if (step > 1e-9 * h) jobs.push_back({r, side == 1, tip, (tip - prev) / step, step});
+    }
+  }
+  std::vector<Eigen::Vector3d> all(out);  // every sample placed so far (brute-force proximity: a few thousand)
+  const double cosTurn = std::cos(params.maxChainTurn * kDeg);
+  std::vector<std::uint32_t> idx, behind, ahead;
+  std::vector<double> d2;
+  auto nearPlaced = [&](const Eigen::Vector3d& y, const Eigen::Vector3d& except, double step) {
+    for (const auto& q : all)
+      if ((q - y).squaredNorm() < 0.5625 * step * step && (q - except).squaredNorm() > 1e-24) return true;
+    return false;
+  };
+  // The regular stepped fit at y (full ball, else the half-ball behind along dir).
+  double hl = h;  // the local spacing at the last fit (localSpacing)
+  auto fitAt = [&](Eigen::Vector3d& y, const Eigen::Vector3d& dir, Crease& c, bool& oneSided) {
+    bool ok = true;
+    oneSided = false;
+    hl = localSpacing(index, y, h);
+    for (int it = 0; it < 2 && ok; ++it) {  // fitted at the prediction, then re-centred on the crease
+      index.radius(y, params.radius * hl, idx, d2);
+      if (idx.size() > 200) idx.resize(200);
+      ok = twoPlaneTest(cloud.points, cloud.normals, y, idx, hl, params, c, params.snapSigma * hl) &&
+           std::abs(c.direction.dot(dir)) >= cosTurn;
+      oneSided = false;
+      if (!ok) {
+        behind.clear();
+        for (std::uint32_t j : idx)
+          if ((cloud.points[j] - y).dot(dir) <= 0) behind.push_back(j);
+        ok = twoPlaneTest(cloud.points, cloud.normals, y, behind, hl, params, c, params.snapSigma * hl) &&
+             std::abs(c.direction.dot(dir)) >= cosTurn;
+        oneSided = ok;
+      }
+      if (ok) y = c.point;
+    }
+    return ok;
+  };
+  for (std::size_t jb = 0; jb < jobs.size(); ++jb) {
+    const Job job = jobs[jb];
+    std::vector<Eigen::Vector3d> added;
+    Eigen::Vector3d tip = job.tip, dir = job.dir;
+    const double step = job.step;
+    // A corner ahead of @p o on the crease of @p c: points ahead of o (in the ball half a step on, radius + half
+    // a step) that neither plane explains belong to a third sheet (off both planes by 3·maxResidual, a normal
+    // unlike both, off the rounded crease); its plane is fitted, the corner refined as the three planes'
+    // intersection. On success the gap from the tip is filled, the corner placed and its two other creases
+    // followed.
+    auto cornerAhead = [&](const Crease& c, const Eigen::Vector3d& o, std::vector<Eigen::Vector3d>& added) {
+      const Eigen::Vector3d y = o + 0.5 * step * dir;
+      const double hc = localSpacing(index, y, h), tolc = 3.0 * params.maxResidual * hc;
+      const double reachC = params.radius * hc + 0.5 * step;
+      // A third sheet's point: off both planes, with a normal unlike both, and not on the (rounded) crease.
+      const double cosSheet = std::cos(0.5 * params.angle * kDeg);
+      auto unexplained = [&](std::uint32_t j) {
+        const Eigen::Vector3d& q = cloud.points[j];
+        const Eigen::Vector3d& nq = cloud.normals[j];
+        const Eigen::Vector3d off = q - c.point - c.direction * (q - c.point).dot(c.direction);
+        return std::abs(c.normalA.dot(q) - c.offsetA) > tolc && std::abs(c.normalB.dot(q) - c.offsetB) > tolc &&
+               std::abs(nq.dot(c.normalA)) < cosSheet && std::abs(nq.dot(c.normalB)) < cosSheet && off.norm() > hc;
+      };
+      index.radius(y, reachC, idx, d2);
+      if (idx.size() > 400) idx.resize(400);
+      behind.clear();
+      for (std::uint32_t j : idx)
+        if ((cloud.points[j] - o).dot(dir) <= 0) behind.push_back(j);
+      bool placed = false;
+      ahead.clear();
+      for (std::uint32_t j : idx)
+        if ((cloud.points[j] - o).dot(dir) > 0 && unexplained(j)) ahead.push_back(j);  // ahead of the tip
+      if (ahead.size() >= 6) {
+        Eigen::Vector3d n3;
+        double o3 = 0, r3 = 0, along = 0;
+        Eigen::Vector3d corner = c.point;
+        // The third sheet's plane, refitted to the unexplained points around the corner estimate.
+        for (int it = 0; it < 3; ++it) {
+          if (ahead.size() < 6) break;
+          r3 = fitPlane(cloud.points, ahead, y, 0, dir, n3, o3);
+          along = n3.dot(c.direction);
+          if (std::abs(along) <= 0.3) break;
+          corner = c.point + ((o3 - n3.dot(c.point)) / along) * c.direction;  // the crease line meets it
+          if (it == 2) break;
+          std::vector<std::uint32_t> around;
+          std::vector<double> ad2;
+          index.radius(corner, params.radius * hc, around, ad2);
+          ahead.clear();
+          for (std::uint32_t j : around)
+            if (unexplained(j)) ahead.push_back(j);
+        }
+        if (r3 <= 2.0 * params.maxResidual * hc && std::abs(along) > 0.3) {
+          // The corner as the three sheets' common point: the points around it go to the nearest of the three
+          // planes, each plane is refitted to its points (twice), and the planes are intersected.
+          Crease cc = c;
+          {
+            Eigen::Vector3d pn[3] = {c.normalA, c.normalB, n3};
+            double po[3] = {c.offsetA, c.offsetB, o3};
+            std::vector<std::uint32_t> around, part[3];
+            std::vector<double> ad2;
+            index.radius(corner, params.radius * hc, around, ad2);
+            for (int it = 0; it < 2; ++it) {
+              for (auto& pt : part) pt.clear();
+              for (std::uint32_t j : around) {
+                int best = 0;
+                double bd = 1e300;
+                for (int k = 0; k < 3; ++k) {
+                  const double dk = std::abs(pn[k].dot(cloud.points[j]) - po[k]);
+                  if (dk < bd) bd = dk, best = k;
+                }
+                if (bd <= tolc) part[best].push_back(j);
+              }
+              Eigen::Vector3d tn[3];
+              double to[3];
+              bool fitted = true;
+              for (int k = 0; k < 3 && fitted; ++k)
+                fitted = part[k].size() >= 5 &&
+                         fitPlane(cloud.points, part[k], corner, 0, pn[k], tn[k], to[k]) <= 2.0 * params.maxResidual * hc;
+              if (!fitted) break;
+              Eigen::Matrix3d m;
+              m << tn[0].transpose(), tn[1].transpose(), tn[2].transpose();
+              if (std::abs(m.determinant()) < 0.1) break;
+              const Eigen::Vector3d k3 = m.inverse() * Eigen::Vector3d(to[0], to[1], to[2]);
+              if ((k3 - corner).norm() > hc) break;
+              for (int k = 0; k < 3; ++k) pn[k] = tn[k], po[k] = to[k];
+              corner = k3;
+            }
+            cc.normalA = pn[0];
+            cc.normalB = pn[1];
+            cc.offsetA = po[0];
+            cc.offsetB = po[1];
+            const Eigen::Vector3d d = pn[0].cross(pn[1]);
+            if (d.norm() > 1e-6) cc.direction = d.normalized() * (d.dot(c.direction) < 0 ? -1.0 : 1.0);
+            n3 = pn[2];
+            o3 = po[2];
+          }
+          const double ahead3 = (corner - tip).dot(dir);
+          double nearest = 0;
+          index.nearest(corner, &nearest);
+          if (ahead3 > 0 && ahead3 < step + params.radius * hc && std::sqrt(nearest) <= params.maxOffCrease * hc) {
+            // Fill tip → corner at ≤ step spacing (the corner itself unless a placed sample is there). A traced
+            // tip closer than half a step to the corner moves onto it; an original one stands for it.
+            bool cornerTaken = false;
+            if ((corner - tip).norm() < 0.5 * step) {
+              if (!added.empty() && all.back() == added.back()) {
+                added.back() = corner;
+                all.back() = corner;
+                tip = corner;
+              }
+              cornerTaken = true;
+            }
+            const bool takenByOther = nearPlaced(corner, tip, step);  // its branches are followed already
+            cornerTaken = cornerTaken || takenByOther;
+            const double gap = (corner - tip).norm();
+            const int pieces = std::max(1, static_cast<int>(std::ceil(gap / step - 0.25)));
+            for (int k = 1; k <= pieces; ++k) {
+              const Eigen::Vector3d q = tip + (corner - tip) * (static_cast<double>(k) / pieces);
+              if (k == pieces ? cornerTaken : nearPlaced(q, tip, step)) break;
+              added.push_back(q);
+              all.push_back(q);
+            }
+            placed = true;
+            if (!takenByOther) {
+              // The corner's other two creases: third plane ∩ each sheet, leaving on the side where the sheet
+              // lies (its points' offset from the crease line, within its plane).
+              const std::vector<std::uint32_t> halfBall = behind;  // fitAt below reuses `behind`
+              for (int sheet = 0; sheet < 2; ++sheet) {
+                const Eigen::Vector3d nS = sheet ? cc.normalB : cc.normalA;
+                const double oS = sheet ? cc.offsetB : cc.offsetA;
+                const Eigen::Vector3d nO = sheet ? cc.normalA : cc.normalB;
+                const double oO = sheet ? cc.offsetA : cc.offsetB;
+                Eigen::Vector3d u = nS.cross(n3);
+                if (u.norm() < 0.3) continue;
+                u.normalize();
+                Eigen::Vector3d side = Eigen::Vector3d::Zero();
+                for (std::uint32_t j : halfBall) {
+                  const Eigen::Vector3d& q = cloud.points[j];
+                  const double dS = std::abs(nS.dot(q) - oS), dO = std::abs(nO.dot(q) - oO);
+                  if (dS <= tolc && dS < dO) side += q - y;
+                }
+                const Eigen::Vector3d w = nS.cross(cc.direction);  // in the sheet, across the crease
+                const double sgn = side.dot(w);
+                if (std::abs(sgn) < 1e-12 * h) continue;
+                if (u.dot(w) * sgn < 0) u = -u;
+                // Follow the branch along the known planes while its neighbourhood stays explained.
+                Run branch{nextChain++, {}, {}};
+                Eigen::Vector3d bt = corner;
+                bool handOver = false;
+                Crease bc;
+                for (int k = 1; k * step <= 3.0 * params.radius * hc; ++k) {
+                  Eigen::Vector3d by = corner + (k * step) * u;
+                  if (nearPlaced(by, bt, step)) break;
+                  double nb = 0;
+                  index.nearest(by, &nb);
+                  if (std::sqrt(nb) > 1.5 * hc) break;  // past the surface (a random sampling leaves ~h gaps)
+                  std::vector<std::uint32_t> bidx;
+                  std::vector<double> bd2;
+                  index.radius(by, params.radius * hc, bidx, bd2);
+                  std::size_t unexplained = 0;
+                  for (std::uint32_t j : bidx) {
+                    const Eigen::Vector3d& q = cloud.points[j];
+                    if (std::abs(nS.dot(q) - oS) > tolc && std::abs(n3.dot(q) - o3) > tolc &&
+                        std::abs(nO.dot(q) - oO) > tolc)
+                      ++unexplained;
+                  }
+                  if (unexplained * 6 > bidx.size()) break;
+                  Eigen::Vector3d fy = by;
+                  bool bOne = false;
+                  if (fitAt(fy, u, bc, bOne) && !bOne && (fy - by).norm() <= params.maxLineDistance * hc) {
+                    handOver = !nearPlaced(fy, bt, step);
+                    if (handOver) by = fy;
+                  }
+                  branch.pts.push_back(by);
+                  all.push_back(by);
+                  bt = by;
+                  if (handOver) break;
+                }
+                if (branch.pts.empty()) continue;
+                runs.push_back(std::move(branch));
+                if (handOver) {
+                  const Eigen::Vector3d bd = bc.direction.dot(u) < 0 ? -bc.direction : bc.direction;
+                  jobs.push_back({runs.size() - 1, true, bt, bd, step});
+                }
+              }
+            }
+          }
+        }
+      }
+      return placed;
+    };
+    Crease last;  // the planes at the tip (the last full fit)
+    {
+      Eigen::Vector3d y = tip;
+      bool one = false;
+      if (!fitAt(y, dir, last, one) || one) last.valid = false;
+    }
+    for (int guard = 0; guard < 100000; ++guard) {
+      const Eigen::Vector3d predicted = tip + step * dir;
+      Eigen::Vector3d y = predicted;
+      Crease c;
+      bool oneSided = false;
+      // The prediction lies on the crease but for its bend over one step: a fit far off it found another line.
+      bool ok = fitAt(y, dir, c, oneSided);
+      if (ok) {
+        // One step on along the fitted line (the nearest point of the line to the prediction slides along it
+        // where the crease bends; a sample a few steps ahead would leave a gap behind it).
+        const double cd = c.direction.dot(dir);
+        const double t = (step - (y - tip).dot(dir)) / cd;
+        if (std::abs(cd) > 0.95 && std::abs(t) <= step) y += t * c.direction;
+        ok = (y - tip).dot(dir) >= 0.5 * step &&  // the crease leads on
+             (y - predicted).norm() <= 0.5 * step + 0.25 * hl;  // far off the prediction: another line
+      }
+      if (ok && nearPlaced(y, tip, step)) break;  // bridged to a sample already placed
+      if (!ok || oneSided) {
+        // Near a corner: fitted on the half-ball behind, or not at all (then the tip's planes go on).
+        if (ok ? cornerAhead(c, y - step * dir, added) : (last.valid && cornerAhead(last, tip, added))) break;
+        if (!ok) {
+          // A fit fails now and then on a random sampling (a lopsided neighbourhood): the crease goes on if the
+          // full fit holds one or two steps further; the skipped samples go on the straight line to it.
+          bool resumed = false;
+          for (int skip = 2; skip <= 3 && !resumed; ++skip) {
+            Eigen::Vector3d z = tip + (skip * step) * dir;
+            Crease cz;
+            bool one = false;
+            if (!fitAt(z, dir, cz, one) || one || (z - tip).dot(dir) < (skip - 0.5) * step) continue;
+            if (nearPlaced(z, tip, step)) break;
+            for (int k = 1; k < skip; ++k) {
+              const Eigen::Vector3d q = tip + (z - tip) * (static_cast<double>(k) / skip);
+              added.push_back(q);
+              all.push_back(q);
+            }
+            y = z;
+            c = cz;
+            oneSided = false;
+            resumed = true;
+          }
+          if (!resumed) break;
+        }
+      }
+      added.push_back(y);
+      all.push_back(y);
+      if (!oneSided) last = c;
+      dir = (c.direction.dot(dir) < 0 ? -c.direction : c.direction);
+      tip = y;
+    }
+    Run& run = runs[job.run];
+    (job.back ? run.pts : run.front).insert(job.back ? run.pts.end() : run.front.end(), added.begin(), added.end());
+  }
+  out.clear();
+  owner.clear();
+  for (const Run& run : runs) {
+    for (std::size_t t = run.front.size(); t-- > 0;) out.push_back(run.front[t]), owner.push_back(run.chain);
+    for (const auto& q : run.pts) out.push_back(q), owner.push_back(run.chain);
+  }
+}
+
+}  // namespace
+
 std::vector<Eigen::Vector3d> snapToCreases(const PointCloud& cloud, const std::vector<Eigen::Vector3d>& samples,
                                            const std::vector<std::uint32_t>& chainOfSample, double spacing,
                                            const FeatureParams& params, std::vector<std::uint32_t>* chainOut) {
@@ -636,6 +1030,7 @@ std::vector<Eigen::Vector3d> snapToCreases(const PointCloud& cloud, const std::v
   // 1. Each sample onto the intersection of its two sheets' local planes (the detector's thresholds).
   std::vector<Eigen::Vector3d> moved(samples);
   std::vector<char> good(n, 0);
+  std::vector<Eigen::Vector3d> creaseDir(n, Eigen::Vector3d::Zero());  // of the fit that placed each good sample
   parallelFor(n, params.threads, [&](std::size_t i) {
     std::vector<std::uint32_t> idx;
     std::vector<double> d2;
@@ -648,19 +1043,20 @@ std::vector<Eigen::Vector3d> snapToCreases(const PointCloud& cloud, const std::v
     Eigen::Vector3d along = samples[after] - samples[before];
     if (along.norm() > 0) along.normalize();  // stays 0 for a lone sample: no jump then
     bool onCrease = false;
+    const double hl = localSpacing(index, samples[i], h);
     for (const FeatureParams* prm : {&params, static_cast<const FeatureParams*>(&far)}) {
       moved[i] = samples[i];
       onCrease = true;
       for (int it = 0; it < 2 && onCrease; ++it) {  // re-centred once: the second fit is centred on the crease
-        index.radius(moved[i], params.radius * h, idx, d2);
+        index.radius(moved[i], params.radius * hl, idx, d2);
         if (idx.size() > 200) idx.resize(200);
         Crease c;
-        onCrease = twoPlaneTest(cloud.points, cloud.normals, moved[i], idx, h, it == 0 ? *prm : params, c,
-                                params.snapSigma * h);
+        onCrease = twoPlaneTest(cloud.points, cloud.normals, moved[i], idx, hl, it == 0 ? *prm : params, c,
+                                params.snapSigma * hl);
         // A jump must land on a crease running along the chain (not on another crease meeting it at a corner).
         if (onCrease && prm == &far && std::abs(c.direction.dot(along)) < std::cos(params.maxChainTurn * kDeg))
           onCrease = false;
-        if (onCrease) moved[i] = c.point;
+        if (onCrease) moved[i] = c.point, creaseDir[i] = c.direction;
       }
       if (onCrease) break;
     }
@@ -673,12 +1069,13 @@ std::vector<Eigen::Vector3d> snapToCreases(const PointCloud& cloud, const std::v
     loose.angle = 1.0;
     loose.maxResidual = 2.0 * params.maxResidual;
     loose.minClusterShare = 0.5 * params.minClusterShare;
-    index.radius(samples[i], params.radius * h, idx, d2);
+    index.radius(samples[i], params.radius * hl, idx, d2);
     if (idx.size() > 200) idx.resize(200);
     Crease c;
-    if (twoPlaneTest(cloud.points, cloud.normals, samples[i], idx, h, loose, c, params.snapSigma * h) &&
-        (c.point - samples[i]).norm() <= 0.25 * h) {
+    if (twoPlaneTest(cloud.points, cloud.normals, samples[i], idx, hl, loose, c, params.snapSigma * hl) &&
+        (c.point - samples[i]).norm() <= 0.25 * hl) {
       moved[i] = c.point;
+      creaseDir[i] = c.direction;
       good[i] = 1;
     }
   });
@@ -700,6 +1097,10 @@ std::vector<Eigen::Vector3d> snapToCreases(const PointCloud& cloud, const std::v
       }
     if (prev == n || next == n) continue;
     const Eigen::Vector3d ab = moved[next] - moved[prev];
+    // On a curved crease the chord cuts inside: its sagitta ≈ L·θ/8 (θ the turn between the two ends' crease
+    // directions) must stay below the detector's residual bound.
+    const double cosTurn = std::min(1.0, std::abs(creaseDir[prev].dot(creaseDir[next])));
+    if (ab.norm() * std::acos(cosTurn) / 8.0 > params.maxResidual * h) continue;
     const double t = std::clamp((samples[i] - moved[prev]).dot(ab) / std::max(ab.squaredNorm(), 1e-300), 0.0, 1.0);
     const Eigen::Vector3d onChord = moved[prev] + t * ab;
     if ((onChord - samples[i]).norm() > params.maxLineDistance * h) continue;  // the neighbours disagree
@@ -710,6 +1111,7 @@ std::vector<Eigen::Vector3d> snapToCreases(const PointCloud& cloud, const std::v
   std::vector<std::uint32_t> owner;
   for (std::size_t i = 0; i < n; ++i)
     if (keep[i]) out.push_back(moved[i]), owner.push_back(chainOfSample[i]);
+  traceChainEnds(cloud, index, h, params, out, owner);
   // 3. Corners: two chain ends whose crease lines, continued forward, meet within a few spacings of both get
   // a sample where they meet (the end samples of chains stop short of a corner, where the two-plane fit fails).
   struct End {
@@ -759,6 +1161,11 @@ std::vector<Eigen::Vector3d> snapToCreases(const PointCloud& cloud, const std::v
       double nearest = 0;
       index.nearest(corner, &nearest);
       if (std::sqrt(nearest) > params.maxOffCrease * h) continue;  // the lines meet off the surface
+      // A corner the tracing already placed (or any sample there): nothing to add.
+      bool taken = false;
+      for (const auto& q : out)
+        if ((q - corner).norm() < 0.5 * std::min(ea.step, eb.step)) taken = true;
+      if (taken) continue;
       bool dup = false;
       for (const auto& q : cornerPoints)
         if ((q - corner).norm() < h) dup = true, corner = q;
@@ -815,16 +1222,17 @@ FeatureResult detectFeatures(const PointCloud& cloud, const FeatureParams& param
   KnnIndex index(pts);
   std::vector<char> flag(n, 0);
   std::vector<Crease> creases(n);
-  auto neighbourhood = [&](std::size_t i, std::vector<std::uint32_t>& idx) {
+  auto neighbourhood = [&](std::size_t i, std::vector<std::uint32_t>& idx, double hi) {
     std::vector<double> d2;
-    index.radius(pts[i], params.radius * h, idx, d2);
+    index.radius(pts[i], params.radius * hi, idx, d2);
     if (idx.size() > 200) idx.resize(200);  // nearest first; bounds the cost in dense clusters
   };
   if (params.detector == FeatureDetector::NormalVariation) {
     parallelFor(n, params.threads, [&](std::size_t i) {
       std::vector<std::uint32_t> idx;
-      neighbourhood(i, idx);
-      flag[i] = twoPlaneTest(pts, nrm, pts[i], idx, h, params, creases[i]) ? 1 : 0;
+      const double hi = localSpacing(index, pts[i], h);
+      neighbourhood(i, idx, hi);
+      flag[i] = twoPlaneTest(pts, nrm, pts[i], idx, hi, params, creases[i]) ? 1 : 0;
     });
   } else {
     const auto cov = computeVcm(pts, params.vcmOffset * h, params.vcmConvolution * h, params.threads);
@@ -839,7 +1247,7 @@ FeatureResult detectFeatures(const PointCloud& cloud, const FeatureParams& param
       loose.maxLineDistance = params.radius;
       loose.maxResidual = 1e9;
       std::vector<std::uint32_t> idx;
-      neighbourhood(i, idx);
+      neighbourhood(i, idx, h);
       twoPlaneTest(pts, nrm, pts[i], idx, h, loose, creases[i]);
     });
   }

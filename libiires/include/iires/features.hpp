@@ -4,6 +4,8 @@
 /// become the resampler's fixed samples (ResampleParams::fixedSamples), so CAD creases stay crisp.
 ///
 /// Two detectors, both on a cloud with oriented normals:
+/// Lengths in spacings use the local spacing where the sampling is sparser than h (the mean distance to the 6
+/// nearest points, when larger than h), so every neighbourhood holds about as many points on a non-uniform scan.
 ///  - FeatureDetector::NormalVariation (default): the neighbours within `radius` spacings are split into two
 ///    clusters by their normals (2-means), a plane is fitted to each cluster's positions (refined by
 ///    reassigning points to the nearer plane), and the point is a feature point when the planes meet at
@@ -15,9 +17,10 @@
 /// Measured on fandisk, joint and anchor (100k points by sampleMesh, PCA+MST normals, reference = mesh edges
 /// with dihedral angle > 45°; precision: detections within 1.5 h of an edge, recall: points within 0.5 h
 /// detected; `IIRES_COMPARE_DETECTORS=1 features_test --gtest_filter='Cad*'`), raw detector / after chaining:
-///   fandisk  NV P .975 R .937 / P .975 R .983   VCM P .813 R .979 / P .999 R .986
-///   joint    NV P .994 R .942 / P .987 R .950   VCM P .814 R .994 / P .999 R .981
-///   anchor   NV P .972 R .953 / P .941 R .889   VCM P .808 R .976 / P .989 R .948
+///   fandisk  NV P .975 R .940 / P .974 R .983   VCM P .813 R .979 / P .999 R .986
+///   joint    NV P .998 R .950 / P .991 R .953   VCM P .814 R .994 / P .999 R .981
+///   anchor   NV P .974 R .960 / P .961 R .883   VCM P .808 R .976 / P .989 R .948
+/// (NV re-measured with the local spacing; VCM from before it.)
 /// and NV takes ~0.9 s per model on 2 cores, VCM ~15 s. NV is the default: better raw precision and F-score,
 /// 15× faster (the resampler's budget is ~1 s for 100k points); VCM gives cleaner chains where time allows.
 ///
@@ -26,7 +29,8 @@
 /// longest paths; paths shorter than `minChainLength` spacings (spurs, isolated detections) are dropped.
 /// sampleFeatureChains() places samples along the chains at a fixed arc-length spacing, on the crease;
 /// snapToCreases() then moves each onto its two sheets' local plane intersection (or drops it where it would sit
-/// off the surface) and adds corner samples — the samples the resampler holds with `--sharp-edges`.
+/// off the surface), traces the chains' ends along their creases into the corners (and the corners' other
+/// creases) and adds corner samples — the samples the resampler holds with `--sharp-edges`.
 
 #include <Eigen/Core>
 #include <array>
@@ -120,17 +124,32 @@ std::vector<Eigen::Vector3d> sampleFeatureChains(const std::vector<FeatureChain>
 ///     its chain (within maxChainTurn); failing that, a looser fit (any angle, 2× residual, half the cluster
 ///     share) may correct it by at most h/4.
 ///  2. A sample where that fit fails the detector's thresholds goes onto the chord between the nearest fitted
-///     samples of its chain (at most 3 away on each side); without both it is dropped (a chain end extended
-///     past the feature would sit off the surface).
-///  3. Where two chains' end lines, continued, meet within 3·radius spacings of both ends and within
-///     params.maxOffCrease spacings of an input point, a corner sample is added there, and the gap from each
-///     of those chain ends to the corner gets samples at the chain's spacing on the straight line.
+///     samples of its chain (at most 3 away on each side) if the chord's sagitta, L·θ/8 (θ the turn between the
+///     two fits' crease directions), is below maxResidual spacings; otherwise it is dropped (a chain end
+///     extended past the feature would sit off the surface; a chord across a bend would cut inside it).
+///  3. Tracing: each chain's samples are split where samples were dropped (gaps over 1.6 × the chain's median
+///     spacing), and every piece's ends (a lone sample: both ways along its own crease) are continued along the
+///     crease: step one spacing along the last crease direction, fit the two sheets there (the snap fit; on the
+///     half-ball behind the prediction where the full ball fails), place the sample one step on along the fitted
+///     line; stop where the fit fails (over one or two failed steps the trace may resume), where the fit lands
+///     more than half a step (+ h/4) off the prediction, or where a sample is already within 0.75 steps (the gap
+///     is bridged). Near a corner the points ahead that neither plane explains (3·maxResidual off both, a normal
+///     unlike both) fit a third plane: the corner is the three planes' intersection (refined by reassigning the
+///     points around it to the nearest plane, twice), the gap to it is filled, and the corner's two other creases
+///     (the third plane with each sheet, on the side where the sheet lies) are followed along those planes while
+///     the points around stay explained by them, handing over to the stepped fit once it holds. Traced
+///     branches get chain indices after the given ones. Sequential in a fixed order: deterministic.
+///  4. Where two chains' end lines, continued, meet within 3·radius spacings of both ends and within
+///     params.maxOffCrease spacings of an input point, and no sample is within half a spacing of it (tracing
+///     placed most corners already), a corner sample is added there, and the gap from each of those chain ends
+///     to the corner gets samples at the chain's spacing on the straight line.
 /// @param chainOfSample the chain index of each sample (sampleFeatureChains' output: a chain's samples are
 ///     consecutive and in order)
 /// @param spacing the input spacing h (FeatureResult::spacing)
 /// @param[out] chainOut (optional) the chain index of each returned sample (a corner: one of its two chains)
-/// @return the kept samples in order, then the corners and their gap samples
-/// @note O(samples · m log n + ends²), m the neighbours in the radius. Deterministic for any thread count.
+/// @return the kept and traced samples, chain by chain in order, then the corners of step 4 and their gap samples
+/// @note O(samples · m log n + ends² + traced · samples), m the neighbours in the radius. Deterministic for any
+/// thread count.
 std::vector<Eigen::Vector3d> snapToCreases(const PointCloud& cloud, const std::vector<Eigen::Vector3d>& samples,
                                            const std::vector<std::uint32_t>& chainOfSample, double spacing,
                                            const FeatureParams& params,
