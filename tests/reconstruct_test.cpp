@@ -110,6 +110,48 @@ TEST(MeshRepair, FillsSmallHoleKeepsLargeOne) {
   EXPECT_TRUE(after.manifold);
 }
 
+// A hole that is a sliver along an edge (a T-junction: k vertices just off the edge (v, far) on one side, the
+// face across it on the other), as hole filling meets where a loop runs out along a knife edge, is zipped shut:
+// the face across the long edge is split at the vertices off it, instead of filling the sliver with slivers.
+TEST(MeshRepair, ZipsSliverHoleAlongAnEdge) {
+  PointCloud c;
+  c.points = test::fibonacciSphere(3000);
+  c.normals = c.points;
+  const TriangleMesh sphere = triangulateLocal(c).mesh;
+  ASSERT_TRUE(evaluateMesh(sphere).closed);
+  for (int k = 1; k <= 2; ++k) {
+    TriangleMesh m = sphere;
+    const Eigen::Vector3i face = m.triangles[100];
+    const int v = face[0], far = face[1], x = face[2];
+    // Replace face (v, far, x) by a fan from x over v, the k new vertices, far.
+    std::vector<int> chain{v};
+    for (int i = 1; i <= k; ++i) {
+      const double t = static_cast<double>(i) / (k + 1);
+      const Eigen::Vector3d p = (1 - t) * m.vertices[v] + t * m.vertices[far];
+      m.vertices.push_back((p + 0.08 * (m.vertices[x] - p)).normalized());
+      chain.push_back(static_cast<int>(m.vertices.size() - 1));
+    }
+    chain.push_back(far);
+    m.triangles[100] = Eigen::Vector3i(chain[0], chain[1], x);
+    for (std::size_t i = 1; i + 1 < chain.size(); ++i) m.triangles.emplace_back(chain[i], chain[i + 1], x);
+    const MeshQuality before = evaluateMesh(m);
+    ASSERT_EQ(before.boundaryLoops, 1u);
+    ASSERT_EQ(before.boundaryEdges, static_cast<std::size_t>(k + 2));
+    std::vector<Eigen::Vector3d> normals(m.vertices.begin(), m.vertices.end());
+    const std::size_t vertices = m.vertices.size();
+    const HoleFillingReport r = fillSmallHoles(m, normals);
+    EXPECT_EQ(r.filled, 1u) << "k = " << k;
+    EXPECT_EQ(r.zipped, static_cast<std::size_t>(k)) << "k = " << k;
+    EXPECT_EQ(m.vertices.size(), vertices) << "k = " << k;
+    const MeshQuality after = evaluateMesh(m);
+    EXPECT_TRUE(after.closed) << "k = " << k;
+    EXPECT_TRUE(after.oriented) << "k = " << k;
+    EXPECT_TRUE(after.manifold) << "k = " << k;
+    EXPECT_EQ(after.euler, 2) << "k = " << k;
+    EXPECT_GE(after.qualityMin, 0.3) << "k = " << k;  // filling the sliver instead: Q ≈ 0.1
+  }
+}
+
 // A sample crowded onto its neighbour (slivers) is moved or removed; a spike (a vertex 5 l off its neighbours'
 // surface, thin triangles too) is kept: changing it would move the surface by more than 0.25 l — unless allowed.
 TEST(MeshRepair, RepairsCrowdedVertexKeepsSpike) {
