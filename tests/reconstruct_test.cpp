@@ -110,6 +110,46 @@ TEST(MeshRepair, FillsSmallHoleKeepsLargeOne) {
   EXPECT_TRUE(after.manifold);
 }
 
+// A hole a little over the small-loop limit (17–24 edges) is closed when its fill is good (goodFillFactor), and
+// kept with the factor at 1; the large cap stays open either way.
+TEST(MeshRepair, ClosesSlightlyLargerHoleWhenTheFillIsGood) {
+  PointCloud c;
+  c.points = test::fibonacciSphere(3000);
+  c.normals = c.points;
+  TriangleMesh m = triangulateLocal(c).mesh;
+  // The hole: a strip about one edge wide along the equator (as at a sharp rim), about 9 edges long.
+  std::vector<Eigen::Vector3i> kept;
+  for (const auto& t : m.triangles) {
+    const Eigen::Vector3d centre = (m.vertices[t[0]] + m.vertices[t[1]] + m.vertices[t[2]]) / 3.0;
+    bool cap = false;
+    for (int k = 0; k < 3; ++k) cap = cap || m.vertices[t[k]].z() < -0.8;
+    if (!(std::abs(centre.z()) < 0.05 && centre.x() > 0.95) && !cap) kept.push_back(t);
+  }
+  m.triangles = kept;
+  const MeshQuality before = evaluateMesh(m);
+  ASSERT_EQ(before.boundaryLoops, 2u);
+  TriangleMesh strict = m;
+  std::vector<Eigen::Vector3d> normals = c.normals, strictNormals = c.normals;
+  const HoleFillingReport r = fillSmallHoles(m, normals);
+  EXPECT_EQ(r.filled, 1u);
+  EXPECT_EQ(r.kept, 1u);
+  const MeshQuality after = evaluateMesh(m);
+  EXPECT_EQ(after.boundaryLoops, 1u);
+  const std::size_t holeEdges = before.boundaryEdges - after.boundaryEdges;
+  EXPECT_GT(holeEdges, 16u);  // over maxEdges ...
+  EXPECT_LE(holeEdges, 24u);  // ... within 1.5 × maxEdges
+  EXPECT_GE(after.qualityMin, 0.4);
+  EXPECT_TRUE(after.oriented);
+  EXPECT_TRUE(after.manifold);
+  HoleFillingParams off;
+  off.goodFillFactor = 1.0;
+  const HoleFillingReport s = fillSmallHoles(strict, strictNormals, off);
+  EXPECT_EQ(s.filled, 0u);
+  EXPECT_EQ(evaluateMesh(strict).boundaryLoops, 2u);
+  off.goodFillFactor = 0.5;
+  EXPECT_THROW(off.validate(), std::invalid_argument);
+}
+
 // A hole that is a sliver along an edge (a T-junction: k vertices just off the edge (v, far) on one side, the
 // face across it on the other), as hole filling meets where a loop runs out along a knife edge, is zipped shut:
 // the face across the long edge is split at the vertices off it, instead of filling the sliver with slivers.

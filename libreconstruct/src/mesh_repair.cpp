@@ -129,6 +129,7 @@ void HoleFillingParams::validate() const {
   if (maxEdges < 3) throw std::invalid_argument("hole filling: maxEdges must be at least 3");
   if (!(maxPerimeter > 0)) throw std::invalid_argument("hole filling: maxPerimeter must be positive");
   if (!(minQuality >= 0 && minQuality <= 1)) throw std::invalid_argument("hole filling: minQuality must be in [0, 1]");
+  if (!(goodFillFactor >= 1)) throw std::invalid_argument("hole filling: goodFillFactor must be at least 1");
 }
 
 HoleFillingReport fillSmallHoles(TriangleMesh& mesh, std::vector<Eigen::Vector3d>& normals,
@@ -295,7 +296,11 @@ HoleFillingReport fillSmallHoles(TriangleMesh& mesh, std::vector<Eigen::Vector3d
     double perimeter = 0;
     for (std::size_t i = 0; i < loop.size(); ++i)
       perimeter += (mesh.vertices[loop[i]] - mesh.vertices[loop[(i + 1) % loop.size()]]).norm();
-    if (loop.size() < 3 || loop.size() > params.maxEdges || perimeter > params.maxPerimeter * meanEdge) {
+    const bool small = loop.size() <= params.maxEdges && perimeter <= params.maxPerimeter * meanEdge;
+    const bool medium = !small &&
+                        static_cast<double>(loop.size()) <= params.goodFillFactor * static_cast<double>(params.maxEdges) &&
+                        perimeter <= params.goodFillFactor * params.maxPerimeter * meanEdge;
+    if (loop.size() < 3 || !(small || medium)) {
       ++report.kept;
       continue;
     }
@@ -336,6 +341,16 @@ HoleFillingReport fillSmallHoles(TriangleMesh& mesh, std::vector<Eigen::Vector3d
     if (!dp && !useFan) {
       faces.clear();
       if (!triangulatePolygon(mesh, normals, loop, edges, false, faces)) {
+        ++report.kept;
+        continue;
+      }
+    }
+    if (medium) {  // closed only when the fill is good
+      double worst = useFan ? fanQuality : 1.0;
+      if (!useFan)
+        for (const auto& t : faces)
+          worst = std::min(worst, triangleQuality(mesh.vertices[vtx(t, 0)], mesh.vertices[vtx(t, 1)], mesh.vertices[vtx(t, 2)]));
+      if (worst < params.minQuality) {
         ++report.kept;
         continue;
       }
