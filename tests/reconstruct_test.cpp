@@ -110,6 +110,88 @@ TEST(MeshRepair, FillsSmallHoleKeepsLargeOne) {
   EXPECT_TRUE(after.manifold);
 }
 
+// A hole a little over the small-loop limit (17–24 edges) is closed when its fill is good (goodFillFactor), and
+// kept with the factor at 1; the large cap stays open either way.
+TEST(MeshRepair, ClosesSlightlyLargerHoleWhenTheFillIsGood) {
+  PointCloud c;
+  c.points = test::fibonacciSphere(3000);
+  c.normals = c.points;
+  TriangleMesh m = triangulateLocal(c).mesh;
+  // The hole: a strip about one edge wide along the equator (as at a sharp rim), about 9 edges long.
+  std::vector<Eigen::Vector3i> kept;
+  for (const auto& t : m.triangles) {
+    const Eigen::Vector3d centre = (m.vertices[t[0]] + m.vertices[t[1]] + m.vertices[t[2]]) / 3.0;
+    bool cap = false;
+    for (int k = 0; k < 3; ++k) cap = cap || m.vertices[t[k]].z() < -0.8;
+    if (!(std::abs(centre.z()) < 0.05 && centre.x() > 0.95) && !cap) kept.push_back(t);
+  }
+  m.triangles = kept;
+  const MeshQuality before = evaluateMesh(m);
+  ASSERT_EQ(before.boundaryLoops, 2u);
+  TriangleMesh strict = m;
+  std::vector<Eigen::Vector3d> normals = c.normals, strictNormals = c.normals;
+  const HoleFillingReport r = fillSmallHoles(m, normals);
+  EXPECT_EQ(r.filled, 1u);
+  EXPECT_EQ(r.kept, 1u);
+  const MeshQuality after = evaluateMesh(m);
+  EXPECT_EQ(after.boundaryLoops, 1u);
+  const std::size_t holeEdges = before.boundaryEdges - after.boundaryEdges;
+  EXPECT_GT(holeEdges, 16u);  // over maxEdges ...
+  EXPECT_LE(holeEdges, 24u);  // ... within 1.5 × maxEdges
+  EXPECT_GE(after.qualityMin, 0.4);
+  EXPECT_TRUE(after.oriented);
+  EXPECT_TRUE(after.manifold);
+  HoleFillingParams off;
+  off.goodFillFactor = 1.0;
+  const HoleFillingReport s = fillSmallHoles(strict, strictNormals, off);
+  EXPECT_EQ(s.filled, 0u);
+  EXPECT_EQ(evaluateMesh(strict).boundaryLoops, 2u);
+  off.goodFillFactor = 0.5;
+  EXPECT_THROW(off.validate(), std::invalid_argument);
+}
+
+// A hole that is a sliver along an edge (a T-junction: k vertices just off the edge (v, far) on one side, the
+// face across it on the other), as hole filling meets where a loop runs out along a knife edge, is zipped shut:
+// the face across the long edge is split at the vertices off it, instead of filling the sliver with slivers.
+TEST(MeshRepair, ZipsSliverHoleAlongAnEdge) {
+  PointCloud c;
+  c.points = test::fibonacciSphere(3000);
+  c.normals = c.points;
+  const TriangleMesh sphere = triangulateLocal(c).mesh;
+  ASSERT_TRUE(evaluateMesh(sphere).closed);
+  for (int k = 1; k <= 2; ++k) {
+    TriangleMesh m = sphere;
+    const Eigen::Vector3i face = m.triangles[100];
+    const int v = face[0], far = face[1], x = face[2];
+    // Replace face (v, far, x) by a fan from x over v, the k new vertices, far.
+    std::vector<int> chain{v};
+    for (int i = 1; i <= k; ++i) {
+      const double t = static_cast<double>(i) / (k + 1);
+      const Eigen::Vector3d p = (1 - t) * m.vertices[v] + t * m.vertices[far];
+      m.vertices.push_back((p + 0.08 * (m.vertices[x] - p)).normalized());
+      chain.push_back(static_cast<int>(m.vertices.size() - 1));
+    }
+    chain.push_back(far);
+    m.triangles[100] = Eigen::Vector3i(chain[0], chain[1], x);
+    for (std::size_t i = 1; i + 1 < chain.size(); ++i) m.triangles.emplace_back(chain[i], chain[i + 1], x);
+    const MeshQuality before = evaluateMesh(m);
+    ASSERT_EQ(before.boundaryLoops, 1u);
+    ASSERT_EQ(before.boundaryEdges, static_cast<std::size_t>(k + 2));
+    std::vector<Eigen::Vector3d> normals(m.vertices.begin(), m.vertices.end());
+    const std::size_t vertices = m.vertices.size();
+    const HoleFillingReport r = fillSmallHoles(m, normals);
+    EXPECT_EQ(r.filled, 1u) << "k = " << k;
+    EXPECT_EQ(r.zipped, static_cast<std::size_t>(k)) << "k = " << k;
+    EXPECT_EQ(m.vertices.size(), vertices) << "k = " << k;
+    const MeshQuality after = evaluateMesh(m);
+    EXPECT_TRUE(after.closed) << "k = " << k;
+    EXPECT_TRUE(after.oriented) << "k = " << k;
+    EXPECT_TRUE(after.manifold) << "k = " << k;
+    EXPECT_EQ(after.euler, 2) << "k = " << k;
+    EXPECT_GE(after.qualityMin, 0.3) << "k = " << k;  // filling the sliver instead: Q ≈ 0.1
+  }
+}
+
 // A sample crowded onto its neighbour (slivers) is moved or removed; a spike (a vertex 5 l off its neighbours'
 // surface, thin triangles too) is kept: changing it would move the surface by more than 0.25 l — unless allowed.
 TEST(MeshRepair, RepairsCrowdedVertexKeepsSpike) {

@@ -34,7 +34,7 @@ int main(int argc, char** argv) {
     app.add_option("--method", method, "triangulation: local (default) or advancing-front")
         ->check(CLI::IsMember({"local", "advancing-front"}));
     app.add_flag("--no-hole-filling", noHoles, "leave small holes open");
-    app.add_option("--max-hole-edges", params.holes.maxEdges, "close holes of at most this many edges (>= 3)");
+    app.add_option("--max-hole-edges", params.holes.maxEdges, "close holes of at most this many edges (>= 3; up to 1.5x that when the fill is good, Q >= 0.4)");
     app.add_option("--quality-only", qualityOnly,
                    "report on this existing mesh (INPUT is the reference cloud); no OUTPUT_MESH");
     app.add_option("--report", reportPath, "write the report as JSON to this file");

@@ -129,6 +129,7 @@ void HoleFillingParams::validate() const {
   if (maxEdges < 3) throw std::invalid_argument("hole filling: maxEdges must be at least 3");
   if (!(maxPerimeter > 0)) throw std::invalid_argument("hole filling: maxPerimeter must be positive");
   if (!(minQuality >= 0 && minQuality <= 1)) throw std::invalid_argument("hole filling: minQuality must be in [0, 1]");
+  if (!(goodFillFactor >= 1)) throw std::invalid_argument("hole filling: goodFillFactor must be at least 1");
 }
 
 HoleFillingReport fillSmallHoles(TriangleMesh& mesh, std::vector<Eigen::Vector3d>& normals,
@@ -227,13 +228,85 @@ HoleFillingReport fillSmallHoles(TriangleMesh& mesh, std::vector<Eigen::Vector3d
       }
       loops.push_back(stack);
     }
-  for (const auto& loop : loops) {
+  // Boundary face of each boundary edge; indices ≥ T.size() are faces in `added`.
+  std::unordered_map<std::uint64_t, std::size_t> boundaryFace;
+  for (std::size_t f = 0; f < mesh.triangles.size(); ++f)
+    for (int c = 0; c < 3; ++c) {
+      const std::uint32_t a = vtx(mesh.triangles[f], c), b = vtx(mesh.triangles[f], (c + 1) % 3);
+      if (count[undirectedKey(a, b)] == 1) boundaryFace[undirectedKey(a, b)] = f;
+    }
+  auto faceAt = [&](std::size_t f) -> Eigen::Vector3i& {
+    return f < mesh.triangles.size() ? mesh.triangles[f] : added[f - mesh.triangles.size()];
+  };
+  // Zip a corner of the loop where it turns back on itself (a near-zero angle at v between its loop edges to u
+  // and w, e.g. where a hole runs out along a knife edge): the nearer neighbour is inserted into the longer edge,
+  // whose face is split in two, so v leaves the loop instead of ending up in a sliver.
+  auto zip = [&](std::vector<std::uint32_t>& loop) {
+    const auto& P = mesh.vertices;
+    for (bool again = true; again && loop.size() >= 3;) {
+      again = false;
+      for (std::size_t i = 0; i < loop.size() && loop.size() >= 3; ++i) {
+        const std::uint32_t u = loop[(i + loop.size() - 1) % loop.size()], v = loop[i], w = loop[(i + 1) % loop.size()];
+        const bool nearIsW = (P[w] - P[v]).norm() < (P[u] - P[v]).norm();
+        const std::uint32_t near = nearIsW ? w : u, far = nearIsW ? u : w;
+        const Eigen::Vector3d d = P[far] - P[v], e = P[near] - P[v];
+        if (!(e.norm() > 0) || e.normalized().dot(d.normalized()) < std::cos(15.0 * M_PI / 180.0)) continue;
+        const auto it = boundaryFace.find(undirectedKey(v, far));
+        if (it == boundaryFace.end()) continue;
+        const Eigen::Vector3i old = faceAt(it->second);
+        int c = 0;
+        while (!((vtx(old, c) == v || vtx(old, c) == far) && (vtx(old, (c + 1) % 3) == v || vtx(old, (c + 1) % 3) == far))) ++c;
+        const std::uint32_t s = vtx(old, c), t = vtx(old, (c + 1) % 3), x = vtx(old, (c + 2) % 3);
+        if (x == near || edges.count(undirectedKey(near, x)) || count[undirectedKey(s, x)] != 2 ||
+            count[undirectedKey(t, x)] != 2)
+          continue;
+        const Eigen::Vector3d n0 = faceNormal(mesh, s, t, x).normalized();
+        const Eigen::Vector3i first(static_cast<int>(s), static_cast<int>(near), static_cast<int>(x)),
+            second(static_cast<int>(near), static_cast<int>(t), static_cast<int>(x));
+        bool ok = true;
+        for (const auto& f : {first, second})
+          ok = ok && triangleQuality(P[vtx(f, 0)], P[vtx(f, 1)], P[vtx(f, 2)]) >= 0.2 &&
+               faceNormal(mesh, vtx(f, 0), vtx(f, 1), vtx(f, 2)).normalized().dot(n0) > 0.5;
+        if (!ok) continue;
+        const std::size_t oldIndex = it->second, newIndex = mesh.triangles.size() + added.size();
+        faceAt(oldIndex) = first;
+        added.push_back(second);
+        boundaryFace.erase(undirectedKey(v, far));
+        boundaryFace.erase(undirectedKey(v, near));
+        count[undirectedKey(v, near)] = 2, count[undirectedKey(near, x)] = 2;
+        edges.insert(undirectedKey(near, x)), edges.insert(undirectedKey(u, w));
+        if (loop.size() == 3) {  // a sliver hole (a T-junction): the zip closes it
+          count[undirectedKey(u, w)] = 2;
+          boundaryFace.erase(undirectedKey(u, w));
+        } else {
+          count[undirectedKey(u, w)] = 1;
+          boundaryFace[undirectedKey(u, w)] = nearIsW ? newIndex : oldIndex;
+          const Eigen::Vector3i& keeper = nearIsW ? second : first;
+          boundaryNormal[directedKey(w, u)] = faceNormal(mesh, vtx(keeper, 0), vtx(keeper, 1), vtx(keeper, 2)).normalized();
+        }
+        loop.erase(loop.begin() + static_cast<std::ptrdiff_t>(i));
+        ++report.zipped;
+        again = true;
+        break;
+      }
+    }
+  };
+  for (auto loop : loops) {
     ++report.loops;
     double perimeter = 0;
     for (std::size_t i = 0; i < loop.size(); ++i)
       perimeter += (mesh.vertices[loop[i]] - mesh.vertices[loop[(i + 1) % loop.size()]]).norm();
-    if (loop.size() < 3 || loop.size() > params.maxEdges || perimeter > params.maxPerimeter * meanEdge) {
+    const bool small = loop.size() <= params.maxEdges && perimeter <= params.maxPerimeter * meanEdge;
+    const bool medium = !small &&
+                        static_cast<double>(loop.size()) <= params.goodFillFactor * static_cast<double>(params.maxEdges) &&
+                        perimeter <= params.goodFillFactor * params.maxPerimeter * meanEdge;
+    if (loop.size() < 3 || !(small || medium)) {
       ++report.kept;
+      continue;
+    }
+    zip(loop);
+    if (loop.size() < 3) {  // zipped shut
+      ++report.filled;
       continue;
     }
     // Best: no new vertex and faces agreeing with the normals; then without the normal test (a corner of
@@ -272,6 +345,16 @@ HoleFillingReport fillSmallHoles(TriangleMesh& mesh, std::vector<Eigen::Vector3d
         continue;
       }
     }
+    if (medium) {  // closed only when the fill is good
+      double worst = useFan ? fanQuality : 1.0;
+      if (!useFan)
+        for (const auto& t : faces)
+          worst = std::min(worst, triangleQuality(mesh.vertices[vtx(t, 0)], mesh.vertices[vtx(t, 1)], mesh.vertices[vtx(t, 2)]));
+      if (worst < params.minQuality) {
+        ++report.kept;
+        continue;
+      }
+    }
     if (useFan) {
       faces.clear();
       const auto c = static_cast<int>(mesh.vertices.size());
@@ -286,7 +369,7 @@ HoleFillingReport fillSmallHoles(TriangleMesh& mesh, std::vector<Eigen::Vector3d
     added.insert(added.end(), faces.begin(), faces.end());
     ++report.filled;
   }
-  report.facesAdded = added.size();
+  report.facesAdded = added.size();  // with the zips' extra faces
   mesh.triangles.insert(mesh.triangles.end(), added.begin(), added.end());
   return report;
 }

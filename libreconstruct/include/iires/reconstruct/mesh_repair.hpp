@@ -18,6 +18,10 @@ struct HoleFillingParams {
   double maxPerimeter = 20.0;  ///< ... and a perimeter of at most this × the mesh's mean edge length (> 0)
   double minQuality = 0.4;     ///< a fan around a new centroid vertex replaces a triangulation of the loop's own
                                ///< vertices whose worst Q is below this, when the fan's worst Q is better (0–1)
+  /// Loops up to this factor longer (in edges and perimeter) are closed too when the fill chosen for them (as for
+  /// a small loop) has a worst Q of at least minQuality — holes the local method leaves at a sharp rim, e.g. 18–20
+  /// edges on hand 20k's wrist cap for some samplings, fill well; 1 = off (≥ 1)
+  double goodFillFactor = 1.5;
 
   /// @throws std::invalid_argument when a field is out of range.
   void validate() const;
@@ -30,6 +34,7 @@ struct HoleFillingReport {
   std::size_t kept = 0;        ///< loops left open (too long, not simple, or no valid triangulation)
   std::size_t facesAdded = 0;  ///< triangles added
   std::size_t verticesAdded = 0;  ///< centroid vertices added (loops whose every diagonal already existed)
+  std::size_t zipped = 0;      ///< loop corners zipped (a face split where the loop turned back on itself)
 };
 
 /// @brief Close the small boundary loops of @p mesh without new vertices: each loop gets the triangulation
@@ -41,8 +46,12 @@ struct HoleFillingReport {
 /// When the best triangulation under the normal test is still below params.minQuality, the best one without it is
 /// taken if better and none of its faces folds back onto the face across a loop edge (normals are unreliable where
 /// a loop closes over a part thinner than the spacing, e.g. a fingertip).
+/// Before a loop is triangulated, each corner where it turns back on itself (its two loop edges within 15° of each
+/// other, e.g. a hole running out along a knife edge, or a T-junction) is zipped: the nearer neighbour is inserted
+/// into the longer edge by splitting the face across that edge in two (when both halves have Q ≥ 0.2 and keep its
+/// normal), so the corner vertex leaves the loop instead of ending up in slivers; a 3-edge sliver loop closes so.
 /// New faces follow the loop's orientation.
-/// @note O(loops · m³) with m ≤ maxEdges. Deterministic.
+/// @note O(loops · m³) with m ≤ goodFillFactor · maxEdges. Deterministic.
 HoleFillingReport fillSmallHoles(TriangleMesh& mesh, std::vector<Eigen::Vector3d>& normals,
                                  const HoleFillingParams& params = {});
 
