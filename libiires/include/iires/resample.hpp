@@ -39,7 +39,7 @@ struct ResampleParams {
   double collapseRatio = 0.8;       ///< collapse edges shorter than collapseRatio·l [0.8]
   int maxPasses = 5;                ///< split/collapse + relaxation passes (count control, then clean-up at N)
   int relaxPerPass = 2;             ///< Lloyd iterations after each pass's edge operations
-  double maxEditShare = 0.005;      ///< at N, a pass replaces at most this share of samples (collapse + split)
+  double maxEditShare = 0.01;       ///< at N, a pass replaces at most this share of samples (collapse + split)
   int maxRelaxIterations = 8;       ///< cap on the final Lloyd relaxation iterations (run in rounds of 4)
   int relaxPatience = 1;            ///< stop the final relaxation after this many rounds without a better CV
   double overRelaxation = 1.5;      ///< Lloyd step factor ω: move to p + ω(c − p); 1 = plain Lloyd, < 2
