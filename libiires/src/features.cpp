@@ -726,6 +726,10 @@ void traceChainEnds(const PointCloud& cloud, const KnnIndex& index, double h, co
     }
   }
   std::vector<Eigen::Vector3d> all(out);  // every sample placed so far (brute-force proximity: a few thousand)
+  // Never more crease samples than input points (they are spaced at least a chain step apart): past that, no job
+  // steps on. Bounds the work on degenerate input (a fuzzer find: branches spawning branches along a crease of
+  // tiny steps ran for minutes) and nearPlaced()'s brute force.
+  const std::size_t budget = out.size() + cloud.points.size() + 64;
   const double cosTurn = std::cos(params.maxChainTurn * kDeg);
   std::vector<std::uint32_t> idx, behind, ahead;
   std::vector<double> d2;
@@ -758,7 +762,7 @@ void traceChainEnds(const PointCloud& cloud, const KnnIndex& index, double h, co
     }
     return ok;
   };
-  for (std::size_t jb = 0; jb < jobs.size(); ++jb) {
+  for (std::size_t jb = 0; jb < jobs.size() && all.size() <= budget; ++jb) {
     const Job job = jobs[jb];
     std::vector<Eigen::Vector3d> added;
     Eigen::Vector3d tip = job.tip, dir = job.dir;
@@ -907,7 +911,7 @@ void traceChainEnds(const PointCloud& cloud, const KnnIndex& index, double h, co
                 Eigen::Vector3d bt = corner;
                 bool handOver = false;
                 Crease bc;
-                for (int k = 1; k * step <= 3.0 * params.radius * hc; ++k) {
+                for (int k = 1; k * step <= 3.0 * params.radius * hc && all.size() <= budget; ++k) {
                   Eigen::Vector3d by = corner + (k * step) * u;
                   if (nearPlaced(by, bt, step)) break;
                   double nb = 0;
@@ -954,7 +958,7 @@ void traceChainEnds(const PointCloud& cloud, const KnnIndex& index, double h, co
       bool one = false;
       if (!fitAt(y, dir, last, one) || one) last.valid = false;
     }
-    for (int guard = 0; guard < 100000; ++guard) {
+    for (int guard = 0; guard < 100000 && all.size() <= budget; ++guard) {
       const Eigen::Vector3d predicted = tip + step * dir;
       Eigen::Vector3d y = predicted;
       Crease c;
