@@ -48,6 +48,14 @@ void expectClosedGenus(const MeshQuality& q, long long euler) {
   EXPECT_EQ(q.euler, euler);
 }
 
+/// The local triangulation of a 3,000-point Fibonacci unit sphere (outward normals, its cloud in @p cloud): a
+/// closed mesh to punch holes in.
+TriangleMesh sphereMesh(PointCloud& cloud) {
+  cloud.points = test::fibonacciSphere(3000);
+  cloud.normals = cloud.points;
+  return triangulateLocal(cloud).mesh;
+}
+
 TEST(Triangulate, FibonacciSphereIsClosedWithoutRepair) {
   PointCloud c;
   c.points = test::fibonacciSphere(3000);
@@ -86,9 +94,7 @@ TEST(Triangulate, RejectsBadInput) {
 
 TEST(MeshRepair, FillsSmallHoleKeepsLargeOne) {
   PointCloud c;
-  c.points = test::fibonacciSphere(3000);
-  c.normals = c.points;
-  TriangleMesh m = triangulateLocal(c).mesh;
+  TriangleMesh m = sphereMesh(c);
   // Punch a small hole (the faces of one vertex) near the north pole, a large one (a cap) at the south pole.
   std::vector<Eigen::Vector3i> kept;
   for (const auto& t : m.triangles) {
@@ -114,9 +120,7 @@ TEST(MeshRepair, FillsSmallHoleKeepsLargeOne) {
 // kept with the factor at 1; the large cap stays open either way.
 TEST(MeshRepair, ClosesSlightlyLargerHoleWhenTheFillIsGood) {
   PointCloud c;
-  c.points = test::fibonacciSphere(3000);
-  c.normals = c.points;
-  TriangleMesh m = triangulateLocal(c).mesh;
+  TriangleMesh m = sphereMesh(c);
   // The hole: a strip about one edge wide along the equator (as at a sharp rim), about 9 edges long.
   std::vector<Eigen::Vector3i> kept;
   for (const auto& t : m.triangles) {
@@ -155,9 +159,7 @@ TEST(MeshRepair, ClosesSlightlyLargerHoleWhenTheFillIsGood) {
 // the face across the long edge is split at the vertices off it, instead of filling the sliver with slivers.
 TEST(MeshRepair, ZipsSliverHoleAlongAnEdge) {
   PointCloud c;
-  c.points = test::fibonacciSphere(3000);
-  c.normals = c.points;
-  const TriangleMesh sphere = triangulateLocal(c).mesh;
+  const TriangleMesh sphere = sphereMesh(c);
   ASSERT_TRUE(evaluateMesh(sphere).closed);
   for (int k = 1; k <= 2; ++k) {
     TriangleMesh m = sphere;
@@ -196,9 +198,7 @@ TEST(MeshRepair, ZipsSliverHoleAlongAnEdge) {
 // surface, thin triangles too) is kept: changing it would move the surface by more than 0.25 l — unless allowed.
 TEST(MeshRepair, RepairsCrowdedVertexKeepsSpike) {
   PointCloud c;
-  c.points = test::fibonacciSphere(3000);
-  c.normals = c.points;
-  TriangleMesh m = triangulateLocal(c).mesh;
+  TriangleMesh m = sphereMesh(c);
   ASSERT_TRUE(evaluateMesh(m).closed);
   const double l = evaluateMesh(m).meanEdgeLength;
   int crowdedOnto = -1;
