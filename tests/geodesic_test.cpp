@@ -155,6 +155,18 @@ TEST_P(UStrip, GraphFollowsTheFold) {
 
 INSTANTIATE_TEST_SUITE_P(WithAndWithoutNormals, UStrip, ::testing::Bool());
 
+// Neighbour lists borrowed from a table over the caller's (unsorted) order give the graph of the own search.
+TEST(Geodesic, BorrowedNeighbourTableGivesTheSameCoordinates) {
+  const PointCloud c = uStrip(15000, 0.05, 9);
+  const iires::KnnIndex index(c.points);
+  const iires::NeighbourTable table(index, c.points, 17);
+  const GeodesicCoordinates own(c), borrowed(c, {}, &table);
+  EXPECT_EQ(own.edges(), borrowed.edges());
+  EXPECT_EQ(own.coordinates(), borrowed.coordinates());
+  const iires::NeighbourTable tooShort(index, c.points, 8);  // fewer than k + 1: not used
+  EXPECT_EQ(GeodesicCoordinates(c, {}, &tooShort).coordinates(), own.coordinates());
+}
+
 TEST(Geodesic, DeterministicForAnyThreadCount) {
   PointCloud c = uStrip(15000, 0.05, 9);
   GeodesicParams p;

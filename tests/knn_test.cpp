@@ -53,4 +53,28 @@ TEST(KnnIndex, SmallAndEmptySets) {
   EXPECT_EQ(idx[0], 1u);
 }
 
+TEST(NeighbourTable, PrefixesAreTheTreesAnswers) {
+  const auto pts = randomPoints(3000, 9);
+  const iires::KnnIndex index(pts);
+  const iires::NeighbourTable table(index, pts, 25, 2);
+  ASSERT_EQ(table.size(), pts.size());
+  EXPECT_EQ(table.k(), 25u);
+  std::vector<std::uint32_t> idx, want;
+  std::vector<double> d2, wantD2;
+  for (std::size_t i = 0; i < pts.size(); i += 7)
+    for (std::size_t k : {1, 9, 17, 25}) {
+      ASSERT_EQ(table.get(i, k, idx, d2), k);
+      index.knn(pts[i], k, want, wantD2);
+      EXPECT_EQ(idx, want) << "point " << i << ", k " << k;
+      EXPECT_EQ(d2, wantD2) << "point " << i << ", k " << k;  // the same arithmetic as the tree's
+    }
+  // A set smaller than k: every row holds all points.
+  const std::vector<Eigen::Vector3d> three{{0, 0, 0}, {1, 0, 0}, {3, 0, 0}};
+  const iires::KnnIndex small(three);
+  const iires::NeighbourTable rows(small, three, 8);
+  EXPECT_EQ(rows.get(2, 8, idx, d2), 3u);
+  EXPECT_EQ(idx, (std::vector<std::uint32_t>{2, 1, 0}));
+  EXPECT_EQ(d2, (std::vector<double>{0, 4, 9}));
+}
+
 }  // namespace

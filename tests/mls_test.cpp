@@ -43,9 +43,11 @@ TEST(MlsSurface, BorrowedIndexAndSingleStepProjection) {
   const auto cloud = iires::test::sphereCloud(20000, 1.0, 12);
   const iires::KnnIndex index(cloud.points);
   const iires::MlsSurface own(cloud.points, cloud.normals);
-  const iires::MlsSurface borrowed(cloud.points, cloud.normals, {}, &index);
+  const iires::NeighbourTable table(index, cloud.points, 9);
+  const iires::MlsSurface borrowed(cloud.points, cloud.normals, {}, &index, &table);
   EXPECT_EQ(&borrowed.index(), &index);
-  EXPECT_DOUBLE_EQ(own.area(), borrowed.area());
+  EXPECT_DOUBLE_EQ(own.area(), borrowed.area());  // the kernel widths from the table are the tree's
+  EXPECT_DOUBLE_EQ(own.meanSpacing(), borrowed.meanSpacing());
   std::mt19937_64 rng(4);
   std::normal_distribution<double> g(0.0, 1.0);
   double worstStep = 0;

@@ -147,14 +147,19 @@ MlsPlane fitMlsPlane(const Eigen::Vector3d& p, const std::vector<Eigen::Vector3d
                           pointNormal, sharpness);
 }
 
-DenoiseResult denoise(const PointCloud& input, const DenoiseParams& params, const KnnIndex* givenIndex) {
+std::size_t denoiseNeighbours(const DenoiseParams& params) {
+  return static_cast<std::size_t>(std::max(params.neighbours, params.kernelNeighbour + 1));
+}
+
+DenoiseResult denoise(const PointCloud& input, const DenoiseParams& params, const KnnIndex* givenIndex,
+                      const NeighbourTable* table) {
   params.validate();
   const auto start = Clock::now();
   const std::size_t k = static_cast<std::size_t>(params.neighbours);
   checkCloud(input, k + 1);
   const std::size_t n = input.size();
   const std::size_t kernelK = static_cast<std::size_t>(params.kernelNeighbour);
-  const std::size_t K = std::max(k, kernelK + 1);  // neighbours per query, the point itself included
+  const std::size_t K = denoiseNeighbours(params);  // neighbours per query, the point itself included
   const bool given = input.hasNormals();
 
   // Work in Morton order: neighbours in space are neighbours in memory (k-NN queries and sweeps stay in
@@ -171,7 +176,10 @@ DenoiseResult denoise(const PointCloud& input, const DenoiseParams& params, cons
   std::vector<std::uint32_t> found(n);
   std::vector<double> h(n, 0.0), nearest(n, 0.0);
   {
-    // A given tree indexes the caller's order: query it with the caller's point and map the answers to ours.
+    // A given tree or table indexes the caller's order: query it with the caller's point and map the answers
+    // to ours.
+    if (table && table->k() < K) table = nullptr;
+    if (table) givenIndex = &table->index();
     std::optional<KnnIndex> own;
     const KnnIndex& index = givenIndex ? *givenIndex : own.emplace(in);
     std::vector<std::uint32_t> rankOf;
@@ -182,7 +190,7 @@ DenoiseResult denoise(const PointCloud& input, const DenoiseParams& params, cons
     parallelFor(n, params.threads, [&](std::size_t i) {
       std::vector<std::uint32_t> idx;
       std::vector<double> d2;
-      const std::size_t f = index.knn(in[i], K, idx, d2);
+      const std::size_t f = table ? table->get(order[i], K, idx, d2) : index.knn(in[i], K, idx, d2);
       if (givenIndex)
         for (std::uint32_t& j : idx) j = rankOf[j];
       std::copy(idx.begin(), idx.begin() + static_cast<long>(f), nbr.begin() + static_cast<long>(i * K));

@@ -3,6 +3,7 @@
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cerrno>
 #include <chrono>
@@ -58,6 +59,57 @@ float segmentUpdate(const Eigen::Vector3f& a, float ta, const Eigen::Vector3f& b
   return tb + lambda * delta + std::sqrt(s * s + h2);
 }
 
+/// Monotone priority queue of (time, node) (a radix heap): times are non-negative floats, whose bit patterns
+/// order like the values, and never below the last one popped (the sweep settles nodes in time order), so a
+/// push is O(1) and a pop moves each item down O(32) buckets over its life — no comparison sort of the front.
+/// Equal times pop last-in first-out: deterministic.
+class RadixQueue {
+ public:
+  bool empty() const { return size_ == 0; }
+  void clear() {
+    for (auto& b : buckets_) b.clear();
+    last_ = 0;
+    size_ = 0;
+  }
+  void push(float t, std::uint32_t v) {
+    const std::uint32_t key = bits(t);
+    buckets_[bucket(key)].push_back({key, v});
+    ++size_;
+  }
+  /// The node with the smallest time.
+  std::uint32_t pop() {
+    if (buckets_[0].empty()) {  // refill bucket 0 from the first non-empty one, keyed on its minimum
+      std::size_t b = 1;
+      while (buckets_[b].empty()) ++b;
+      std::vector<Entry>& from = buckets_[b];
+      last_ = std::min_element(from.begin(), from.end(), [](const Entry& x, const Entry& y) { return x.key < y.key; })->key;
+      for (const Entry& e : from) buckets_[bucket(e.key)].push_back(e);
+      from.clear();
+    }
+    const Entry e = buckets_[0].back();
+    buckets_[0].pop_back();
+    --size_;
+    return e.v;
+  }
+
+ private:
+  struct Entry {
+    std::uint32_t key, v;
+  };
+  static std::uint32_t bits(float t) {
+    t += 0.0f;  // −0 → +0
+    std::uint32_t k;
+    std::memcpy(&k, &t, sizeof k);
+    return k;
+  }
+  std::size_t bucket(std::uint32_t key) const {
+    return key == last_ ? 0 : 32 - static_cast<std::size_t>(__builtin_clz(key ^ last_));
+  }
+  std::array<std::vector<Entry>, 33> buckets_;
+  std::uint32_t last_ = 0;
+  std::size_t size_ = 0;
+};
+
 /// Per-thread state of a single-source sweep; reset touches only the visited nodes, so a sweep over a
 /// component of m points costs O(m k log m) however large the cloud.
 class Sweep {
@@ -69,13 +121,9 @@ class Sweep {
     reset();
     dist_[source] = 0.0f;
     touched_.push_back(source);
-    heap_.push_back({0.0f, source});
-    const auto greater = [](const Item& x, const Item& y) { return x.t > y.t || (x.t == y.t && x.v > y.v); };
-    while (!heap_.empty()) {
-      std::pop_heap(heap_.begin(), heap_.end(), greater);
-      const Item top = heap_.back();
-      heap_.pop_back();
-      const std::uint32_t a = top.v;
+    queue_.push(0.0f, source);
+    while (!queue_.empty()) {
+      const std::uint32_t a = queue_.pop();
       if (done_[a]) continue;  // lazy deletion: a stale copy of an already settled node
       done_[a] = 1;
       const float ta = dist_[a];
@@ -97,8 +145,7 @@ class Sweep {
         if (dist_[c] == kInf) touched_.push_back(c);
         if (cand < dist_[c]) {
           dist_[c] = cand;
-          heap_.push_back({cand, c});
-          std::push_heap(heap_.begin(), heap_.end(), greater);
+          queue_.push(cand, c);
         }
       }
     }
@@ -108,11 +155,6 @@ class Sweep {
   float distance(std::uint32_t i) const { return dist_[i]; }
 
  private:
-  struct Item {
-    float t;
-    std::uint32_t v;
-  };
-
   void reset() {
     for (std::uint32_t i : touched_) {
       dist_[i] = kInf;
@@ -121,7 +163,7 @@ class Sweep {
       upScore_[i] = kInf;
     }
     touched_.clear();
-    heap_.clear();
+    queue_.clear();
   }
 
   std::vector<float> dist_;
@@ -129,7 +171,7 @@ class Sweep {
   std::vector<std::uint32_t> up_;
   std::vector<float> upScore_;
   std::vector<std::uint32_t> touched_;
-  std::vector<Item> heap_;
+  RadixQueue queue_;
 };
 
 }  // namespace
@@ -176,10 +218,10 @@ struct GeodesicCoordinates::Impl {
   double spacing = 0;
   GeodesicReport report;
 
-  void build();
+  void build(const NeighbourTable* table);
 };
 
-void GeodesicCoordinates::Impl::build() {
+void GeodesicCoordinates::Impl::build(const NeighbourTable* table) {
   const auto start = Clock::now();
   const std::size_t n = points.size();
   const int threads = params.threads;
@@ -206,6 +248,7 @@ void GeodesicCoordinates::Impl::build() {
     pos[i] = (zp[i] - centre).cast<float>();
   }
   index = std::make_unique<KnnIndex>(zp);
+  if (table && (table->k() < k + 1 || table->size() != n)) table = nullptr;
   std::vector<std::uint32_t> knn(n * k, kNone);
   std::vector<float> knnDist(n * k, kInf);
   std::vector<float> rho(n, 0.0f), nearestDist(n, 0.0f);
@@ -214,7 +257,12 @@ void GeodesicCoordinates::Impl::build() {
   parallelFor(n, threads, [&](std::size_t i) {
     std::vector<std::uint32_t> idx;
     std::vector<double> d2;
-    index->knn(zp[i], k + 1, idx, d2);
+    if (table) {  // the caller's order: map the neighbours to ours
+      table->get(order[i], k + 1, idx, d2);
+      for (std::uint32_t& j : idx) j = rank[j];
+    } else {
+      index->knn(zp[i], k + 1, idx, d2);
+    }
     std::size_t w = 0;
     for (std::size_t r = 0; r < idx.size() && w < k; ++r) {
       if (idx[r] == i) continue;
@@ -430,7 +478,8 @@ void GeodesicCoordinates::Impl::build() {
   report.totalSeconds = secondsSince(start);
 }
 
-GeodesicCoordinates::GeodesicCoordinates(const PointCloud& cloud, const GeodesicParams& params)
+GeodesicCoordinates::GeodesicCoordinates(const PointCloud& cloud, const GeodesicParams& params,
+                                         const NeighbourTable* table)
     : impl_(std::make_unique<Impl>()) {
   params.validate();
   if (cloud.empty()) throw InputError("geodesic coordinates: the cloud is empty");
@@ -441,7 +490,7 @@ GeodesicCoordinates::GeodesicCoordinates(const PointCloud& cloud, const Geodesic
   impl_->params = params;
   impl_->points = cloud.points;
   if (cloud.hasNormals()) impl_->normals = cloud.normals;
-  impl_->build();
+  impl_->build(table);
 }
 
 GeodesicCoordinates::~GeodesicCoordinates() = default;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <nanoflann.hpp>
 
+#include "iires/parallel.hpp"
 #include "iires/radix_sort.hpp"
 
 namespace iires {
@@ -76,6 +77,33 @@ std::int64_t KnnIndex::nearest(const Eigen::Vector3d& query, double* sqDist) con
   impl_->tree.knnSearch(query.data(), 1, &index, &d2);
   if (sqDist) *sqDist = d2;
   return index;
+}
+
+NeighbourTable::NeighbourTable(const KnnIndex& index, const std::vector<Eigen::Vector3d>& points, std::size_t k,
+                               int threads)
+    : index_(index), points_(points), k_(std::min<std::size_t>(k, 255)), rows_(points.size() * k_), found_(points.size()) {
+  parallelFor(points.size(), threads, [&](std::size_t i) {
+    thread_local std::vector<std::uint32_t> idx;
+    thread_local std::vector<double> d2;
+    const std::size_t f = index.knn(points[i], k_, idx, d2);
+    std::copy_n(idx.begin(), f, rows_.begin() + static_cast<long>(i * k_));
+    found_[i] = static_cast<std::uint8_t>(f);
+  });
+}
+
+std::size_t NeighbourTable::get(std::size_t i, std::size_t k, std::vector<std::uint32_t>& indices,
+                                std::vector<double>& sqDists) const {
+  const std::size_t f = std::min<std::size_t>(k, found_[i]);
+  const std::uint32_t* row = rows_.data() + i * k_;
+  indices.assign(row, row + f);
+  sqDists.resize(f);
+  const Eigen::Vector3d& p = points_[i];
+  for (std::size_t j = 0; j < f; ++j) {  // in nanoflann's order of terms, so the values are the tree's
+    const Eigen::Vector3d& q = points_[row[j]];
+    const double dx = p.x() - q.x(), dy = p.y() - q.y(), dz = p.z() - q.z();
+    sqDists[j] = dx * dx + dy * dy + dz * dz;
+  }
+  return f;
 }
 
 namespace {

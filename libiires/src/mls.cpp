@@ -14,15 +14,17 @@ constexpr double kMaxQuadricHeight = 2.0;     // kernel widths: a quadric fit be
 }
 
 MlsSurface::MlsSurface(const std::vector<Eigen::Vector3d>& points, const std::vector<Eigen::Vector3d>& normals,
-                       const MlsParams& params, const KnnIndex* index)
+                       const MlsParams& params, const KnnIndex* index, const NeighbourTable* table)
     : points_(points), normals_(normals), params_(params), index_(index ? index : &own_.emplace(points)) {
   const std::size_t n = points.size();
   h_.assign(n, 0.0);
   std::vector<double> nearest(n, 0.0);
+  if (table && (table->k() < kKernelNeighbour + 1 || table->size() != n)) table = nullptr;
   parallelFor(n, 0, [&](std::size_t i) {
     std::vector<std::uint32_t> idx;
     std::vector<double> d2;
-    const std::size_t found = index_->knn(points[i], kKernelNeighbour + 1, idx, d2);
+    const std::size_t found = table ? table->get(i, kKernelNeighbour + 1, idx, d2)
+                                    : index_->knn(points[i], kKernelNeighbour + 1, idx, d2);
     if (found < 2) return;
     h_[i] = std::sqrt(d2[found - 1]);
     nearest[i] = std::sqrt(d2[1]);

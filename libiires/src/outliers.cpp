@@ -83,7 +83,13 @@ void OutlierParams::validate() const {
   if (threads < 0) fail("threads must be >= 0 (0 = all cores)");
 }
 
-OutlierResult processOutliers(const PointCloud& input, const OutlierParams& params, const KnnIndex* given) {
+std::size_t outlierNeighbours(const OutlierParams& params) {
+  return std::max({static_cast<std::size_t>(params.k), static_cast<std::size_t>(params.planeNeighbours),
+                   kSpacingNeighbours}) + 1;
+}
+
+OutlierResult processOutliers(const PointCloud& input, const OutlierParams& params, const KnnIndex* given,
+                              const NeighbourTable* table) {
   params.validate();
   const auto start = Clock::now();
   const std::size_t k = static_cast<std::size_t>(params.k);
@@ -92,7 +98,7 @@ OutlierResult processOutliers(const PointCloud& input, const OutlierParams& para
   const std::size_t n = input.size();
   const auto& P = input.points;
   // Neighbours per point, itself first (index 0).
-  const std::size_t K = std::max({k, planeK, kSpacingNeighbours}) + 1;
+  const std::size_t K = outlierNeighbours(params);
 
   // Every per-point loop visits the points in Morton order (neighbours in space are visited together, which
   // keeps the k-d tree and the neighbour rows in cache); each iteration writes only its own point's slot.
@@ -102,12 +108,13 @@ OutlierResult processOutliers(const PointCloud& input, const OutlierParams& para
   std::vector<std::uint32_t> count(n);
   std::vector<double> spacing(n);
   {
+    if (table && table->k() < K) table = nullptr;
     std::optional<KnnIndex> own;
-    const KnnIndex& index = given ? *given : own.emplace(P);
+    const KnnIndex& index = table ? table->index() : given ? *given : own.emplace(P);
     forEachPoint([&](std::size_t i) {
       std::vector<std::uint32_t> idx;
       std::vector<double> d2;
-      const std::size_t f = index.knn(P[i], K, idx, d2);
+      const std::size_t f = table ? table->get(i, K, idx, d2) : index.knn(P[i], K, idx, d2);
       // Put i itself first even when exact duplicates tie with it.
       const auto self =
           std::find(idx.begin(), idx.begin() + static_cast<long>(f), static_cast<std::uint32_t>(i));

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 
@@ -26,7 +27,12 @@ std::string PreprocessResult::toJson() const {
   return s.str();
 }
 
-PreprocessResult preprocess(const PointCloud& input, const PreprocessParams& params) {
+std::size_t preprocessNeighbours(const PreprocessParams& params) {
+  const std::size_t k = outlierNeighbours(params.outliers);
+  return params.runDenoise ? std::max(k, denoiseNeighbours(params.denoise)) : k;
+}
+
+PreprocessResult preprocess(const PointCloud& input, const PreprocessParams& params, const NeighbourTable* table) {
   params.validate();
   const auto start = std::chrono::steady_clock::now();
   OutlierParams op = params.outliers;
@@ -35,9 +41,11 @@ PreprocessResult preprocess(const PointCloud& input, const PreprocessParams& par
 
   PreprocessResult result;
   result.inputPoints = input.size();
-  // One k-d tree for both stages, unless the outlier stage moved or removed points.
-  const KnnIndex index(input.points);
-  OutlierResult outliers = processOutliers(input, op, &index);  // eq. (4)–(5)
+  // One k-NN search for both stages, unless the outlier stage moved or removed points.
+  std::optional<KnnIndex> index;
+  std::optional<NeighbourTable> own;
+  if (!table) table = &own.emplace(index.emplace(input.points), input.points, preprocessNeighbours(params), params.threads);
+  OutlierResult outliers = processOutliers(input, op, nullptr, table);  // eq. (4)–(5)
   const bool unchanged = outliers.found == 0;
   result.outliersFound = outliers.found;
   result.outliersPulled = outliers.pulled;
@@ -48,7 +56,7 @@ PreprocessResult preprocess(const PointCloud& input, const PreprocessParams& par
     // cleanDisplacement input spacings on average, the cloud is already clean and further sweeps would only
     // erode tight curvature (folds, thin parts, sparse clouds) — denoise() keeps the positions then.
     dp.cleanDisplacement = params.cleanDisplacement;
-    DenoiseResult denoised = denoise(outliers.cloud, dp, unchanged ? &index : nullptr);
+    DenoiseResult denoised = denoise(outliers.cloud, dp, nullptr, unchanged ? table : nullptr);
     result.denoiseSeconds = denoised.seconds;
     result.cleanInput = denoised.cleanInput;
     result.denoiseIterations = denoised.iterations;

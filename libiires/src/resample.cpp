@@ -207,6 +207,38 @@ class Resampler {
 /// current distances instead of querying a new k-d tree (samples moved by a fraction of a spacing, so the few
 /// neighbours that shape a cell stay among the nearest of a step ago). Without it every ring is computed from
 /// scratch.
+/// x⁸ by three squarings (std::pow with a real exponent costs a log and an exp).
+float pow8(double x) {
+  x *= x;
+  x *= x;
+  return static_cast<float>(x * x);
+}
+
+/// A monotone stand-in for the angle of the unit vector @p d, in [0, 4): sorts directions counter-clockwise
+/// from +x like atan2 does from −x, without the transcendental call.
+double pseudoAngle(const Eigen::Vector2d& d) {
+  const double s = std::abs(d.x()) + std::abs(d.y());
+  const double t = d.y() / s;  // in [−1, 1]
+  return d.x() >= 0 ? (d.y() >= 0 ? t : 4.0 + t) : 2.0 - t;
+}
+
+/// The counter-clockwise gap from unit direction @p from to the next one @p to of a 1-ring: its bisector when
+/// the gap is wider than 135°, else nothing. @p full: the two are the same direction and the gap is the whole
+/// circle (a ring with one direction).
+std::optional<Eigen::Vector2d> gapBisector(const Eigen::Vector2d& from, const Eigen::Vector2d& to, bool full) {
+  if (full) return -from;
+  const double cross = from.x() * to.y() - from.y() * to.x(), dot = from.dot(to);
+  if (cross > 0) {
+    if (dot >= -std::sqrt(0.5)) return std::nullopt;  // at most 135°
+    return (from + to).normalized();
+  }
+  if (cross == 0) {
+    if (dot > 0) return std::nullopt;  // the same direction: no gap
+    return Eigen::Vector2d(-from.y(), from.x());  // exactly 180°
+  }
+  return -(from + to).normalized();  // more than 180°
+}
+
 Rings Resampler::computeRings(const Samples& s, double cellRadius, const Relaxation* relaxation,
                               bool requery) const {
   const Rings* previous = relaxation && relaxation->rings ? &*relaxation->rings : nullptr;
@@ -244,7 +276,8 @@ Rings Resampler::computeRings(const Samples& s, double cellRadius, const Relaxat
     // Per-thread scratch buffers (one thread-local lookup): this runs for every sample in every iteration.
     struct Scratch {
       std::vector<std::uint32_t> idx, lab, tmpL, coincident;
-      std::vector<double> d2, angles;
+      std::vector<double> d2;
+      std::vector<std::pair<double, Eigen::Vector2d>> dirs;
       std::vector<std::pair<double, std::uint32_t>> byDistance;
       std::vector<std::pair<std::uint32_t, Eigen::Vector2d>> nb;
       std::vector<Eigen::Vector2d> poly, tmpV;
@@ -252,7 +285,8 @@ Rings Resampler::computeRings(const Samples& s, double cellRadius, const Relaxat
     thread_local Scratch scratch;
     Scratch& sc = scratch;
     auto &idx = sc.idx, &lab = sc.lab, &tmpL = sc.tmpL, &coincident = sc.coincident;
-    auto &d2 = sc.d2, &angles = sc.angles;
+    auto& d2 = sc.d2;
+    auto& dirs = sc.dirs;
     auto &poly = sc.poly, &tmpV = sc.tmpV;
     auto& byDistance = sc.byDistance;
     auto& nb = sc.nb;
@@ -316,24 +350,26 @@ Rings Resampler::computeRings(const Samples& s, double cellRadius, const Relaxat
     lab.erase(std::unique(lab.begin(), lab.end()), lab.end());
     r.open[i] = !lab.empty() && lab.back() == kNone;
     int w = 0;
-    angles.clear();
+    dirs.clear();
     for (std::uint32_t j : lab) {
       if (j == kNone || w >= k) continue;
       r.ring[i * static_cast<std::size_t>(k) + static_cast<std::size_t>(w++)] = j;
       const auto it = std::find_if(nb.begin(), nb.end(), [&](const auto& x) { return x.first == j; });
-      angles.push_back(std::atan2(it->second.y(), it->second.x()));
+      const Eigen::Vector2d d = it->second.normalized();
+      dirs.emplace_back(pseudoAngle(d), d);
     }
     for (std::uint32_t j : coincident)
       if (w < k) r.ring[i * static_cast<std::size_t>(k) + static_cast<std::size_t>(w++)] = j;
     // Open boundary: the 1-ring leaves an angular gap wider than 135° and the surface does not continue into
     // it (a probe half a cell into the gap leaves the cloud); the gap's bisector then points off the surface.
     // A gap with surface behind it is merely a sparse region (e.g. while upsampling) and stays open to moves.
-    std::sort(angles.begin(), angles.end());
-    for (std::size_t a = 0; a < angles.size(); ++a) {
-      const double from = angles[a], to = a + 1 < angles.size() ? angles[a + 1] : angles[0] + 2 * M_PI;
-      if (to - from <= 0.75 * M_PI) continue;
-      const double mid = 0.5 * (from + to);
-      const Eigen::Vector3d dir = std::cos(mid) * u + std::sin(mid) * v;
+    std::sort(dirs.begin(), dirs.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
+    for (std::size_t a = 0; a < dirs.size(); ++a) {
+      const bool wrap = a + 1 == dirs.size();
+      const std::optional<Eigen::Vector2d> mid =
+          gapBisector(dirs[a].second, dirs[wrap ? 0 : a + 1].second, wrap && dirs[0].first == dirs[a].first);
+      if (!mid) continue;
+      const Eigen::Vector3d dir = mid->x() * u + mid->y() * v;
       double off = 0;
       surface_.project(s.pos[i] + 0.5 * radius * dir, nullptr, &off, &s.nrm[i]);
       if (off > kOffSurfaceLimit) r.outward[i] = dir;
@@ -566,7 +602,7 @@ void Resampler::eliminate(Samples& s, std::size_t count) {
       if (idx[c] == i || !rule_.accept(i, idx[c])) continue;
       const double scale = 0.5 * (sz[i] + sz[idx[c]]), radius = 2.0 * rmax * scale;
       const double d = std::max(std::sqrt(d2[c]), 2.0 * rmin * scale);
-      if (d < radius) nb[i].emplace_back(idx[c], static_cast<float>(std::pow(1.0 - d / radius, 8.0)));
+      if (d < radius) nb[i].emplace_back(idx[c], pow8(1.0 - d / radius));
     }
   });
   std::vector<double> weight(s.size(), 0.0);
@@ -845,12 +881,30 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
   cloud = select(cloud, mortonOrder(cloud.points));
 
   constexpr std::size_t kPreprocessMinPoints = 25;
-  if (params.preprocess && cloud.size() >= kPreprocessMinPoints) {
+  const bool preprocessing = params.preprocess && cloud.size() >= kPreprocessMinPoints;
+  PreprocessParams pp = params.preprocessing;
+  pp.threads = params.threads;
+  GeodesicParams gp = params.geodesic;
+  gp.threads = params.threads;
+  // One k-NN search for every stage that reads the working cloud's neighbours (pre-processing, the geodesic
+  // graph, the MLS kernel widths) while pre-processing keeps the positions; one k-d tree for it and the MLS.
+  t = clock.begin("neighbours");
+  std::optional<KnnIndex> index(std::in_place, cloud.points);
+  std::optional<NeighbourTable> neighbours(
+      std::in_place, *index, cloud.points,
+      std::max({preprocessing ? preprocessNeighbours(pp) : std::size_t{0}, params.intrinsic ? static_cast<std::size_t>(gp.k) + 1 : 0, std::size_t{9}}),
+      params.threads);
+  clock.end("neighbours", t);
+  if (preprocessing) {
     t = clock.begin("preprocess");
-    PreprocessParams pp = params.preprocessing;
-    pp.threads = params.threads;
-    result.preprocessing = iires::preprocess(cloud, pp);
-    cloud = std::move(result.preprocessing.cloud);
+    result.preprocessing = iires::preprocess(cloud, pp, &*neighbours);
+    if (result.preprocessing.positionsKept()) {
+      cloud.normals = std::move(result.preprocessing.cloud.normals);
+    } else {
+      neighbours.reset();
+      index.reset();
+      cloud = std::move(result.preprocessing.cloud);
+    }
     result.preprocessing.cloud = {};
     clock.end("preprocess", t);
   }
@@ -868,10 +922,9 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
   std::shared_ptr<NeighbourRule> rule = params.neighbourRule;
   if (!rule && params.intrinsic) {
     t = clock.begin("geodesic");
-    GeodesicParams gp = params.geodesic;
     IntrinsicParams ip = params.intrinsicRule;
-    gp.threads = ip.threads = params.threads;
-    result.geodesic = std::make_shared<const GeodesicCoordinates>(cloud, gp);
+    ip.threads = params.threads;
+    result.geodesic = std::make_shared<const GeodesicCoordinates>(cloud, gp, neighbours ? &*neighbours : nullptr);
     rule = std::make_shared<IntrinsicRule>(result.geodesic, ip);
     result.components = result.geodesic->components();
     result.satellites = result.components * static_cast<std::size_t>(gp.satellites);
@@ -879,9 +932,11 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
   }
   if (!rule) rule = std::make_shared<EuclideanRule>();
 
-  t = clock.begin("surface");  // on the geodesic graph's k-d tree when there is one (same points, same order)
+  t = clock.begin("surface");  // on the working cloud's k-d tree, or the geodesic graph's (same points, same order)
   const MlsSurface surface(cloud.points, cloud.normals, params.mls,
-                           result.geodesic ? result.geodesic->pointIndex() : nullptr);
+                           index ? &*index : result.geodesic ? result.geodesic->pointIndex() : nullptr,
+                           neighbours ? &*neighbours : nullptr);
+  neighbours.reset();
   clock.end("surface", t);
 
   std::optional<CurvatureResult> curvature;

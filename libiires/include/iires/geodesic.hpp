@@ -83,9 +83,12 @@ struct GeodesicReport {
 class GeodesicCoordinates {
  public:
   /// @param cloud points, with normals (oriented) or without
+  /// @param table (optional) neighbour lists of exactly cloud.points with k ≥ params.k + 1, borrowed for the
+  /// build, to save its k-NN search
   /// @throws InputError when the cloud is empty or has non-finite coordinates; std::invalid_argument for
   /// bad params.
-  explicit GeodesicCoordinates(const PointCloud& cloud, const GeodesicParams& params = {});
+  explicit GeodesicCoordinates(const PointCloud& cloud, const GeodesicParams& params = {},
+                               const NeighbourTable* table = nullptr);
   ~GeodesicCoordinates();
   GeodesicCoordinates(GeodesicCoordinates&&) noexcept;
   GeodesicCoordinates& operator=(GeodesicCoordinates&&) noexcept;

@@ -33,8 +33,10 @@ struct MlsCache {
 /// then outlive the surface); the cloud must outlive the surface. project() is thread-safe.
 class MlsSurface {
  public:
+  /// @param table (optional) neighbour lists of exactly these points (k ≥ 9), borrowed while constructing, to
+  /// save the kernel widths' k-NN search
   MlsSurface(const std::vector<Eigen::Vector3d>& points, const std::vector<Eigen::Vector3d>& normals,
-             const MlsParams& params = {}, const KnnIndex* index = nullptr);
+             const MlsParams& params = {}, const KnnIndex* index = nullptr, const NeighbourTable* table = nullptr);
   ~MlsSurface();
 
   /// @brief Project @p x onto the surface. @p normal (optional) receives the surface normal there,

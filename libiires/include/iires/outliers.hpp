@@ -78,8 +78,13 @@ struct OutlierResult {
 /// @throws InputError when the cloud is empty, holds NaN/Inf, or has fewer than planeNeighbours + 1
 /// points; std::invalid_argument for bad parameters.
 /// @param index (optional) a k-d tree over exactly input.points, borrowed, to save building one
+/// @param table (optional) neighbour lists of exactly input.points (k ≥ max(k, planeNeighbours, 6) + 1),
+/// borrowed, to save the k-NN search; its index then serves as @p index
 /// @note O(n k log n). Deterministic for any thread count.
+/// @brief Neighbours per point processOutliers() finds (the point itself included): what a table must hold.
+std::size_t outlierNeighbours(const OutlierParams& params);
+
 OutlierResult processOutliers(const PointCloud& input, const OutlierParams& params = {},
-                              const KnnIndex* index = nullptr);
+                              const KnnIndex* index = nullptr, const NeighbourTable* table = nullptr);
 
 }  // namespace iires

@@ -38,12 +38,20 @@ struct PreprocessResult {
 
   /// @brief The report as a one-line JSON object (keys as the fields, snake_case).
   std::string toJson() const;
+  /// @brief The output's positions are the input's (no outlier found, no denoising sweep applied).
+  bool positionsKept() const { return outliersFound == 0 && denoiseIterations == 0; }
 };
+
+/// @brief Neighbours per point that preprocess() reads from a NeighbourTable (the point itself included).
+std::size_t preprocessNeighbours(const PreprocessParams& params);
 
 /// @brief processOutliers() then (unless runDenoise is false) denoise() on its output.
 /// @throws InputError for an unusable cloud (empty, NaN/Inf, fewer points than the stages need);
 /// std::invalid_argument for bad parameters.
+/// @param table (optional) neighbour lists of exactly input.points with k ≥ preprocessNeighbours(params),
+/// borrowed; without it preprocess() finds them itself (once for both stages)
 /// @note O(n k log n). Deterministic for any thread count.
-PreprocessResult preprocess(const PointCloud& input, const PreprocessParams& params = {});
+PreprocessResult preprocess(const PointCloud& input, const PreprocessParams& params = {},
+                            const NeighbourTable* table = nullptr);
 
 }  // namespace iires
