@@ -56,12 +56,17 @@ bool projectOntoQuadric(const Eigen::Vector3d& p, const std::vector<Eigen::Vecto
     const double pu = d.dot(u), pv = d.dot(v);
     Eigen::Matrix<double, 6, 1> row;
     row << 1, pu, pv, pu * pu, pu * pv, pv * pv;
-    ata.noalias() += w * row * row.transpose();
-    atb.noalias() += (w * d.dot(n)) * row;
+    const Eigen::Matrix<double, 6, 1> wrow = w * row;
+    for (int r = 0; r < 6; ++r)
+      for (int q = 0; q <= r; ++q) ata(r, q) += wrow[r] * row[q];  // lower triangle: the solvers read only it
+    atb.noalias() += d.dot(n) * wrow;
     wsum += w;
   }
   for (int r = 3; r < 6; ++r) ata(r, r) += 1e-2 * wsum;  // ridge on the curvature terms: flat if unsure
-  const Eigen::Matrix<double, 6, 1> c = ata.ldlt().solve(atb);
+  // Positive definite with the ridge: Cholesky, with the pivoting LDLT as fallback (as in MlsSurface).
+  const Eigen::LLT<Eigen::Matrix<double, 6, 6>> llt(ata);
+  const Eigen::Matrix<double, 6, 1> c =
+      llt.info() == Eigen::Success ? Eigen::Matrix<double, 6, 1>(llt.solve(atb)) : ata.ldlt().solve(atb).eval();
   if (!c.allFinite()) return false;
   const Eigen::Vector3d d = (p - plane.centre) / h;
   const double pu = d.dot(u), pv = d.dot(v);

@@ -14,6 +14,7 @@
 #include <numeric>
 #include <sstream>
 #include <stdexcept>
+#include <thread>
 #include <unistd.h>
 
 #include "iires/disjoint_sets.hpp"
@@ -218,10 +219,10 @@ struct GeodesicCoordinates::Impl {
   double spacing = 0;
   GeodesicReport report;
 
-  void build(const NeighbourTable* table);
+  void build(const NeighbourTable* table, const std::function<void(int)>& alongside);
 };
 
-void GeodesicCoordinates::Impl::build(const NeighbourTable* table) {
+void GeodesicCoordinates::Impl::build(const NeighbourTable* table, const std::function<void(int)>& alongside) {
   const auto start = Clock::now();
   const std::size_t n = points.size();
   const int threads = params.threads;
@@ -426,38 +427,63 @@ void GeodesicCoordinates::Impl::build(const NeighbourTable* table) {
   for (std::size_t o = n; o-- > 0;) seed[comp[rank[o]]] = rank[o];
   std::vector<std::vector<std::uint32_t>> sat(count);
   std::vector<float> field(n * static_cast<std::size_t>(m), kInf);  // internal order
-  const int nThreads = std::max(1, std::min<int>(resolveThreads(threads), static_cast<int>(std::min<std::size_t>(count, 1024))));
-  double seedSeconds = 0;
+  const int team = resolveThreads(threads);
+  const int nThreads = std::max(1, std::min<int>(team, static_cast<int>(std::min<std::size_t>(count, 1024))));
+  double seedSeconds = 0, sweepSeconds = 0;
+  auto sweeps = [&] {
 #pragma omp parallel num_threads(nThreads) reduction(+ : seedSeconds)
-  {
-    Sweep sweep(n);
-    std::vector<float> minDist;
+    {
+      Sweep sweep(n);
+      std::vector<float> minDist;
 #pragma omp for schedule(dynamic, 1)
-    for (long long c = 0; c < static_cast<long long>(count); ++c) {
-      const auto t0 = Clock::now();
-      std::vector<std::uint32_t>& sc = sat[static_cast<std::size_t>(c)];
-      sweep.run(graph, pos, seed[static_cast<std::size_t>(c)], false);  // plain Dijkstra is enough for a seed
-      std::vector<std::uint32_t> members = sweep.visited();
-      std::sort(members.begin(), members.end());
-      minDist.assign(members.size(), kInf);
-      auto pickFarthest = [&](auto value) {
-        std::size_t best = 0;
-        for (std::size_t x = 1; x < members.size(); ++x)
-          if (value(x) > value(best)) best = x;  // ties: lowest internal index (members are sorted)
-        return members[best];
-      };
-      sc.push_back(pickFarthest([&](std::size_t x) { return sweep.distance(members[x]); }));
-      seedSeconds += secondsSince(t0);
-      for (int s = 0; s < m; ++s) {
-        sweep.run(graph, pos, sc.back(), params.fastMarching);
-        for (std::size_t x = 0; x < members.size(); ++x) {
-          const float d = sweep.distance(members[x]);
-          field[members[x] * static_cast<std::size_t>(m) + static_cast<std::size_t>(s)] = d;
-          minDist[x] = std::min(minDist[x], d);
+      for (long long c = 0; c < static_cast<long long>(count); ++c) {
+        const auto t0 = Clock::now();
+        std::vector<std::uint32_t>& sc = sat[static_cast<std::size_t>(c)];
+        sweep.run(graph, pos, seed[static_cast<std::size_t>(c)], false);  // plain Dijkstra is enough for a seed
+        std::vector<std::uint32_t> members = sweep.visited();
+        std::sort(members.begin(), members.end());
+        minDist.assign(members.size(), kInf);
+        auto pickFarthest = [&](auto value) {
+          std::size_t best = 0;
+          for (std::size_t x = 1; x < members.size(); ++x)
+            if (value(x) > value(best)) best = x;  // ties: lowest internal index (members are sorted)
+          return members[best];
+        };
+        sc.push_back(pickFarthest([&](std::size_t x) { return sweep.distance(members[x]); }));
+        seedSeconds += secondsSince(t0);
+        for (int s = 0; s < m; ++s) {
+          sweep.run(graph, pos, sc.back(), params.fastMarching);
+          for (std::size_t x = 0; x < members.size(); ++x) {
+            const float d = sweep.distance(members[x]);
+            field[members[x] * static_cast<std::size_t>(m) + static_cast<std::size_t>(s)] = d;
+            minDist[x] = std::min(minDist[x], d);
+          }
+          if (s + 1 < m) sc.push_back(pickFarthest([&](std::size_t x) { return minDist[x]; }));
         }
-        if (s + 1 < m) sc.push_back(pickFarthest([&](std::size_t x) { return minDist[x]; }));
       }
     }
+    sweepSeconds = secondsSince(t);
+  };
+  if (alongside && team > nThreads) {  // the sweeps on a thread of their own, the other work on the idle ones
+    std::exception_ptr failure;
+    std::thread sweeper([&] {
+      try {
+        sweeps();
+      } catch (...) {
+        failure = std::current_exception();
+      }
+    });
+    try {
+      alongside(team - nThreads);
+    } catch (...) {
+      sweeper.join();
+      throw;
+    }
+    sweeper.join();
+    if (failure) std::rethrow_exception(failure);
+  } else {
+    sweeps();
+    if (alongside) alongside(team);
   }
   report.satelliteSeconds = seedSeconds;
   // Back to the caller's order.
@@ -470,7 +496,7 @@ void GeodesicCoordinates::Impl::build(const NeighbourTable* table) {
   satellites.assign(count, {});
   for (std::size_t c = 0; c < count; ++c)
     for (std::uint32_t x : sat[c]) satellites[c].push_back(order[x]);
-  report.fieldSeconds = secondsSince(t) - seedSeconds / nThreads;
+  report.fieldSeconds = sweepSeconds - seedSeconds / nThreads;
 
   report.points = n;
   report.components = count;
@@ -479,7 +505,7 @@ void GeodesicCoordinates::Impl::build(const NeighbourTable* table) {
 }
 
 GeodesicCoordinates::GeodesicCoordinates(const PointCloud& cloud, const GeodesicParams& params,
-                                         const NeighbourTable* table)
+                                         const NeighbourTable* table, const std::function<void(int)>& alongside)
     : impl_(std::make_unique<Impl>()) {
   params.validate();
   if (cloud.empty()) throw InputError("geodesic coordinates: the cloud is empty");
@@ -490,7 +516,7 @@ GeodesicCoordinates::GeodesicCoordinates(const PointCloud& cloud, const Geodesic
   impl_->params = params;
   impl_->points = cloud.points;
   if (cloud.hasNormals()) impl_->normals = cloud.normals;
-  impl_->build(table);
+  impl_->build(table, alongside);
 }
 
 GeodesicCoordinates::~GeodesicCoordinates() = default;

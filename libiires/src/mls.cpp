@@ -20,7 +20,7 @@ MlsSurface::MlsSurface(const std::vector<Eigen::Vector3d>& points, const std::ve
   h_.assign(n, 0.0);
   std::vector<double> nearest(n, 0.0);
   if (table && (table->k() < kKernelNeighbour + 1 || table->size() != n)) table = nullptr;
-  parallelFor(n, 0, [&](std::size_t i) {
+  parallelFor(n, params.threads, [&](std::size_t i) {
     std::vector<std::uint32_t> idx;
     std::vector<double> d2;
     const std::size_t found = table ? table->get(i, kKernelNeighbour + 1, idx, d2)

@@ -176,7 +176,8 @@ class Resampler {
             const std::vector<double>* size)
       : pts_(pts), normals_(normals), surface_(surface), params_(params), rule_(rule), size_(size) {}
 
-  Samples initialise(ResampleResult& result);
+  /// @p chosen: the input points to start from (initialCandidates()).
+  Samples initialise(const std::vector<std::uint32_t>& chosen, ResampleResult& result);
   void run(Samples& s, ResampleResult& result);
 
  private:
@@ -675,22 +676,27 @@ void Resampler::forceCount(Samples& s, Relaxation& relaxation) const {
   relaxation = {};
 }
 
-Samples Resampler::initialise(ResampleResult& result) {
+/// The input points the initialisation starts from: about candidateFactor·N voxel cells' worth (all points of
+/// a cloud not that much denser than the output).
+std::vector<std::uint32_t> initialCandidates(const PointCloud& cloud, const MlsSurface& surface,
+                                             const ResampleParams& params, int threads) {
+  const std::size_t count = static_cast<std::size_t>(params.candidateFactor * static_cast<double>(params.targetCount));
+  if (cloud.size() <= count) {
+    std::vector<std::uint32_t> all(cloud.size());
+    std::iota(all.begin(), all.end(), 0u);
+    return all;
+  }
+  return voxelThin(cloud.points, cloud.normals, count, std::sqrt(surface.area() / static_cast<double>(count)),
+                   params.seed, threads);
+}
+
+Samples Resampler::initialise(const std::vector<std::uint32_t>& chosen, ResampleResult& result) {
   const std::size_t n = params_.targetCount;
   Samples s;
   for (const auto& p : params_.fixedSamples) {
     Eigen::Vector3d nrm;
     surface_.project(p, &nrm);
     s.add(p, nrm, true);
-  }
-  std::vector<std::uint32_t> chosen;
-  const std::size_t candidates = static_cast<std::size_t>(params_.candidateFactor * static_cast<double>(n));
-  if (pts_.size() <= candidates) {
-    chosen.resize(pts_.size());
-    std::iota(chosen.begin(), chosen.end(), 0u);
-  } else {
-    chosen = voxelThin(pts_, normals_, candidates, std::sqrt(surface_.area() / static_cast<double>(candidates)),
-                       params_.seed, params_.threads);
   }
   // Candidates are input points (on the cloud already): only the survivors of the elimination are projected.
   for (std::uint32_t c : chosen) s.add(pts_[c], normals_[c], false);
@@ -919,58 +925,70 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
   }
   clock.end("normals", t);
 
+  // What does not need the geodesic coordinates: the MLS surface, the curvature field, the sharp features and
+  // the initial candidates. It runs while the geodesic satellite sweeps (serial per component) leave threads idle.
+  std::optional<MlsSurface> surface;
+  std::optional<CurvatureResult> curvature;
+  ResampleParams local = params;  // sharp edges add fixed samples
+  std::vector<std::uint32_t> candidates;
+  auto independent = [&](int threads) {
+    auto t = clock.begin("surface");  // on the working cloud's k-d tree while it indexes these positions
+    MlsParams mp = params.mls;
+    mp.threads = threads;
+    surface.emplace(cloud.points, cloud.normals, mp, index ? &*index : nullptr, neighbours ? &*neighbours : nullptr);
+    clock.end("surface", t);
+    if (params.mode == ResampleMode::kCurvature) {
+      t = clock.begin("curvature");
+      CurvatureParams cp = params.curvature;
+      cp.threads = threads;
+      curvature = computeCurvature(cloud.points, cloud.normals, cp);  // eq. (8)–(10)
+      clock.end("curvature", t);
+    }
+    if (params.sharpEdges) {
+      t = clock.begin("features");
+      FeatureParams fp = params.features;
+      fp.threads = threads;
+      const FeatureResult features = detectFeatures(cloud, fp);
+      const double l0 = std::sqrt(2.0 * surface->area() / (std::sqrt(3.0) * static_cast<double>(params.targetCount)));
+      std::vector<std::uint32_t> chainOf;
+      std::vector<Eigen::Vector3d> onEdges = sampleFeatureChains(features.chains, params.edgeRatio * l0, &chainOf);
+      if (onEdges.size() + params.fixedSamples.size() > params.targetCount / 2)  // never let edges take over N
+        onEdges = sampleFeatureChains(features.chains, params.edgeRatio * l0 * 2.0 *
+                                                           static_cast<double>(onEdges.size()) /
+                                                           static_cast<double>(params.targetCount), &chainOf);
+      onEdges = snapToCreases(cloud, onEdges, chainOf, features.spacing, fp);  // exactly on the creases
+      result.featurePoints = features.featureIndices.size();
+      result.featureSamples = std::min(onEdges.size(), params.targetCount - params.fixedSamples.size());
+      local.fixedSamples.insert(local.fixedSamples.end(), onEdges.begin(),
+                                onEdges.begin() + static_cast<long>(result.featureSamples));
+      clock.end("features", t);
+    }
+    t = clock.begin("candidates");
+    candidates = initialCandidates(cloud, *surface, params, threads);
+    clock.end("candidates", t);
+  };
+
   std::shared_ptr<NeighbourRule> rule = params.neighbourRule;
   if (!rule && params.intrinsic) {
-    t = clock.begin("geodesic");
+    t = clock.begin("geodesic");  // includes the independent stages where they ran during its sweeps
     IntrinsicParams ip = params.intrinsicRule;
     ip.threads = params.threads;
-    result.geodesic = std::make_shared<const GeodesicCoordinates>(cloud, gp, neighbours ? &*neighbours : nullptr);
+    result.geodesic =
+        std::make_shared<const GeodesicCoordinates>(cloud, gp, neighbours ? &*neighbours : nullptr, independent);
     rule = std::make_shared<IntrinsicRule>(result.geodesic, ip);
     result.components = result.geodesic->components();
     result.satellites = result.components * static_cast<std::size_t>(gp.satellites);
     clock.end("geodesic", t);
+  } else {
+    independent(params.threads);
   }
   if (!rule) rule = std::make_shared<EuclideanRule>();
-
-  t = clock.begin("surface");  // on the working cloud's k-d tree, or the geodesic graph's (same points, same order)
-  const MlsSurface surface(cloud.points, cloud.normals, params.mls,
-                           index ? &*index : result.geodesic ? result.geodesic->pointIndex() : nullptr,
-                           neighbours ? &*neighbours : nullptr);
   neighbours.reset();
-  clock.end("surface", t);
 
-  std::optional<CurvatureResult> curvature;
-  if (params.mode == ResampleMode::kCurvature) {
-    t = clock.begin("curvature");
-    CurvatureParams cp = params.curvature;
-    cp.threads = params.threads;
-    curvature = computeCurvature(cloud.points, cloud.normals, cp);  // eq. (8)–(10)
-    clock.end("curvature", t);
-  }
-  ResampleParams local = params;  // sharp edges add fixed samples
-  if (params.sharpEdges) {
-    t = clock.begin("features");
-    FeatureParams fp = params.features;
-    fp.threads = params.threads;
-    const FeatureResult features = detectFeatures(cloud, fp);
-    const double l0 = std::sqrt(2.0 * surface.area() / (std::sqrt(3.0) * static_cast<double>(params.targetCount)));
-    std::vector<std::uint32_t> chainOf;
-    std::vector<Eigen::Vector3d> onEdges = sampleFeatureChains(features.chains, params.edgeRatio * l0, &chainOf);
-    if (onEdges.size() + params.fixedSamples.size() > params.targetCount / 2)  // never let edges take over N
-      onEdges = sampleFeatureChains(features.chains, params.edgeRatio * l0 * 2.0 *
-                                                         static_cast<double>(onEdges.size()) /
-                                                         static_cast<double>(params.targetCount), &chainOf);
-    onEdges = snapToCreases(cloud, onEdges, chainOf, features.spacing, fp);  // exactly on the creases
-    result.featurePoints = features.featureIndices.size();
-    result.featureSamples = std::min(onEdges.size(), params.targetCount - params.fixedSamples.size());
-    local.fixedSamples.insert(local.fixedSamples.end(), onEdges.begin(),
-                              onEdges.begin() + static_cast<long>(result.featureSamples));
-    clock.end("features", t);
-  }
-  Resampler resampler(cloud.points, cloud.normals, surface, local, *rule,
+  Resampler resampler(cloud.points, cloud.normals, *surface, local, *rule,
                       curvature ? &curvature->sizeFactor : nullptr);
   t = clock.begin("initialise");
-  Samples s = resampler.initialise(result);
+  Samples s = resampler.initialise(candidates, result);
   clock.end("initialise", t);
 
   t = clock.begin("resample");
@@ -989,7 +1007,7 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
     std::vector<std::uint32_t> idx;
     std::vector<double> d2;
     for (const Eigen::Vector3d& p : result.cloud.points) {
-      const auto level = static_cast<std::size_t>(curvature->level[surface.index().nearest(p)]);
+      const auto level = static_cast<std::size_t>(curvature->level[surface->index().nearest(p)]);
       ++result.pointsPerLevel[level];
       if (out.knn(p, 2, idx, d2) == 2) result.spacingPerLevel[level] += std::sqrt(d2[1]);
     }

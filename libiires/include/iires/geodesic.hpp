@@ -15,6 +15,7 @@
 #include <Eigen/Core>
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <limits>
 #include <memory>
 #include <string>
@@ -85,10 +86,14 @@ class GeodesicCoordinates {
   /// @param cloud points, with normals (oriented) or without
   /// @param table (optional) neighbour lists of exactly cloud.points with k ≥ params.k + 1, borrowed for the
   /// build, to save its k-NN search
+  /// @param alongside (optional) work that does not need the coordinates, called once with the number of
+  /// threads it may use: during the satellite sweeps when those leave threads idle (fewer components than
+  /// threads: each component's sweeps are serial), else after them. Its exceptions propagate.
   /// @throws InputError when the cloud is empty or has non-finite coordinates; std::invalid_argument for
   /// bad params.
   explicit GeodesicCoordinates(const PointCloud& cloud, const GeodesicParams& params = {},
-                               const NeighbourTable* table = nullptr);
+                               const NeighbourTable* table = nullptr,
+                               const std::function<void(int threads)>& alongside = {});
   ~GeodesicCoordinates();
   GeodesicCoordinates(GeodesicCoordinates&&) noexcept;
   GeodesicCoordinates& operator=(GeodesicCoordinates&&) noexcept;

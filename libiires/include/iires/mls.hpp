@@ -15,6 +15,7 @@ struct MlsParams {
   int k = 16;           ///< neighbours in each local fit (paper: 8 for the weights' kernel width)
   int degree = 2;       ///< 1 = weighted tangent plane (paper eq. 1–3), 2 = plane + quadric height field
   int iterations = 2;   ///< projection steps per query (each re-centres the fit on the last estimate)
+  int threads = 0;      ///< for the construction (kernel widths); 0 = all cores
 };
 
 /// @brief The input neighbourhood of a previous projection, kept by a caller that projects the same moving
