@@ -230,11 +230,12 @@ DenoiseResult denoise(const PointCloud& input, const DenoiseParams& params, cons
       double w[kMaxNeighbours], wn[kMaxNeighbours];
       const double invN2 = 0.25 / (h[i] * h[i]);
       for (std::size_t j = 0; j < count; ++j) {
-        wn[j] = std::exp(-(cur[nb[j]] - cur[i]).squaredNorm() * invN2);
+        double e = -(cur[nb[j]] - cur[i]).squaredNorm() * invN2;
         if (useBilateral) {
           const double c = 1.0 - std::abs(normals[nb[j]].dot(normals[i]));
-          wn[j] *= std::exp(-c * c * invSharp2);
+          e -= c * c * invSharp2;  // the two factors in one exp
         }
+        wn[j] = std::exp(e);
         const double w2 = wn[j] * wn[j];
         w[j] = w2 * w2;
       }
