@@ -926,16 +926,20 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
   clock.end("normals", t);
 
   // What does not need the geodesic coordinates: the MLS surface, the curvature field, the sharp features and
-  // the initial candidates. It runs while the geodesic satellite sweeps (serial per component) leave threads idle.
+  // the initial candidates. While the neighbour table still holds (the surface then costs little) it runs where
+  // the geodesic satellite sweeps (serial per component) leave threads idle; else after them, on all threads
+  // and the geodesic graph's k-d tree.
   std::optional<MlsSurface> surface;
   std::optional<CurvatureResult> curvature;
   ResampleParams local = params;  // sharp edges add fixed samples
   std::vector<std::uint32_t> candidates;
   auto independent = [&](int threads) {
-    auto t = clock.begin("surface");  // on the working cloud's k-d tree while it indexes these positions
+    auto t = clock.begin("surface");
     MlsParams mp = params.mls;
     mp.threads = threads;
-    surface.emplace(cloud.points, cloud.normals, mp, index ? &*index : nullptr, neighbours ? &*neighbours : nullptr);
+    surface.emplace(cloud.points, cloud.normals, mp,
+                    index ? &*index : result.geodesic ? result.geodesic->pointIndex() : nullptr,
+                    neighbours ? &*neighbours : nullptr);
     clock.end("surface", t);
     if (params.mode == ResampleMode::kCurvature) {
       t = clock.begin("curvature");
@@ -973,12 +977,14 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
     t = clock.begin("geodesic");  // includes the independent stages where they ran during its sweeps
     IntrinsicParams ip = params.intrinsicRule;
     ip.threads = params.threads;
-    result.geodesic =
-        std::make_shared<const GeodesicCoordinates>(cloud, gp, neighbours ? &*neighbours : nullptr, independent);
+    const bool beside = neighbours.has_value();
+    const std::function<void(int)> during = beside ? std::function<void(int)>(independent) : nullptr;
+    result.geodesic = std::make_shared<const GeodesicCoordinates>(cloud, gp, beside ? &*neighbours : nullptr, during);
     rule = std::make_shared<IntrinsicRule>(result.geodesic, ip);
     result.components = result.geodesic->components();
     result.satellites = result.components * static_cast<std::size_t>(gp.satellites);
     clock.end("geodesic", t);
+    if (!beside) independent(params.threads);
   } else {
     independent(params.threads);
   }
