@@ -250,7 +250,8 @@ TEST(Denoise, BorrowedIndexGivesTheSameOutput) {
   const iires::KnnIndex index(cloud.points);
   const iires::NeighbourTable table(index, cloud.points, iires::denoiseNeighbours({}));
   const auto own = iires::denoise(cloud);
-  for (const auto& borrowed : {iires::denoise(cloud, {}, &index), iires::denoise(cloud, {}, nullptr, &table)}) {
+  for (const auto& borrowed :
+       {iires::denoise(cloud, {}, &index), iires::denoise(cloud, {}, nullptr, &table)}) {
     ASSERT_EQ(own.cloud.size(), borrowed.cloud.size());
     double worst = 0;
     for (std::size_t i = 0; i < own.cloud.size(); ++i)

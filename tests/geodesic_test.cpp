@@ -167,8 +167,8 @@ TEST(Geodesic, BorrowedNeighbourTableGivesTheSameCoordinates) {
   EXPECT_EQ(GeodesicCoordinates(c, {}, &tooShort).coordinates(), own.coordinates());
 }
 
-// Work handed to the constructor runs once (beside the sweeps when a thread is idle), leaves the coordinates as
-// they are, and its exception reaches the caller.
+// Work handed to the constructor runs once (beside the sweeps when a thread is idle), leaves the coordinates
+// as they are, and its exception reaches the caller.
 TEST(Geodesic, RunsIndependentWorkAlongsideTheSweeps) {
   const PointCloud c = uStrip(8000, 0.05, 9);
   GeodesicParams p;
@@ -178,10 +178,12 @@ TEST(Geodesic, RunsIndependentWorkAlongsideTheSweeps) {
     int calls = 0, given = 0;
     const GeodesicCoordinates g(c, p, nullptr, [&](int t) { ++calls, given = t; });
     EXPECT_EQ(calls, 1);
-    EXPECT_EQ(given, 1) << "one component: one thread sweeps, the other is free (or, on one thread, after it)";
+    EXPECT_EQ(given, 1)
+        << "one component: one thread sweeps, the other is free (or, on one thread, after it)";
     EXPECT_EQ(g.coordinates(), plain.coordinates());
-    EXPECT_THROW(GeodesicCoordinates(c, p, nullptr, [](int) { throw std::runtime_error("alongside failed"); }),
-                 std::runtime_error);
+    EXPECT_THROW(
+        GeodesicCoordinates(c, p, nullptr, [](int) { throw std::runtime_error("alongside failed"); }),
+        std::runtime_error);
   }
 }
 

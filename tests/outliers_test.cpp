@@ -165,7 +165,8 @@ TEST(Outliers, BorrowedNeighbourTableGivesTheSameOutput) {
   const Noisy data = noisyPlane(10000, 3.0, 0.5, 0.03, 15);
   const iires::KnnIndex index(data.cloud.points);
   const iires::NeighbourTable table(index, data.cloud.points, iires::outlierNeighbours({}));
-  const auto own = iires::processOutliers(data.cloud), borrowed = iires::processOutliers(data.cloud, {}, nullptr, &table);
+  const auto own = iires::processOutliers(data.cloud),
+             borrowed = iires::processOutliers(data.cloud, {}, nullptr, &table);
   EXPECT_GT(own.found, 0u);
   EXPECT_EQ(own.outliers, borrowed.outliers);
   EXPECT_EQ(own.cloud.points, borrowed.cloud.points);

@@ -65,8 +65,9 @@ bool projectOntoQuadric(const Eigen::Vector3d& p, const std::vector<Eigen::Vecto
   for (int r = 3; r < 6; ++r) ata(r, r) += 1e-2 * wsum;  // ridge on the curvature terms: flat if unsure
   // Positive definite with the ridge: Cholesky, with the pivoting LDLT as fallback (as in MlsSurface).
   const Eigen::LLT<Eigen::Matrix<double, 6, 6>> llt(ata);
-  const Eigen::Matrix<double, 6, 1> c =
-      llt.info() == Eigen::Success ? Eigen::Matrix<double, 6, 1>(llt.solve(atb)) : ata.ldlt().solve(atb).eval();
+  const Eigen::Matrix<double, 6, 1> c = llt.info() == Eigen::Success
+                                            ? Eigen::Matrix<double, 6, 1>(llt.solve(atb))
+                                            : ata.ldlt().solve(atb).eval();
   if (!c.allFinite()) return false;
   const Eigen::Vector3d d = (p - plane.centre) / h;
   const double pu = d.dot(u), pv = d.dot(v);

@@ -83,7 +83,8 @@ class RadixQueue {
       std::size_t b = 1;
       while (buckets_[b].empty()) ++b;
       std::vector<Entry>& from = buckets_[b];
-      last_ = std::min_element(from.begin(), from.end(), [](const Entry& x, const Entry& y) { return x.key < y.key; })->key;
+      last_ = from.front().key;
+      for (const Entry& e : from) last_ = std::min(last_, e.key);
       for (const Entry& e : from) buckets_[bucket(e.key)].push_back(e);
       from.clear();
     }
@@ -222,7 +223,8 @@ struct GeodesicCoordinates::Impl {
   void build(const NeighbourTable* table, const std::function<void(int)>& alongside);
 };
 
-void GeodesicCoordinates::Impl::build(const NeighbourTable* table, const std::function<void(int)>& alongside) {
+void GeodesicCoordinates::Impl::build(const NeighbourTable* table,
+                                      const std::function<void(int)>& alongside) {
   const auto start = Clock::now();
   const std::size_t n = points.size();
   const int threads = params.threads;
@@ -439,7 +441,8 @@ void GeodesicCoordinates::Impl::build(const NeighbourTable* table, const std::fu
       for (long long c = 0; c < static_cast<long long>(count); ++c) {
         const auto t0 = Clock::now();
         std::vector<std::uint32_t>& sc = sat[static_cast<std::size_t>(c)];
-        sweep.run(graph, pos, seed[static_cast<std::size_t>(c)], false);  // plain Dijkstra is enough for a seed
+        // Plain Dijkstra is enough for a seed.
+        sweep.run(graph, pos, seed[static_cast<std::size_t>(c)], false);
         std::vector<std::uint32_t> members = sweep.visited();
         std::sort(members.begin(), members.end());
         minDist.assign(members.size(), kInf);
@@ -505,7 +508,8 @@ void GeodesicCoordinates::Impl::build(const NeighbourTable* table, const std::fu
 }
 
 GeodesicCoordinates::GeodesicCoordinates(const PointCloud& cloud, const GeodesicParams& params,
-                                         const NeighbourTable* table, const std::function<void(int)>& alongside)
+                                         const NeighbourTable* table,
+                                         const std::function<void(int)>& alongside)
     : impl_(std::make_unique<Impl>()) {
   params.validate();
   if (cloud.empty()) throw InputError("geodesic coordinates: the cloud is empty");

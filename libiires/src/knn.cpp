@@ -79,9 +79,13 @@ std::int64_t KnnIndex::nearest(const Eigen::Vector3d& query, double* sqDist) con
   return index;
 }
 
-NeighbourTable::NeighbourTable(const KnnIndex& index, const std::vector<Eigen::Vector3d>& points, std::size_t k,
-                               int threads)
-    : index_(index), points_(points), k_(std::min<std::size_t>(k, 255)), rows_(points.size() * k_), found_(points.size()) {
+NeighbourTable::NeighbourTable(const KnnIndex& index, const std::vector<Eigen::Vector3d>& points,
+                               std::size_t k, int threads)
+    : index_(index),
+      points_(points),
+      k_(std::min<std::size_t>(k, 255)),
+      rows_(points.size() * k_),
+      found_(points.size()) {
   parallelFor(points.size(), threads, [&](std::size_t i) {
     thread_local std::vector<std::uint32_t> idx;
     thread_local std::vector<double> d2;

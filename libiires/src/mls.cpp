@@ -13,8 +13,9 @@ constexpr std::size_t kKernelNeighbour = 8;  // paper: h from the 8th neighbour
 constexpr double kMaxQuadricHeight = 2.0;     // kernel widths: a quadric fit beyond this is not trusted
 }
 
-MlsSurface::MlsSurface(const std::vector<Eigen::Vector3d>& points, const std::vector<Eigen::Vector3d>& normals,
-                       const MlsParams& params, const KnnIndex* index, const NeighbourTable* table)
+MlsSurface::MlsSurface(const std::vector<Eigen::Vector3d>& points,
+                       const std::vector<Eigen::Vector3d>& normals, const MlsParams& params,
+                       const KnnIndex* index, const NeighbourTable* table)
     : points_(points), normals_(normals), params_(params), index_(index ? index : &own_.emplace(points)) {
   const std::size_t n = points.size();
   h_.assign(n, 0.0);

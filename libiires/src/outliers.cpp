@@ -84,8 +84,8 @@ void OutlierParams::validate() const {
 }
 
 std::size_t outlierNeighbours(const OutlierParams& params) {
-  return std::max({static_cast<std::size_t>(params.k), static_cast<std::size_t>(params.planeNeighbours),
-                   kSpacingNeighbours}) + 1;
+  const auto k = static_cast<std::size_t>(params.k), planeK = static_cast<std::size_t>(params.planeNeighbours);
+  return std::max({k, planeK, kSpacingNeighbours}) + 1;
 }
 
 OutlierResult processOutliers(const PointCloud& input, const OutlierParams& params, const KnnIndex* given,

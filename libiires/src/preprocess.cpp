@@ -32,7 +32,8 @@ std::size_t preprocessNeighbours(const PreprocessParams& params) {
   return params.runDenoise ? std::max(k, denoiseNeighbours(params.denoise)) : k;
 }
 
-PreprocessResult preprocess(const PointCloud& input, const PreprocessParams& params, const NeighbourTable* table) {
+PreprocessResult preprocess(const PointCloud& input, const PreprocessParams& params,
+                            const NeighbourTable* table) {
   params.validate();
   const auto start = std::chrono::steady_clock::now();
   OutlierParams op = params.outliers;
@@ -44,7 +45,10 @@ PreprocessResult preprocess(const PointCloud& input, const PreprocessParams& par
   // One k-NN search for both stages, unless the outlier stage moved or removed points.
   std::optional<KnnIndex> index;
   std::optional<NeighbourTable> own;
-  if (!table) table = &own.emplace(index.emplace(input.points), input.points, preprocessNeighbours(params), params.threads);
+  if (!table) {
+    index.emplace(input.points);
+    table = &own.emplace(*index, input.points, preprocessNeighbours(params), params.threads);
+  }
   OutlierResult outliers = processOutliers(input, op, nullptr, table);  // eq. (4)–(5)
   const bool unchanged = outliers.found == 0;
   result.outliersFound = outliers.found;

@@ -201,13 +201,6 @@ class Resampler {
   const std::vector<double>* size_;
 };
 
-/// Neighbours are filtered by the neighbour rule as of its last update, which follows every change of the
-/// sample set (relaxation moves samples by a fraction of a spacing and keeps their order).
-/// @param relaxation with the rings of the previous iteration on the same samples: samples it marks inactive
-/// keep their ring and cell, and unless @p requery the others re-sort their previous candidate lists by the
-/// current distances instead of querying a new k-d tree (samples moved by a fraction of a spacing, so the few
-/// neighbours that shape a cell stay among the nearest of a step ago). Without it every ring is computed from
-/// scratch.
 /// x⁸ by three squarings (std::pow with a real exponent costs a log and an exp).
 float pow8(double x) {
   x *= x;
@@ -226,7 +219,8 @@ double pseudoAngle(const Eigen::Vector2d& d) {
 /// The counter-clockwise gap from unit direction @p from to the next one @p to of a 1-ring: its bisector when
 /// the gap is wider than 135°, else nothing. @p full: the two are the same direction and the gap is the whole
 /// circle (a ring with one direction).
-std::optional<Eigen::Vector2d> gapBisector(const Eigen::Vector2d& from, const Eigen::Vector2d& to, bool full) {
+std::optional<Eigen::Vector2d> gapBisector(const Eigen::Vector2d& from, const Eigen::Vector2d& to,
+                                           bool full) {
   if (full) return -from;
   const double cross = from.x() * to.y() - from.y() * to.x(), dot = from.dot(to);
   if (cross > 0) {
@@ -234,12 +228,19 @@ std::optional<Eigen::Vector2d> gapBisector(const Eigen::Vector2d& from, const Ei
     return (from + to).normalized();
   }
   if (cross == 0) {
-    if (dot > 0) return std::nullopt;  // the same direction: no gap
+    if (dot > 0) return std::nullopt;             // the same direction: no gap
     return Eigen::Vector2d(-from.y(), from.x());  // exactly 180°
   }
   return -(from + to).normalized();  // more than 180°
 }
 
+/// Neighbours are filtered by the neighbour rule as of its last update, which follows every change of the
+/// sample set (relaxation moves samples by a fraction of a spacing and keeps their order).
+/// @param relaxation with the rings of the previous iteration on the same samples: samples it marks inactive
+/// keep their ring and cell, and unless @p requery the others re-sort their previous candidate lists by the
+/// current distances instead of querying a new k-d tree (samples moved by a fraction of a spacing, so the few
+/// neighbours that shape a cell stay among the nearest of a step ago). Without it every ring is computed from
+/// scratch.
 Rings Resampler::computeRings(const Samples& s, double cellRadius, const Relaxation* relaxation,
                               bool requery) const {
   const Rings* previous = relaxation && relaxation->rings ? &*relaxation->rings : nullptr;
@@ -680,7 +681,8 @@ void Resampler::forceCount(Samples& s, Relaxation& relaxation) const {
 /// a cloud not that much denser than the output).
 std::vector<std::uint32_t> initialCandidates(const PointCloud& cloud, const MlsSurface& surface,
                                              const ResampleParams& params, int threads) {
-  const std::size_t count = static_cast<std::size_t>(params.candidateFactor * static_cast<double>(params.targetCount));
+  const std::size_t count =
+      static_cast<std::size_t>(params.candidateFactor * static_cast<double>(params.targetCount));
   if (cloud.size() <= count) {
     std::vector<std::uint32_t> all(cloud.size());
     std::iota(all.begin(), all.end(), 0u);
@@ -896,10 +898,10 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
   // graph, the MLS kernel widths) while pre-processing keeps the positions; one k-d tree for it and the MLS.
   t = clock.begin("neighbours");
   std::optional<KnnIndex> index(std::in_place, cloud.points);
-  std::optional<NeighbourTable> neighbours(
-      std::in_place, *index, cloud.points,
-      std::max({preprocessing ? preprocessNeighbours(pp) : std::size_t{0}, params.intrinsic ? static_cast<std::size_t>(gp.k) + 1 : 0, std::size_t{9}}),
-      params.threads);
+  const std::size_t tableK =
+      std::max({preprocessing ? preprocessNeighbours(pp) : std::size_t{0},
+                params.intrinsic ? static_cast<std::size_t>(gp.k) + 1 : 0, std::size_t{9}});
+  std::optional<NeighbourTable> neighbours(std::in_place, *index, cloud.points, tableK, params.threads);
   clock.end("neighbours", t);
   if (preprocessing) {
     t = clock.begin("preprocess");
@@ -925,48 +927,22 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
   }
   clock.end("normals", t);
 
-  // What does not need the geodesic coordinates: the MLS surface, the curvature field, the sharp features and
-  // the initial candidates. While the neighbour table still holds (the surface then costs little) it runs where
-  // the geodesic satellite sweeps (serial per component) leave threads idle; else after them, on all threads
-  // and the geodesic graph's k-d tree.
+  // What does not need the geodesic coordinates: the MLS surface and the initial candidates. While the
+  // neighbour table still holds (the surface then costs little) it runs where the geodesic satellite sweeps
+  // (serial per component) leave threads idle; else after them, on all threads and the geodesic graph's k-d
+  // tree.
   std::optional<MlsSurface> surface;
-  std::optional<CurvatureResult> curvature;
-  ResampleParams local = params;  // sharp edges add fixed samples
   std::vector<std::uint32_t> candidates;
   auto independent = [&](int threads) {
     auto t = clock.begin("surface");
     MlsParams mp = params.mls;
     mp.threads = threads;
     surface.emplace(cloud.points, cloud.normals, mp,
-                    index ? &*index : result.geodesic ? result.geodesic->pointIndex() : nullptr,
+                    index             ? &*index
+                    : result.geodesic ? result.geodesic->pointIndex()
+                                      : nullptr,
                     neighbours ? &*neighbours : nullptr);
     clock.end("surface", t);
-    if (params.mode == ResampleMode::kCurvature) {
-      t = clock.begin("curvature");
-      CurvatureParams cp = params.curvature;
-      cp.threads = threads;
-      curvature = computeCurvature(cloud.points, cloud.normals, cp);  // eq. (8)–(10)
-      clock.end("curvature", t);
-    }
-    if (params.sharpEdges) {
-      t = clock.begin("features");
-      FeatureParams fp = params.features;
-      fp.threads = threads;
-      const FeatureResult features = detectFeatures(cloud, fp);
-      const double l0 = std::sqrt(2.0 * surface->area() / (std::sqrt(3.0) * static_cast<double>(params.targetCount)));
-      std::vector<std::uint32_t> chainOf;
-      std::vector<Eigen::Vector3d> onEdges = sampleFeatureChains(features.chains, params.edgeRatio * l0, &chainOf);
-      if (onEdges.size() + params.fixedSamples.size() > params.targetCount / 2)  // never let edges take over N
-        onEdges = sampleFeatureChains(features.chains, params.edgeRatio * l0 * 2.0 *
-                                                           static_cast<double>(onEdges.size()) /
-                                                           static_cast<double>(params.targetCount), &chainOf);
-      onEdges = snapToCreases(cloud, onEdges, chainOf, features.spacing, fp);  // exactly on the creases
-      result.featurePoints = features.featureIndices.size();
-      result.featureSamples = std::min(onEdges.size(), params.targetCount - params.fixedSamples.size());
-      local.fixedSamples.insert(local.fixedSamples.end(), onEdges.begin(),
-                                onEdges.begin() + static_cast<long>(result.featureSamples));
-      clock.end("features", t);
-    }
     t = clock.begin("candidates");
     candidates = initialCandidates(cloud, *surface, params, threads);
     clock.end("candidates", t);
@@ -979,7 +955,8 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
     ip.threads = params.threads;
     const bool beside = neighbours.has_value();
     const std::function<void(int)> during = beside ? std::function<void(int)>(independent) : nullptr;
-    result.geodesic = std::make_shared<const GeodesicCoordinates>(cloud, gp, beside ? &*neighbours : nullptr, during);
+    result.geodesic =
+        std::make_shared<const GeodesicCoordinates>(cloud, gp, beside ? &*neighbours : nullptr, during);
     rule = std::make_shared<IntrinsicRule>(result.geodesic, ip);
     result.components = result.geodesic->components();
     result.satellites = result.components * static_cast<std::size_t>(gp.satellites);
@@ -990,6 +967,36 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
   }
   if (!rule) rule = std::make_shared<EuclideanRule>();
   neighbours.reset();
+
+  std::optional<CurvatureResult> curvature;
+  if (params.mode == ResampleMode::kCurvature) {
+    t = clock.begin("curvature");
+    CurvatureParams cp = params.curvature;
+    cp.threads = params.threads;
+    curvature = computeCurvature(cloud.points, cloud.normals, cp);  // eq. (8)–(10)
+    clock.end("curvature", t);
+  }
+  ResampleParams local = params;  // sharp edges add fixed samples
+  if (params.sharpEdges) {
+    t = clock.begin("features");
+    FeatureParams fp = params.features;
+    fp.threads = params.threads;
+    const FeatureResult features = detectFeatures(cloud, fp);
+    const double l0 =
+        std::sqrt(2.0 * surface->area() / (std::sqrt(3.0) * static_cast<double>(params.targetCount)));
+    std::vector<std::uint32_t> chainOf;
+    std::vector<Eigen::Vector3d> onEdges = sampleFeatureChains(features.chains, params.edgeRatio * l0, &chainOf);
+    if (onEdges.size() + params.fixedSamples.size() > params.targetCount / 2)  // never let edges take over N
+      onEdges = sampleFeatureChains(features.chains, params.edgeRatio * l0 * 2.0 *
+                                                         static_cast<double>(onEdges.size()) /
+                                                         static_cast<double>(params.targetCount), &chainOf);
+    onEdges = snapToCreases(cloud, onEdges, chainOf, features.spacing, fp);  // exactly on the creases
+    result.featurePoints = features.featureIndices.size();
+    result.featureSamples = std::min(onEdges.size(), params.targetCount - params.fixedSamples.size());
+    local.fixedSamples.insert(local.fixedSamples.end(), onEdges.begin(),
+                              onEdges.begin() + static_cast<long>(result.featureSamples));
+    clock.end("features", t);
+  }
 
   Resampler resampler(cloud.points, cloud.normals, *surface, local, *rule,
                       curvature ? &curvature->sizeFactor : nullptr);

@@ -104,14 +104,14 @@ struct DenoiseResult {
 /// @throws InputError when the cloud is empty, holds NaN/Inf, or has fewer than neighbours + 1 points;
 /// std::invalid_argument for bad parameters.
 /// @param index (optional) a k-d tree over exactly input.points, borrowed, to save building one
-/// @param table (optional) neighbour lists of exactly input.points (k ≥ max(neighbours, kernelNeighbour + 1)),
-/// borrowed, to save the neighbour search
+/// @param table (optional) neighbour lists of exactly input.points (k ≥ max(neighbours, kernelNeighbour +
+/// 1)), borrowed, to save the neighbour search
 /// @note O(n k log n) for the neighbour search plus O(n k) per sweep. Deterministic: every sweep reads the
 /// previous positions only, so the output does not depend on the thread count.
 /// @brief Neighbours per point denoise() finds (the point itself included): what a table must hold.
 std::size_t denoiseNeighbours(const DenoiseParams& params);
 
-DenoiseResult denoise(const PointCloud& input, const DenoiseParams& params = {}, const KnnIndex* index = nullptr,
-                      const NeighbourTable* table = nullptr);
+DenoiseResult denoise(const PointCloud& input, const DenoiseParams& params = {},
+                      const KnnIndex* index = nullptr, const NeighbourTable* table = nullptr);
 
 }  // namespace iires

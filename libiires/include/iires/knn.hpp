@@ -41,14 +41,15 @@ class KnnIndex {
   std::unique_ptr<Impl> impl_;
 };
 
-/// @brief The k nearest neighbours of every point of a set, found once for the stages that each read the first
-/// few of every row (outlier test, denoising, geodesic graph, MLS kernel widths: one k-NN pass instead of four).
-/// Row i holds what KnnIndex::knn(points[i], k) returns (point i itself among them, nearest first); get()
-/// hands out a prefix with the squared distances recomputed, so the table costs 4 bytes per neighbour.
+/// @brief The k nearest neighbours of every point of a set, found once for the stages that each read the
+/// first few of every row (outlier test, denoising, geodesic graph, MLS kernel widths: one k-NN pass instead
+/// of four). Row i holds what KnnIndex::knn(points[i], k) returns (point i itself among them, nearest first);
+/// get() hands out a prefix with the squared distances recomputed, so the table costs 4 bytes per neighbour.
 /// @note The points and the index must outlive the table and stay unchanged.
 class NeighbourTable {
  public:
-  NeighbourTable(const KnnIndex& index, const std::vector<Eigen::Vector3d>& points, std::size_t k, int threads = 0);
+  NeighbourTable(const KnnIndex& index, const std::vector<Eigen::Vector3d>& points, std::size_t k,
+                 int threads = 0);
 
   std::size_t k() const { return k_; }
   std::size_t size() const { return found_.size(); }

@@ -37,7 +37,8 @@ class MlsSurface {
   /// @param table (optional) neighbour lists of exactly these points (k ≥ 9), borrowed while constructing, to
   /// save the kernel widths' k-NN search
   MlsSurface(const std::vector<Eigen::Vector3d>& points, const std::vector<Eigen::Vector3d>& normals,
-             const MlsParams& params = {}, const KnnIndex* index = nullptr, const NeighbourTable* table = nullptr);
+             const MlsParams& params = {}, const KnnIndex* index = nullptr,
+             const NeighbourTable* table = nullptr);
   ~MlsSurface();
 
   /// @brief Project @p x onto the surface. @p normal (optional) receives the surface normal there,

@@ -64,11 +64,12 @@ struct OutlierResult {
 /// k-NN lists of its own k nearest neighbours (a non-mutual relation). A suspect is an *outlier* when it
 /// also lies off the surface: its distance to the least-squares plane of its planeNeighbours nearest
 /// *trusted* (non-suspect) points exceeds planeThreshold local spacings, or its distance to the plane of the
-/// nearest of them (with its 8 nearest trusted neighbours) exceeds nearPlaneThreshold local spacings; any point
-/// beyond twice planeThreshold is an outlier too (a small cluster of outliers can be mutual among itself). The literal eq. 4 (any non-mutual
-/// neighbour) flags ordinary points where the density changes — those points are non-mutual too but lie on
-/// their neighbours' plane, so the second test clears them; an outlier moved 3–6 spacings off the surface
-/// is non-mutual (the surface points' own neighbours are all closer) and far from the plane.
+/// nearest of them (with its 8 nearest trusted neighbours) exceeds nearPlaneThreshold local spacings; any
+/// point beyond twice planeThreshold is an outlier too (a small cluster of outliers can be mutual among
+/// itself). The literal eq. 4 (any non-mutual neighbour) flags ordinary points where the density changes —
+/// those points are non-mutual too but lie on their neighbours' plane, so the second test clears them; an
+/// outlier moved 3–6 spacings off the surface is non-mutual (the surface points' own neighbours are all
+/// closer) and far from the plane.
 ///
 /// Pull (eq. 5): an outlier o is moved to o + n_a n_aᵀ (a(q) − o), where q is its nearest trusted point
 /// (mutual and within planeThreshold of its plane; any non-outlier when fewer than planeNeighbours exist) and
