@@ -99,7 +99,9 @@ std::string runMethod(const std::string& method, const iires::PointCloud& sample
     mesh = r.mesh;
     if (!dump.empty()) iires::writeMesh(dump, mesh);
     return describe(mesh, truth, r.meshingSeconds(), threads) +
-           " holes_filled=" + std::to_string(r.holes.filled) + " holes_kept=" + std::to_string(r.holes.kept);
+           " holes_filled=" + std::to_string(r.holes.filled) + " holes_kept=" + std::to_string(r.holes.kept) +
+           " large_holes_filled=" + std::to_string(r.largeHoles.filled) +
+           " large_holes_kept=" + std::to_string(r.largeHoles.kept);
   }
   open3d::geometry::PointCloud pcd;
   pcd.points_ = samples.points;

@@ -90,6 +90,9 @@ std::string ReconstructResult::toJson() const {
   os << ",\n  \"bad_triangles\": {\"vertices_moved\": " << badTriangles.moved << ", \"vertices_removed\": " << badTriangles.removed << "}";
   os << ",\n  \"holes\": {\"loops\": " << holes.loops << ", \"filled\": " << holes.filled
      << ", \"kept\": " << holes.kept << ", \"faces_added\": " << holes.facesAdded << ", \"vertices_added\": " << holes.verticesAdded << "}"
+     << ",\n  \"large_holes\": {\"loops\": " << largeHoles.loops << ", \"filled\": " << largeHoles.filled
+     << ", \"kept\": " << largeHoles.kept << ", \"faces_added\": " << largeHoles.facesAdded
+     << ", \"vertices_added\": " << largeHoles.verticesAdded << ", \"skipped\": " << (largeHoles.skipped ? "true" : "false") << "}"
      << ",\n  \"orientation\": {\"components\": " << orientation.components
      << ", \"faces_flipped\": " << orientation.facesFlipped << ", \"conflicts\": " << orientation.conflicts << "}"
      << ",\n  \"quality\": " << nested(quality.toJson()) << ",\n  \"meshing_time_s\": " << num(meshingSeconds())
@@ -174,7 +177,13 @@ ReconstructResult reconstruct(const PointCloud& input, const ReconstructParams& 
       result.holes.facesAdded += again.facesAdded;
       result.holes.verticesAdded += again.verticesAdded;
     }
-    if (params.method == ReconstructMethod::kLocal && params.local.flipMaxDihedral > 0 && result.holes.facesAdded)
+    if (params.holes.maxRefinedExtent > 0) {
+      // What is left open: a gap small next to its part gets a refined fill (it needs an oriented 2-manifold).
+      orientConsistently(result.mesh, normals);
+      result.largeHoles = fillLargeHoles(result.mesh, normals, params.holes);
+    }
+    if (params.method == ReconstructMethod::kLocal && params.local.flipMaxDihedral > 0 &&
+        (result.holes.facesAdded || result.largeHoles.filled))
       result.flipsAfterFilling = flipToDelaunay(result.mesh, params.local.flipMaxDihedral, params.local.maxFlipSweeps);
   }
   if (params.repairQuality > 0)

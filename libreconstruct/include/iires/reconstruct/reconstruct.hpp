@@ -1,8 +1,8 @@
 #pragma once
 /// @file reconstruct.hpp
 /// @brief The reconstruction pipeline (DESIGN §5): cloud → (isotropic resampling to N) → triangulation
-/// (local Delaunay 1-rings or CGAL's advancing front) → small holes closed → consistent orientation → quality
-/// report.
+/// (local Delaunay 1-rings or CGAL's advancing front) → small holes closed → large holes (gaps small next to
+/// their part) closed with new vertices → consistent orientation → quality report.
 
 #include <cstdint>
 #include <functional>
@@ -51,7 +51,7 @@ struct ReconstructParams {
   AdvancingFrontParams advancingFront;  ///< advancing-front settings
   std::size_t minComponentFaces = 20;  ///< components with fewer faces are removed before hole filling (0 = keep)
   bool fillHoles = true;            ///< close small holes (loops short in edges and perimeter)
-  HoleFillingParams holes;          ///< which loops count as small
+  HoleFillingParams holes;          ///< which loops count as small, and which as a gap for fillLargeHoles()
   /// Triangles with a worse Q are repaired by moving (or else removing) one of their vertices when that does better
   /// and the surface moves by at most repairDeviation × the mean edge length (repairBadTriangles); 0 = off
   double repairQuality = 0.4;
@@ -84,6 +84,7 @@ struct ReconstructResult {
   TriangulateResult triangulation;   ///< the local method's diagnostics (its mesh is moved into mesh)
   std::size_t smallComponentFaces = 0;  ///< faces of small components removed
   HoleFillingReport holes;           ///< small holes closed / kept
+  LargeHoleReport largeHoles;        ///< large holes closed with new vertices / kept (fillLargeHoles)
   std::size_t flipsAfterFilling = 0; ///< Delaunay flips after hole filling (local method)
   BadTriangleReport badTriangles;    ///< vertices moved / removed to raise the worst triangles (repairBadTriangles)
   OrientationReport orientation;     ///< orientation diagnostics
