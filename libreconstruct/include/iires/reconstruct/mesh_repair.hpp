@@ -85,6 +85,19 @@ struct LargeHoleReport {
 LargeHoleReport fillLargeHoles(TriangleMesh& mesh, std::vector<Eigen::Vector3d>& normals,
                                const HoleFillingParams& params = {});
 
+/// @brief Remesh the neighbourhood of the triangles still below @p minQuality: those faces grown by @p rings rings
+/// (through shared vertices) get @p iterations passes of CGAL's isotropic remeshing at the region's mean edge
+/// length, vertices projected onto the region's old surface, the region's border unchanged. The result is kept only
+/// when the region's worst Q rises (else the mesh is left as it was). Moved vertices keep their index (and get the
+/// normal of their new faces in @p normals when it holds one per vertex), removed ones stay in the list unused,
+/// new ones are appended; the faces are rebuilt (faces outside the regions first, in order).
+/// @return vertices moved, removed or added (0: nothing changed, including when no face is below @p minQuality —
+/// then nothing at all is done — or @p mesh is not an oriented 2-manifold).
+/// @pre @p mesh is consistently oriented (orientConsistently()).
+/// @note Deterministic.
+std::size_t remeshBadRegions(TriangleMesh& mesh, std::vector<Eigen::Vector3d>& normals, double minQuality,
+                             int rings = 2, int iterations = 3);
+
 /// @brief Make every vertex manifold: where a vertex's faces form several fans (its link has several parts),
 /// keep the fan with the most faces (ties: the one with the lowest face index) and remove the others' faces.
 /// The holes this opens are for fillSmallHoles().

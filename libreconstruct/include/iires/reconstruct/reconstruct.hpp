@@ -56,6 +56,9 @@ struct ReconstructParams {
   /// and the surface moves by at most repairDeviation × the mean edge length (repairBadTriangles); 0 = off
   double repairQuality = 0.4;
   double repairDeviation = 0.25;    ///< see repairQuality (≥ 0)
+  /// Then the regions (2 rings) around triangles still below repairQuality are remeshed isotropically, kept when
+  /// their worst Q rises (remeshBadRegions); nothing happens when no triangle is below it
+  bool remeshBadRegions = true;
   bool evaluate = true;             ///< compute the quality report (distance to the validated input cloud)
   MeshQualityParams quality;        ///< report settings (threads and seed are set from here)
   /// Neighbour rule for resampling and the 1-rings. nullptr = the resampler's default (intrinsic unless
@@ -87,6 +90,7 @@ struct ReconstructResult {
   LargeHoleReport largeHoles;        ///< large holes closed with new vertices / kept (fillLargeHoles)
   std::size_t flipsAfterFilling = 0; ///< Delaunay flips after hole filling (local method)
   BadTriangleReport badTriangles;    ///< vertices moved / removed to raise the worst triangles (repairBadTriangles)
+  std::size_t remeshedVertices = 0;  ///< vertices moved / removed / added by remeshBadRegions
   OrientationReport orientation;     ///< orientation diagnostics
   std::size_t unusedVertices = 0;    ///< samples no triangle uses (removed from the mesh)
   MeshQuality quality;               ///< the quality report (when params.evaluate)
