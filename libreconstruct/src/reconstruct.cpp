@@ -178,7 +178,7 @@ ReconstructResult reconstruct(const PointCloud& input, const ReconstructParams& 
       result.holes.facesAdded += again.facesAdded;
       result.holes.verticesAdded += again.verticesAdded;
     }
-    if (params.holes.maxRefinedExtent > 0) {
+    if (params.holes.maxRefinedExtent > 0 && result.holes.kept > 0) {
       // What is left open: a gap small next to its part gets a refined fill (it needs an oriented 2-manifold).
       orientConsistently(result.mesh, normals);
       result.largeHoles = fillLargeHoles(result.mesh, normals, params.holes);
