@@ -10,6 +10,7 @@
 #include <CGAL/Polygon_mesh_processing/triangulate_hole.h>
 #include <CGAL/Surface_mesh.h>
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <iterator>
