@@ -7,7 +7,9 @@
 // key=value line: quality (Q, angles), topology, Hausdorff to the TRUE mesh (% of its diagonal), time.
 //
 // Usage: reconstruct_bench [--data DIR] [--models a,b,c] [--counts 10000,20000] [--dense 100000]
-//                          [--methods local,advancing-front,bpa,poisson] [--threads T]
+//                          [--methods local,advancing-front,bpa,poisson] [--threads T] [--seed S] [--dump DIR]
+// --seed: the sampleMesh seed of the dense input (default 3); --dump DIR writes each local mesh to
+// DIR/MODEL_N_sSEED.off.
 // (internally: --child METHOD --cloud FILE --truth MESH --spacing L --n N runs one method and prints its line)
 // Extra model "hand-vertices": the 1,197 vertices of CGAL's hand mesh (a sparse, uneven scan) upsampled to N.
 #include <sys/wait.h>
@@ -61,14 +63,14 @@ std::string describe(const iires::TriangleMesh& mesh, const iires::TriangleMesh&
 
 /// The input of a model: a dense area-uniform sampling of the true mesh without normals (a scan), or for the
 /// sparse model the mesh's own vertices.
-iires::PointCloud modelInput(const iires::TriangleMesh& truth, bool sparse, std::size_t dense) {
+iires::PointCloud modelInput(const iires::TriangleMesh& truth, bool sparse, std::size_t dense, unsigned seed) {
   iires::PointCloud input;
   if (sparse) {
     input.points = truth.vertices;
   } else {
     iires::MeshSamplingParams sp;
     sp.count = dense;
-    sp.seed = 3;
+    sp.seed = seed;
     input = iires::sampleMesh(truth, sp);
     input.normals.clear();  // a scan has no normals: the pipeline estimates them
   }
@@ -76,7 +78,8 @@ iires::PointCloud modelInput(const iires::TriangleMesh& truth, bool sparse, std:
 }
 
 std::string runMethod(const std::string& method, const iires::PointCloud& samples, const iires::TriangleMesh& truth,
-                      double spacing, std::size_t n, bool sparse, std::size_t dense, int threads) {
+                      double spacing, std::size_t n, bool sparse, std::size_t dense, int threads, unsigned seed,
+                      const std::string& dump) {
   const auto t = Clock::now();
   iires::TriangleMesh mesh;
   if (method == "local" || method == "advancing-front") {
@@ -87,15 +90,18 @@ std::string runMethod(const std::string& method, const iires::PointCloud& sample
     iires::ReconstructResult r;
     if (method == "local") {  // the whole pipeline, as iires-reconstruct runs it
       p.targetCount = n;
-      r = iires::reconstruct(modelInput(truth, sparse, dense), p);
+      r = iires::reconstruct(modelInput(truth, sparse, dense, seed), p);
       if (r.samples.points != samples.points) return "status=error message=\"resampling differs from the parent's\"";
     } else {
       p.resample = false;
       r = iires::reconstruct(samples, p);
     }
     mesh = r.mesh;
+    if (!dump.empty()) iires::writeMesh(dump, mesh);
     return describe(mesh, truth, r.meshingSeconds(), threads) +
-           " holes_filled=" + std::to_string(r.holes.filled) + " holes_kept=" + std::to_string(r.holes.kept);
+           " holes_filled=" + std::to_string(r.holes.filled) + " holes_kept=" + std::to_string(r.holes.kept) +
+           " large_holes_filled=" + std::to_string(r.largeHoles.filled) +
+           " large_holes_kept=" + std::to_string(r.largeHoles.kept);
   }
   open3d::geometry::PointCloud pcd;
   pcd.points_ = samples.points;
@@ -120,11 +126,13 @@ std::string runMethod(const std::string& method, const iires::PointCloud& sample
 /// status when it crashed.
 std::string isolated(const std::string& self, const std::string& method, const std::string& cloudFile,
                      const std::string& truthFile, double spacing, const std::string& n, bool sparse,
-                     std::size_t dense, int threads) {
+                     std::size_t dense, int threads, unsigned seed, const std::string& dump) {
   std::ostringstream cmd;
   cmd << "'" << self << "' --child " << method << " --cloud '" << cloudFile << "' --truth '" << truthFile
       << "' --spacing " << std::setprecision(17) << spacing << " --n " << n << " --sparse " << sparse
-      << " --dense " << dense << " --threads " << threads << " 2>/dev/null";
+      << " --dense " << dense << " --threads " << threads << " --seed " << seed;
+  if (!dump.empty() && method == "local") cmd << " --dump '" << dump << "'";
+  cmd << " 2>/dev/null";
   std::FILE* pipe = popen(cmd.str().c_str(), "r");
   if (!pipe) return "status=popen_failed";
   std::string out;
@@ -150,6 +158,8 @@ int main(int argc, char** argv) {
   double spacingArg = 0;
   std::size_t nArg = 0;
   bool sparseArg = false;
+  unsigned seed = 3;
+  std::string dump;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string k = argv[i], v = argv[i + 1];
     if (k == "--child") child = v;
@@ -164,6 +174,8 @@ int main(int argc, char** argv) {
     else if (k == "--methods") methods = v;
     else if (k == "--dense") dense = std::stoul(v);
     else if (k == "--threads") threads = std::stoi(v);
+    else if (k == "--seed") seed = static_cast<unsigned>(std::stoul(v));
+    else if (k == "--dump") dump = v;
     else {
       std::cerr << "unknown option " << k << "\n";
       return 2;
@@ -173,7 +185,7 @@ int main(int argc, char** argv) {
   if (!child.empty()) {
     try {
       std::cout << "status=ok " << runMethod(child, iires::readPointCloud(cloudFile), iires::readMesh(truthFile),
-                                              spacingArg, nArg, sparseArg, dense, threads)
+                                              spacingArg, nArg, sparseArg, dense, threads, seed, dump)
                 << std::endl;
     } catch (const std::exception& e) {
       std::cout << "status=error message=\"" << e.what() << "\"" << std::endl;
@@ -187,7 +199,7 @@ int main(int argc, char** argv) {
     const bool sparse = model == "hand-vertices";
     const std::string file = data + "/meshes/" + (sparse ? std::string("hand") : model) + ".off";
     const iires::TriangleMesh truth = iires::readMesh(file);
-    const iires::PointCloud input = modelInput(truth, sparse, dense);
+    const iires::PointCloud input = modelInput(truth, sparse, dense, seed);
     for (const std::string& c : split(counts)) {
       iires::ResampleParams rp = iires::meshResampling();  // the resampling reconstruct() does
       rp.targetCount = std::stoul(c);
@@ -202,7 +214,9 @@ int main(int argc, char** argv) {
       iires::writePointCloud(cloudFile, rs.cloud);
       for (const std::string& m : split(methods))
         std::cout << "model=" << model << " n=" << c << " method=" << m << " "
-                  << isolated(argv[0], m, cloudFile, file, spacing, c, sparse, dense, threads) << std::endl;
+                  << isolated(argv[0], m, cloudFile, file, spacing, c, sparse, dense, threads, seed,
+                              dump.empty() ? std::string() : dump + "/" + model + "_" + c + "_s" + std::to_string(seed) + ".off")
+                  << std::endl;
       std::remove(cloudFile.c_str());
     }
   }

@@ -194,6 +194,94 @@ TEST(MeshRepair, ZipsSliverHoleAlongAnEdge) {
   }
 }
 
+// A gap small next to its part (a cap cut off the sphere, z < -0.8: the loop's box diagonal is about half the
+// sphere's) is closed with new vertices at the mesh's spacing, flat (C⁰ fairing: no dome bulging towards the pole);
+// with maxRefinedExtent below that ratio it stays open, and a mesh that is not consistently oriented is left alone.
+TEST(MeshRepair, FillLargeHolesClosesACapWithNewVertices) {
+  PointCloud c;
+  const TriangleMesh sphere = sphereMesh(c);
+  TriangleMesh m = sphere;
+  std::vector<Eigen::Vector3i> kept;
+  for (const auto& t : m.triangles) {
+    bool cap = false;
+    for (int k = 0; k < 3; ++k) cap = cap || m.vertices[t[k]].z() < -0.8;
+    if (!cap) kept.push_back(t);
+  }
+  m.triangles = kept;
+  const MeshQuality before = evaluateMesh(m);
+  ASSERT_EQ(before.boundaryLoops, 1u);
+  ASSERT_GT(before.boundaryEdges, 40u);  // far over fillSmallHoles' limits (16 edges, 20 l; 24 / 30 l when good)
+  const TriangleMesh cut = m;
+  std::vector<Eigen::Vector3d> normals = c.normals;
+  {
+    TriangleMesh small = m;
+    std::vector<Eigen::Vector3d> n = normals;
+    EXPECT_EQ(fillSmallHoles(small, n).filled, 0u);
+  }
+  const std::size_t nv = m.vertices.size();
+  // The loop's z range (its vertices lie just above the cut).
+  std::map<std::pair<int, int>, int> uses;
+  for (const auto& t : m.triangles)
+    for (int k = 0; k < 3; ++k) ++uses[std::minmax(t[k], t[(k + 1) % 3])];
+  double loopLow = 1, loopHigh = -1;
+  for (const auto& [e, n] : uses)
+    if (n == 1)
+      for (int v : {e.first, e.second})
+        loopLow = std::min(loopLow, m.vertices[v].z()), loopHigh = std::max(loopHigh, m.vertices[v].z());
+  ASSERT_LT(loopHigh, -0.7);
+  const LargeHoleReport r = fillLargeHoles(m, normals);
+  EXPECT_FALSE(r.skipped);
+  EXPECT_EQ(r.loops, 1u);
+  EXPECT_EQ(r.filled, 1u);
+  ASSERT_EQ(m.vertices.size(), nv + r.verticesAdded);
+  ASSERT_EQ(normals.size(), m.vertices.size());
+  // The cap's area is π · 0.6² ≈ 1.13, about 10 % of the sphere's 3,000 vertices: new ones at a similar density.
+  EXPECT_GT(r.verticesAdded, 150u);
+  EXPECT_LT(r.verticesAdded, 600u);
+  const MeshQuality after = evaluateMesh(m);
+  expectClosedGenus(after, 2);
+  // The old faces come first, unchanged; the patch's faces are well shaped (issue 7's bound, Q ≥ 0.4; measured
+  // 0.65 here) and as good on average as the triangulation's own (the whole sphere's mean Q 0.827).
+  ASSERT_GT(m.triangles.size(), cut.triangles.size());
+  EXPECT_TRUE(std::equal(cut.triangles.begin(), cut.triangles.end(), m.triangles.begin()));
+  EXPECT_EQ(r.facesAdded, m.triangles.size() - cut.triangles.size());
+  double patchMin = 1, patchSum = 0;
+  for (std::size_t f = cut.triangles.size(); f < m.triangles.size(); ++f) {
+    const auto& t = m.triangles[f];
+    const double q = triangleQuality(m.vertices[t[0]], m.vertices[t[1]], m.vertices[t[2]]);
+    patchMin = std::min(patchMin, q), patchSum += q;
+  }
+  EXPECT_GE(patchMin, 0.4);
+  EXPECT_GE(patchSum / static_cast<double>(r.facesAdded), evaluateMesh(sphere).qualityMean);
+  for (std::size_t v = nv; v < m.vertices.size(); ++v) {
+    const Eigen::Vector3d& x = m.vertices[v];
+    EXPECT_GT(x.z(), loopLow - 0.01) << v;  // a flat cap within the loop's z range (a C¹ dome bulges below it)
+    EXPECT_LT(x.z(), loopHigh + 0.01) << v;
+    EXPECT_LT(x.head<2>().norm(), 0.61) << v;  // inside the loop
+    EXPECT_LT(normals[v].z(), -0.9) << v;     // outward (down), as the oriented faces around it
+  }
+  // Too large for the limit: kept, nothing changes.
+  TriangleMesh strict = cut;
+  std::vector<Eigen::Vector3d> strictNormals = c.normals;
+  HoleFillingParams p;
+  p.maxRefinedExtent = 0.3;
+  const LargeHoleReport s = fillLargeHoles(strict, strictNormals, p);
+  EXPECT_EQ(s.filled, 0u);
+  EXPECT_EQ(s.kept, 1u);
+  EXPECT_EQ(strict.triangles, cut.triangles);
+  EXPECT_EQ(strict.vertices.size(), cut.vertices.size());
+  // One face flipped: not an oriented manifold, so nothing is done.
+  TriangleMesh flipped = cut;
+  std::swap(flipped.triangles[7][1], flipped.triangles[7][2]);
+  const LargeHoleReport f = fillLargeHoles(flipped, strictNormals);
+  EXPECT_TRUE(f.skipped);
+  EXPECT_EQ(f.filled, 0u);
+  EXPECT_EQ(flipped.triangles.size(), cut.triangles.size());
+  EXPECT_EQ(flipped.vertices.size(), cut.vertices.size());
+  p.maxRefinedExtent = 1.5;
+  EXPECT_THROW(p.validate(), std::invalid_argument);
+}
+
 // A sample crowded onto its neighbour (slivers) is moved or removed; a spike (a vertex 5 l off its neighbours'
 // surface, thin triangles too) is kept: changing it would move the surface by more than 0.25 l — unless allowed.
 TEST(MeshRepair, RepairsCrowdedVertexKeepsSpike) {
@@ -233,6 +321,53 @@ TEST(MeshRepair, RepairsCrowdedVertexKeepsSpike) {
   // With no bound on the deviation the spike is flattened or removed.
   repairBadTriangles(loose, c.normals, 0.4, 100.0);
   EXPECT_TRUE(loose.vertices[2000] != spike || spikeFaces(loose) == 0);
+}
+
+// Slivers (an edge split 1/8 along it: two of the four new faces are thin) are remeshed away: the region around
+// them gets isotropic remeshing, on the old surface; the rest of the mesh stays as it was.
+TEST(MeshRepair, RemeshBadRegionsRaisesSlivers) {
+  PointCloud c;
+  TriangleMesh m = sphereMesh(c);
+  std::vector<Eigen::Vector3d> normals = c.normals;
+  const TriangleMesh clean = m;
+  EXPECT_EQ(remeshBadRegions(m, normals, 0.4), 0u);  // nothing below 0.4 (0.65): nothing happens
+  EXPECT_EQ(m.vertices, clean.vertices);
+  EXPECT_EQ(m.triangles, clean.triangles);
+  // Split the edge (a, b) of face 0 and of the face across it at 1/8 of its length.
+  const int a = m.triangles[0][0], b = m.triangles[0][1], cc = m.triangles[0][2];
+  std::size_t across = 0;
+  int d = -1;
+  for (std::size_t f = 1; f < m.triangles.size(); ++f)
+    for (int k = 0; k < 3; ++k)
+      if (m.triangles[f][k] == b && m.triangles[f][(k + 1) % 3] == a) across = f, d = m.triangles[f][(k + 2) % 3];
+  ASSERT_GE(d, 0);
+  const Eigen::Vector3d split = (0.875 * m.vertices[a] + 0.125 * m.vertices[b]).normalized();
+  const int s = static_cast<int>(m.vertices.size());
+  m.vertices.push_back(split);
+  normals.push_back(split);
+  m.triangles[0] = Eigen::Vector3i(a, s, cc);
+  m.triangles[across] = Eigen::Vector3i(b, s, d);
+  m.triangles.emplace_back(s, b, cc);
+  m.triangles.emplace_back(s, a, d);
+  const MeshQuality before = evaluateMesh(m);
+  ASSERT_TRUE(before.closed);
+  ASSERT_TRUE(before.oriented);
+  ASSERT_LT(before.qualityMin, 0.25);
+  TriangleMesh repaired = m;
+  std::vector<Eigen::Vector3d> repairedNormals = normals;
+  const std::size_t n = remeshBadRegions(repaired, repairedNormals, 0.4);
+  EXPECT_GT(n, 0u);
+  ASSERT_EQ(repairedNormals.size(), repaired.vertices.size());
+  const MeshQuality after = evaluateMesh(repaired);
+  expectClosedGenus(after, 2);
+  EXPECT_GE(after.qualityMin, 0.4);
+  const Eigen::Vector3d centre = (m.vertices[a] + m.vertices[b]) / 2;
+  for (std::size_t v = 0; v < repaired.vertices.size(); ++v) {
+    EXPECT_NEAR(repaired.vertices[v].norm(), 1.0, 0.01) << v;  // on the old surface
+    if (v < clean.vertices.size() && (clean.vertices[v] - centre).norm() > 6 * before.meanEdgeLength) {
+      EXPECT_EQ(repaired.vertices[v], clean.vertices[v]) << v;  // away from the region: untouched
+    }
+  }
 }
 
 TEST(MeshRepair, OrientsFlippedFacesOutward) {
@@ -348,11 +483,13 @@ TEST(ReconstructRealData, Fandisk10k) {
 }
 
 // A sparse, uneven scan (issue 7): the 1,197 vertices of CGAL's hand mesh upsampled to 10k and meshed end to end.
-// What holds today: exactly N samples, one manifold, consistently oriented component, Q_avg ≥ 0.90 (0.905).
-// NOT yet met (see BENCHMARKS.md): closed, genus 0, Q_min ≥ 0.4 (0.29) and Hausdorff ≤ 1 % — the wrist cap is 11
-// large faces with no vertex inside, so the cloud has a 0.5-wide hole there that stays open (an 82-edge loop), the
-// MLS surface bulges past the cap's rim (mesh → truth 3.3 % of the diagonal), two fingers are bridged (genus 3,
-// two 17–19-edge loops between them), and the missing cap is 13 % of the diagonal from the mesh.
+// The wrist cap is 11 large faces with no vertex inside, so the cloud has a 0.5-wide gap there (a 90-edge loop
+// after the local triangulation); fillLargeHoles() closes it (and the loop where two fingers are bridged) with new
+// vertices: closed, one manifold, oriented component, Q_avg ≥ 0.90 (0.904 measured), Hausdorff to the true mesh
+// 3.4 % of the diagonal (13.0 % with the cap open). Q_min is 0.412 here after remeshBadRegions (0.278 without; not
+// asserted: 0.26 at N = 20k, between the bridged fingers).
+// NOT yet met (see BENCHMARKS.md): genus 0 (the bridge: Euler 0) and Hausdorff ≤ 1 % — the resampler puts samples
+// up to 0.044 below the lowest input point (z = -0.5) at the open wrist: mesh → truth 3.4 %.
 TEST(ReconstructRealData, SparseHandVerticesTo10k) {
   const TriangleMesh truth = readMesh(test::dataPath("meshes/hand.off"));
   PointCloud input;
@@ -362,7 +499,10 @@ TEST(ReconstructRealData, SparseHandVerticesTo10k) {
   const ReconstructResult r = reconstruct(input, p);
   const MeshQuality& q = r.quality;
   EXPECT_EQ(r.samples.size(), 10000u);
-  EXPECT_GE(q.vertices, 9950u);  // a few samples on the crumpled fingertips join no triangle (9,981 measured)
+  EXPECT_GE(r.largeHoles.filled, 1u);
+  EXPECT_GE(r.largeHoles.verticesAdded, 300u);  // the cap: area ≈ 0.12 at a spacing of ≈ 0.017 (587 measured)
+  EXPECT_EQ(q.boundaryEdges, 0u);
+  EXPECT_TRUE(q.closed);
   EXPECT_EQ(q.components, 1u);
   EXPECT_EQ(q.nonManifoldEdges, 0u);
   EXPECT_EQ(q.nonManifoldVertices, 0u);
@@ -371,6 +511,9 @@ TEST(ReconstructRealData, SparseHandVerticesTo10k) {
   EXPECT_LT(q.shareBelow30, 0.01);
   // Every input vertex is near the mesh (the worst, 2.7 % of the diagonal, is on the wrist cap's rim).
   EXPECT_LT(q.distance.backwardMax / q.distance.diagonal, 0.04);
+  // The true mesh's cap is covered now: the Hausdorff distance is the MLS bulge past the rim, not the gap.
+  const SurfaceDistance d = surfaceDistance(r.mesh, truth);
+  EXPECT_LT(d.relativeHausdorff(), 0.04);
 }
 
 // An open scan (issue 7): bunny00's samples above a plane removed. The mesh keeps the cut as one boundary loop

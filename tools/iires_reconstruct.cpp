@@ -35,6 +35,10 @@ int main(int argc, char** argv) {
         ->check(CLI::IsMember({"local", "advancing-front"}));
     app.add_flag("--no-hole-filling", noHoles, "leave small holes open");
     app.add_option("--max-hole-edges", params.holes.maxEdges, "close holes of at most this many edges (>= 3; up to 1.5x that when the fill is good, Q >= 0.4)");
+    app.add_option("--max-hole-extent", params.holes.maxRefinedExtent,
+                   "close longer holes with new vertices when their bounding box is at most this fraction of their "
+                   "part's (0-1, default 0.6; 0 = off: keep every long loop open)")
+        ->check(CLI::Range(0.0, 1.0));
     app.add_option("--quality-only", qualityOnly,
                    "report on this existing mesh (INPUT is the reference cloud); no OUTPUT_MESH");
     app.add_option("--report", reportPath, "write the report as JSON to this file");
@@ -109,6 +113,8 @@ int main(int argc, char** argv) {
                 << result.quality.toTable();
       std::cout << "  " << std::left << std::setw(30) << "small holes closed / kept" << result.holes.filled << " / "
                 << result.holes.kept << "\n";
+      std::cout << "  " << std::left << std::setw(30) << "large holes closed / kept" << result.largeHoles.filled
+                << " / " << result.largeHoles.kept << " (" << result.largeHoles.verticesAdded << " vertices added)\n";
       std::cout << "  " << std::left << std::setw(30) << "Q<0.4 repairs moved / removed" << result.badTriangles.moved
                 << " / " << result.badTriangles.removed << "\n";
       std::cout << "  " << std::left << std::setw(30) << "time (s)";

@@ -130,6 +130,9 @@ void HoleFillingParams::validate() const {
   if (!(maxPerimeter > 0)) throw std::invalid_argument("hole filling: maxPerimeter must be positive");
   if (!(minQuality >= 0 && minQuality <= 1)) throw std::invalid_argument("hole filling: minQuality must be in [0, 1]");
   if (!(goodFillFactor >= 1)) throw std::invalid_argument("hole filling: goodFillFactor must be at least 1");
+  if (!(maxRefinedExtent >= 0 && maxRefinedExtent <= 1))
+    throw std::invalid_argument("hole filling: maxRefinedExtent must be in [0, 1]");
+  if (refineIterations < 0) throw std::invalid_argument("hole filling: refineIterations must be non-negative");
 }
 
 HoleFillingReport fillSmallHoles(TriangleMesh& mesh, std::vector<Eigen::Vector3d>& normals,

@@ -87,9 +87,13 @@ std::string ReconstructResult::toJson() const {
        << ", \"proposed_by_3\": " << triangulation.proposedBy3 << ", \"proposed_by_2\": " << triangulation.proposedBy2
        << ", \"kept\": " << triangulation.kept << ", \"rejected_conflicts\": " << triangulation.rejectedConflicts
        << ", \"removed_fan_faces\": " << triangulation.removedFans << ", \"flips\": " << triangulation.flips << ", \"flips_after_filling\": " << flipsAfterFilling << "}";
-  os << ",\n  \"bad_triangles\": {\"vertices_moved\": " << badTriangles.moved << ", \"vertices_removed\": " << badTriangles.removed << "}";
+  os << ",\n  \"bad_triangles\": {\"vertices_moved\": " << badTriangles.moved << ", \"vertices_removed\": " << badTriangles.removed
+     << ", \"remeshed_vertices\": " << remeshedVertices << "}";
   os << ",\n  \"holes\": {\"loops\": " << holes.loops << ", \"filled\": " << holes.filled
      << ", \"kept\": " << holes.kept << ", \"faces_added\": " << holes.facesAdded << ", \"vertices_added\": " << holes.verticesAdded << "}"
+     << ",\n  \"large_holes\": {\"loops\": " << largeHoles.loops << ", \"filled\": " << largeHoles.filled
+     << ", \"kept\": " << largeHoles.kept << ", \"faces_added\": " << largeHoles.facesAdded
+     << ", \"vertices_added\": " << largeHoles.verticesAdded << ", \"skipped\": " << (largeHoles.skipped ? "true" : "false") << "}"
      << ",\n  \"orientation\": {\"components\": " << orientation.components
      << ", \"faces_flipped\": " << orientation.facesFlipped << ", \"conflicts\": " << orientation.conflicts << "}"
      << ",\n  \"quality\": " << nested(quality.toJson()) << ",\n  \"meshing_time_s\": " << num(meshingSeconds())
@@ -174,11 +178,22 @@ ReconstructResult reconstruct(const PointCloud& input, const ReconstructParams& 
       result.holes.facesAdded += again.facesAdded;
       result.holes.verticesAdded += again.verticesAdded;
     }
-    if (params.method == ReconstructMethod::kLocal && params.local.flipMaxDihedral > 0 && result.holes.facesAdded)
+    if (params.holes.maxRefinedExtent > 0 && result.holes.kept > 0) {
+      // What is left open: a gap small next to its part gets a refined fill (it needs an oriented 2-manifold).
+      orientConsistently(result.mesh, normals);
+      result.largeHoles = fillLargeHoles(result.mesh, normals, params.holes);
+    }
+    if (params.method == ReconstructMethod::kLocal && params.local.flipMaxDihedral > 0 &&
+        (result.holes.facesAdded || result.largeHoles.filled))
       result.flipsAfterFilling = flipToDelaunay(result.mesh, params.local.flipMaxDihedral, params.local.maxFlipSweeps);
   }
-  if (params.repairQuality > 0)
+  if (params.repairQuality > 0) {
     result.badTriangles = repairBadTriangles(result.mesh, normals, params.repairQuality, params.repairDeviation);
+    if (params.remeshBadRegions) {
+      orientConsistently(result.mesh, normals);  // remeshing needs an oriented 2-manifold
+      result.remeshedVertices = remeshBadRegions(result.mesh, normals, params.repairQuality);
+    }
+  }
   clock.end("holes", t);
 
   t = clock.begin("orient");

@@ -22,6 +22,12 @@ struct HoleFillingParams {
   /// a small loop) has a worst Q of at least minQuality — holes the local method leaves at a sharp rim, e.g. 18–20
   /// edges on hand 20k's wrist cap for some samplings, fill well; 1 = off (≥ 1)
   double goodFillFactor = 1.5;
+  /// fillLargeHoles(): loops whose bounding-box diagonal is at most this fraction of their component's are closed
+  /// with new vertices — a gap in a closed object's scan (the 0.70-wide wrist cap of a 1.57-wide hand: 0.45),
+  /// while the boundary of an open surface spans most of it (a sphere cut at z = 0.5: 0.77, bunny00 cut at 60 %
+  /// of its height: 0.86); 0 = off (0–1)
+  double maxRefinedExtent = 0.6;
+  int refineIterations = 3;  ///< isotropic remeshing iterations over a large hole's patch (≥ 0)
 
   /// @throws std::invalid_argument when a field is out of range.
   void validate() const;
@@ -54,6 +60,43 @@ struct HoleFillingReport {
 /// @note O(loops · m³) with m ≤ goodFillFactor · maxEdges. Deterministic.
 HoleFillingReport fillSmallHoles(TriangleMesh& mesh, std::vector<Eigen::Vector3d>& normals,
                                  const HoleFillingParams& params = {});
+
+/// @brief What fillLargeHoles() did.
+struct LargeHoleReport {
+  std::size_t loops = 0;          ///< boundary loops found
+  std::size_t filled = 0;         ///< loops closed
+  std::size_t kept = 0;           ///< loops left open (too large next to their component, or no fill found)
+  std::size_t facesAdded = 0;     ///< net triangles added
+  std::size_t verticesAdded = 0;  ///< vertices added inside the holes
+  bool skipped = false;           ///< the mesh was not an oriented 2-manifold: nothing was done
+};
+
+/// @brief Close the boundary loops whose bounding-box diagonal is at most params.maxRefinedExtent × that of their
+/// component (through shared vertices) with new vertices: CGAL's refined, faired hole filling (Liepa 2003: a
+/// minimal-area triangulation, refined to the loop's edge density, its new vertices faired for C¹ continuity with
+/// the surrounding mesh), then params.refineIterations of isotropic remeshing of the patch at the loop's mean edge
+/// length (the loop's own edges and vertices unchanged). Meant for what fillSmallHoles() leaves: a gap of a scan
+/// wider than many mesh edges (e.g. an object's flat cap sampled only at its rim), while the boundary of an open
+/// surface, spanning most of it, is kept. New vertices are appended to the mesh, and their normals (of the
+/// incident faces) to @p normals when it holds one per vertex; the faces are rebuilt (old faces first, in order).
+/// @pre @p mesh is consistently oriented (orientConsistently()); otherwise, or when it is not a 2-manifold,
+/// nothing is done (report.skipped).
+/// @note Deterministic.
+LargeHoleReport fillLargeHoles(TriangleMesh& mesh, std::vector<Eigen::Vector3d>& normals,
+                               const HoleFillingParams& params = {});
+
+/// @brief Remesh the neighbourhood of the triangles still below @p minQuality: those faces grown by @p rings rings
+/// (through shared vertices) get @p iterations passes of CGAL's isotropic remeshing at the region's mean edge
+/// length, vertices projected onto the region's old surface, the region's border unchanged. The result is kept only
+/// when the region's worst Q rises (else the mesh is left as it was). Moved vertices keep their index (and get the
+/// normal of their new faces in @p normals when it holds one per vertex), removed ones stay in the list unused,
+/// new ones are appended; the faces are rebuilt (faces outside the regions first, in order).
+/// @return vertices moved, removed or added (0: nothing changed, including when no face is below @p minQuality —
+/// then nothing at all is done — or @p mesh is not an oriented 2-manifold).
+/// @pre @p mesh is consistently oriented (orientConsistently()).
+/// @note Deterministic.
+std::size_t remeshBadRegions(TriangleMesh& mesh, std::vector<Eigen::Vector3d>& normals, double minQuality,
+                             int rings = 2, int iterations = 3);
 
 /// @brief Make every vertex manifold: where a vertex's faces form several fans (its link has several parts),
 /// keep the fan with the most faces (ties: the one with the lowest face index) and remove the others' faces.

@@ -1,8 +1,8 @@
 #pragma once
 /// @file reconstruct.hpp
 /// @brief The reconstruction pipeline (DESIGN §5): cloud → (isotropic resampling to N) → triangulation
-/// (local Delaunay 1-rings or CGAL's advancing front) → small holes closed → consistent orientation → quality
-/// report.
+/// (local Delaunay 1-rings or CGAL's advancing front) → small holes closed → large holes (gaps small next to
+/// their part) closed with new vertices → consistent orientation → quality report.
 
 #include <cstdint>
 #include <functional>
@@ -51,11 +51,14 @@ struct ReconstructParams {
   AdvancingFrontParams advancingFront;  ///< advancing-front settings
   std::size_t minComponentFaces = 20;  ///< components with fewer faces are removed before hole filling (0 = keep)
   bool fillHoles = true;            ///< close small holes (loops short in edges and perimeter)
-  HoleFillingParams holes;          ///< which loops count as small
+  HoleFillingParams holes;          ///< which loops count as small, and which as a gap for fillLargeHoles()
   /// Triangles with a worse Q are repaired by moving (or else removing) one of their vertices when that does better
   /// and the surface moves by at most repairDeviation × the mean edge length (repairBadTriangles); 0 = off
   double repairQuality = 0.4;
   double repairDeviation = 0.25;    ///< see repairQuality (≥ 0)
+  /// Then the regions (2 rings) around triangles still below repairQuality are remeshed isotropically, kept when
+  /// their worst Q rises (remeshBadRegions); nothing happens when no triangle is below it
+  bool remeshBadRegions = true;
   bool evaluate = true;             ///< compute the quality report (distance to the validated input cloud)
   MeshQualityParams quality;        ///< report settings (threads and seed are set from here)
   /// Neighbour rule for resampling and the 1-rings. nullptr = the resampler's default (intrinsic unless
@@ -84,8 +87,10 @@ struct ReconstructResult {
   TriangulateResult triangulation;   ///< the local method's diagnostics (its mesh is moved into mesh)
   std::size_t smallComponentFaces = 0;  ///< faces of small components removed
   HoleFillingReport holes;           ///< small holes closed / kept
+  LargeHoleReport largeHoles;        ///< large holes closed with new vertices / kept (fillLargeHoles)
   std::size_t flipsAfterFilling = 0; ///< Delaunay flips after hole filling (local method)
   BadTriangleReport badTriangles;    ///< vertices moved / removed to raise the worst triangles (repairBadTriangles)
+  std::size_t remeshedVertices = 0;  ///< vertices moved / removed / added by remeshBadRegions
   OrientationReport orientation;     ///< orientation diagnostics
   std::size_t unusedVertices = 0;    ///< samples no triangle uses (removed from the mesh)
   MeshQuality quality;               ///< the quality report (when params.evaluate)
