@@ -1020,20 +1020,21 @@ void traceChainEnds(const PointCloud& cloud, const KnnIndex& index, double h, co
 
 /// Step 5 of snapToCreases(): fill the gaps the tracing and the corners leave between neighbouring samples.
 /// Two samples a, b more than 1.5 × the chains' median spacing (`step`) and at most 5 steps apart, with no other
-/// sample within 0.45 × their distance of their midpoint (nothing lies between them), get samples at ≤ step on
-/// the crease between them, each
+/// sample within 0.45 × their distance of their midpoint and half a step of the line a–b (nothing lies between
+/// them), get samples at ≤ step on the crease between them, each
 ///  - at the snap fit's crease point near its chord point (the fitted crease running along a→b within
 ///    maxChainTurn, its point within 0.3 step of the chord), else
 ///  - on the fitted crease line of a or b where that line runs along a→b and passes within 0.1 step of the
 ///    chord point, else
 ///  - on the chord itself where the samples run on in line through a and b: a sample 0.5–1.6 steps behind a
-///    (and one behind b) lies within 0.15 step of the line a–b (both for gaps over 3 steps; one of them
-///    suffices next to a corner, where the corner sample has no neighbour in line). This fills the holes where
-///    no two-plane fit holds (a plane beside a small-radius cylinder), which the tracing cannot step through.
+///    (and one behind b) lies within 20° (or 0.15 step) of the line a–b (both for gaps over 4.5 steps; one of
+///    them suffices for shorter ones, as next to a corner, where the corner sample has no neighbour in line).
+///    This fills the holes where no two-plane fit holds (a plane beside a small-radius cylinder, a corner's
+///    neighbourhood), which the tracing cannot step through.
 /// A gap where one new sample has none of these is left open (two creases meeting, not one). Each new sample
 /// lies within 1.5·maxOffCrease (local) spacings of an input point (an edge point of a random sampling may have
-/// none within one spacing). Sequential in sample order, each gap seeing the samples
-/// added before it: deterministic. The new samples are appended, owned by a's chain.
+/// none within one spacing). Sequential in sample order, each gap seeing the samples added before it:
+/// deterministic. The new samples are appended, owned by a's chain.
 void fillCreaseGaps(const PointCloud& cloud, const KnnIndex& index, double h, const FeatureParams& params,
                     std::vector<Eigen::Vector3d>& out, std::vector<std::uint32_t>& owner) {
   std::vector<double> gaps;
@@ -1070,20 +1071,30 @@ void fillCreaseGaps(const PointCloud& cloud, const KnnIndex& index, double h, co
   };
   std::vector<std::uint32_t> near, ci;
   std::vector<double> nd2, cd2;
-  auto covered = [&](const Eigen::Vector3d& m, double r) {
-    if (placed.radius(m, r, ci, cd2) > 0) return true;
+  // A sample within r of the midpoint m of a–b and within half a step of the line a–b splits the gap (one off
+  // the line, e.g. an outlier of a biased fit, does not).
+  auto covered = [&](const Eigen::Vector3d& m, double r, const Eigen::Vector3d& u) {
+    auto blocks = [&](const Eigen::Vector3d& q) {
+      const Eigen::Vector3d v = q - m;
+      return v.squaredNorm() < r * r && (v - u * v.dot(u)).squaredNorm() <= 0.25 * step * step;
+    };
+    placed.radius(m, r, ci, cd2);
+    for (std::uint32_t c : ci)
+      if (blocks(out[c])) return true;
     for (const auto& q : added)
-      if ((q - m).norm() < r) return true;
+      if (blocks(q)) return true;
     return false;
   };
-  // A sample 0.5–1.6 steps behind e (away from f) within 0.15 step of the line e–f: the samples run on in line.
+  // A sample 0.5–1.6 steps behind e (away from f) within 20° (or 0.15 step) of the line e–f: the samples run on in
+  // line (up to the wobble of samples placed by biased fits).
+  const double kInLine = std::tan(20.0 * kDeg);
   auto inLine = [&](const Eigen::Vector3d& e, const Eigen::Vector3d& f) {
     const Eigen::Vector3d u = (f - e).normalized();
     placed.radius(e, 1.6 * step, ci, cd2);
     for (std::uint32_t c : ci) {
       const Eigen::Vector3d v = out[c] - e;
       const double t = v.dot(u);
-      if (-t >= 0.5 * step && (v - t * u).norm() <= 0.15 * step) return true;
+      if (-t >= 0.5 * step && (v - t * u).norm() <= std::max(0.15 * step, -t * kInLine)) return true;
     }
     return false;
   };
@@ -1099,9 +1110,9 @@ void fillCreaseGaps(const PointCloud& cloud, const KnnIndex& index, double h, co
       const double g = (b - a).norm();
       if (g <= 1.5 * step || g > 5.0 * step) continue;
       const Eigen::Vector3d m = 0.5 * (a + b), u = (b - a) / g;
-      if (covered(m, 0.45 * g)) continue;
+      if (covered(m, 0.45 * g, u)) continue;
       const bool lineA = inLine(a, b), lineB = inLine(b, a);
-      const bool chord = g <= 3.0 * step ? (lineA || lineB) : (lineA && lineB);
+      const bool chord = g <= 4.5 * step ? (lineA || lineB) : (lineA && lineB);
       const int pieces = static_cast<int>(std::ceil(g / step - 1e-9));
       fill.clear();
       bool ok = true;
@@ -1271,7 +1282,7 @@ std::vector<Eigen::Vector3d> snapToCreases(const PointCloud& cloud, const std::v
       if (ea.chain == eb.chain || (ea.point - eb.point).norm() > reach) continue;
       // Closest points of the two lines: ea.point + s·da and eb.point + t·db.
       const double c = ea.direction.dot(eb.direction);
-      if (1.0 - c * c < 0.1) continue;  // nearly parallel: no corner between them
+      if (1.0 - c * c < 0.05) continue;  // nearly parallel (under 13°): no corner between them
       const Eigen::Vector3d w = ea.point - eb.point;
       const double d = ea.direction.dot(w), e = eb.direction.dot(w);
       const double sa = (c * e - d) / (1.0 - c * c), tb = (e - c * d) / (1.0 - c * c);
