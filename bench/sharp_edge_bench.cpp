@@ -9,7 +9,8 @@
 // --dump K: for the iires methods, print to stderr the K worst spots of the edge coverage (reference-edge points
 //   farthest from the output, at least 2 spacings apart), each with its distance to the nearest sharp-edge
 //   corner (a vertex of the sharp-edge graph with degree ≠ 2) and the nearest output points (F = a held
-//   feature sample), their distance to the edges and to the mesh — to see where and why the edge max is set.
+//   feature sample), their distance to the edges and to the mesh — to see where and why the edge max is set;
+//   and the output point farthest from the mesh (held or free, its distance to the edges and to a corner).
 #define CGAL_EIGEN3_ENABLED 1
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/bilateral_smooth_point_set.h>
@@ -116,6 +117,20 @@ void dumpWorst(const std::vector<Eigen::Vector3d>& pts, const std::vector<std::u
   for (const auto& [v, dirs] : out)
     if (dirs.size() != 2 || -dirs[0].dot(dirs[1]) < std::cos(30.0 * M_PI / 180))
       corners.emplace_back(std::get<0>(v), std::get<1>(v), std::get<2>(v));
+  {  // the output point farthest from the mesh (it sets err_max)
+    std::size_t worst = 0;
+    double worstD = -1;
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+      const double d = ref.mesh->distances({pts[i]}).max;
+      if (d > worstD) worstD = d, worst = i;
+    }
+    const Eigen::Vector3d& p = pts[worst];
+    double corner = 1e300;
+    for (const auto& c : corners) corner = std::min(corner, (c - p).norm());
+    std::fprintf(stderr, "  err max %.4f %% of the diagonal (%.3f sp) at (%.5f %.5f %.5f): %s, %.2f sp from the edges, %.2f sp from a corner\n",
+                 100 * worstD / ref.mesh->diagonal(), worstD / sp, p.x(), p.y(), p.z(), held[worst] ? "held" : "free",
+                 iires::distanceToSegments(p, ref.edges) / sp, corner / sp);
+  }
   std::vector<Eigen::Vector3d> shown;
   for (const auto& [d, i] : dist) {
     if (static_cast<int>(shown.size()) >= k || d < 0.3 * sp) break;

@@ -1019,7 +1019,7 @@ void traceChainEnds(const PointCloud& cloud, const KnnIndex& index, double h, co
 }
 
 /// Step 5 of snapToCreases(): fill the gaps the tracing and the corners leave between neighbouring samples.
-/// Two samples a, b more than 1.5 × the chains' median spacing (`step`) and at most 5 steps apart, with no other
+/// Two samples a, b more than 1.5 × the chains' median spacing (`step`) and at most 6 steps apart, with no other
 /// sample within 0.45 × their distance of their midpoint and half a step of the line a–b (nothing lies between
 /// them), get samples at ≤ step on the crease between them, each
 ///  - at the snap fit's crease point near its chord point (the fitted crease running along a→b within
@@ -1100,7 +1100,7 @@ void fillCreaseGaps(const PointCloud& cloud, const KnnIndex& index, double h, co
   };
   std::vector<Eigen::Vector3d> fill;
   for (std::size_t i = 0; i < n0; ++i) {
-    placed.radius(out[i], 5.0 * step, near, nd2);
+    placed.radius(out[i], 6.0 * step, near, nd2);
     std::vector<std::uint32_t> later;
     for (std::uint32_t j : near)
       if (j > i) later.push_back(j);
@@ -1108,7 +1108,7 @@ void fillCreaseGaps(const PointCloud& cloud, const KnnIndex& index, double h, co
     for (std::uint32_t j : later) {
       const Eigen::Vector3d &a = out[i], &b = out[j];
       const double g = (b - a).norm();
-      if (g <= 1.5 * step || g > 5.0 * step) continue;
+      if (g <= 1.5 * step || g > 6.0 * step) continue;
       const Eigen::Vector3d m = 0.5 * (a + b), u = (b - a) / g;
       if (covered(m, 0.45 * g, u)) continue;
       const bool lineA = inLine(a, b), lineB = inLine(b, a);

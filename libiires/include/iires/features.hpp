@@ -143,7 +143,7 @@ std::vector<Eigen::Vector3d> sampleFeatureChains(const std::vector<FeatureChain>
 ///     params.maxOffCrease spacings of an input point, and no sample is within half a spacing of it (tracing
 ///     placed most corners already), a corner sample is added there, and the gap from each of those chain ends
 ///     to the corner gets samples at the chain's spacing on the straight line.
-///  5. Gaps: two samples 1.5–5 × the chains' median spacing apart with no sample between them (within 0.45 × their
+///  5. Gaps: two samples 1.5–6 × the chains' median spacing apart with no sample between them (within 0.45 × their
 ///     distance of the midpoint and half a spacing of their line) get samples at ≤ that spacing between them: on
 ///     the snap fit's crease where it runs along them and near their chord, else on the fitted crease line of
 ///     either, else on the chord where the samples on either side run on in line with it (within 20°; one side
