@@ -5,7 +5,12 @@
 //     sampled every 0.01 mean spacings) to the nearest output point, over the output's mean NN spacing;
 //   err_mean_pct / err_max_pct: distance of the output to the mesh, % of the bounding-box diagonal.
 // Usage: sharp_edge_bench MESH INPUT_COUNT N [N ...] [--density-ratio R] [--threads T]
-//        [--methods iires,iires_sharp,cgal_wlop,cgal_ear]   (default: all four)
+//        [--methods iires,iires_sharp,cgal_wlop,cgal_ear]   (default: all four) [--dump K]
+// --dump K: for the iires methods, print to stderr the K worst spots of the edge coverage (reference-edge points
+//   farthest from the output, at least 2 spacings apart), each with its distance to the nearest sharp-edge
+//   corner (a vertex of the sharp-edge graph with degree ≠ 2) and the nearest output points (F = a held
+//   feature sample), their distance to the edges and to the mesh — to see where and why the edge max is set;
+//   and the output point farthest from the mesh (held or free, its distance to the edges and to a corner).
 #define CGAL_EIGEN3_ENABLED 1
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/bilateral_smooth_point_set.h>
@@ -13,8 +18,12 @@
 #include <CGAL/property_map.h>
 #include <CGAL/wlop_simplify_and_regularize_point_set.h>
 
+#include <Eigen/Geometry>
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
+#include <map>
 #include <iterator>
 #include <string>
 #include <utility>
@@ -22,6 +31,7 @@
 
 #include "iires/features.hpp"
 #include "iires/io.hpp"
+#include "iires/knn.hpp"
 #include "iires/metrics.hpp"
 #include "iires/normals.hpp"
 #include "iires/resample.hpp"
@@ -41,7 +51,34 @@ double now() { return std::chrono::duration<double>(std::chrono::steady_clock::n
 struct Reference {
   const iires::MeshDistance* mesh;
   std::vector<iires::Segment> edges;
+  std::vector<double> angles;  ///< --dump only: each edge's dihedral angle, degrees
 };
+
+/// The dihedral angle (degrees) of each of @p edges in @p mesh (the larger one where more than two faces meet).
+std::vector<double> edgeAngles(const iires::TriangleMesh& mesh, const std::vector<iires::Segment>& edges) {
+  std::map<std::pair<std::tuple<double, double, double>, std::tuple<double, double, double>>, std::vector<Eigen::Vector3d>> faces;
+  auto key = [](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+    auto ta = std::make_tuple(a.x(), a.y(), a.z()), tb = std::make_tuple(b.x(), b.y(), b.z());
+    return ta < tb ? std::make_pair(ta, tb) : std::make_pair(tb, ta);
+  };
+  for (const auto& t : mesh.triangles) {
+    const Eigen::Vector3d &a = mesh.vertices[t[0]], &b = mesh.vertices[t[1]], &c = mesh.vertices[t[2]];
+    const Eigen::Vector3d n = (b - a).cross(c - a).normalized();
+    faces[key(a, b)].push_back(n);
+    faces[key(b, c)].push_back(n);
+    faces[key(c, a)].push_back(n);
+  }
+  std::vector<double> out;
+  for (const auto& e : edges) {
+    const auto& ns = faces[key(e[0], e[1])];
+    double worst = 0;
+    for (std::size_t a = 0; a < ns.size(); ++a)
+      for (std::size_t b = a + 1; b < ns.size(); ++b)
+        worst = std::max(worst, std::acos(std::clamp(ns[a].dot(ns[b]), -1.0, 1.0)) * 180 / M_PI);
+    out.push_back(worst);
+  }
+  return out;
+}
 
 void report(const std::string& prefix, const std::string& method, const std::vector<Eigen::Vector3d>& pts,
             double seconds, const Reference& ref, const std::string& extra = "") {
@@ -54,6 +91,87 @@ void report(const std::string& prefix, const std::string& method, const std::vec
       prefix.c_str(), method.c_str(), pts.size(), seconds, spacing.cv, 100 * err.mean / ref.mesh->diagonal(),
       100 * err.max / ref.mesh->diagonal(), edge.max / spacing.mean, edge.mean / spacing.mean, extra.c_str());
   std::fflush(stdout);
+}
+
+/// The --dump report (see the header): the @p k worst spots of the edge coverage of @p pts;
+/// @p fixedIndices are the held samples.
+void dumpWorst(const std::vector<Eigen::Vector3d>& pts, const std::vector<std::uint32_t>& fixedIndices,
+               const Reference& ref, int k) {
+  std::vector<char> held(pts.size(), 0);
+  for (std::uint32_t i : fixedIndices) held[i] = 1;
+  const double sp = iires::spacingStats(pts).mean;
+  const auto samples = iires::sampleSegments(ref.edges, 0.01 * sp);
+  const iires::KnnIndex index(pts);
+  std::vector<std::pair<double, std::size_t>> dist(samples.size());
+  for (std::size_t i = 0; i < samples.size(); ++i) {
+    double d2 = 0;
+    index.nearest(samples[i], &d2);
+    dist[i] = {std::sqrt(d2), i};
+  }
+  std::sort(dist.begin(), dist.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+  // Corners of the sharp-edge graph: vertices of degree ≠ 2, or where the two edges turn by more than 30°.
+  std::map<std::tuple<double, double, double>, std::vector<Eigen::Vector3d>> out;
+  for (const auto& e : ref.edges)
+    for (int v = 0; v < 2; ++v) out[{e[v].x(), e[v].y(), e[v].z()}].push_back((e[1 - v] - e[v]).normalized());
+  std::vector<Eigen::Vector3d> corners;
+  for (const auto& [v, dirs] : out)
+    if (dirs.size() != 2 || -dirs[0].dot(dirs[1]) < std::cos(30.0 * M_PI / 180))
+      corners.emplace_back(std::get<0>(v), std::get<1>(v), std::get<2>(v));
+  {  // the output point farthest from the mesh (it sets err_max)
+    std::size_t worst = 0;
+    double worstD = -1;
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+      const double d = ref.mesh->distances({pts[i]}).max;
+      if (d > worstD) worstD = d, worst = i;
+    }
+    const Eigen::Vector3d& p = pts[worst];
+    double corner = 1e300;
+    for (const auto& c : corners) corner = std::min(corner, (c - p).norm());
+    std::fprintf(stderr, "  err max %.4f %% of the diagonal (%.3f sp) at (%.5f %.5f %.5f): %s, %.2f sp from the edges, %.2f sp from a corner\n",
+                 100 * worstD / ref.mesh->diagonal(), worstD / sp, p.x(), p.y(), p.z(), held[worst] ? "held" : "free",
+                 iires::distanceToSegments(p, ref.edges) / sp, corner / sp);
+  }
+  std::vector<Eigen::Vector3d> shown;
+  for (const auto& [d, i] : dist) {
+    if (static_cast<int>(shown.size()) >= k || d < 0.3 * sp) break;
+    const Eigen::Vector3d& q = samples[i];
+    bool near = false;
+    for (const auto& s : shown) near = near || (s - q).norm() < 2 * sp;
+    if (near) continue;
+    shown.push_back(q);
+    double corner = 1e300;
+    Eigen::Vector3d cp = q;
+    for (const auto& c : corners)
+      if ((c - q).norm() < corner) corner = (c - q).norm(), cp = c;
+    double dihedral = 0;  // of the reference edge the spot lies on
+    for (std::size_t e = 0; e < ref.edges.size(); ++e)
+      if (iires::distanceToSegments(q, {ref.edges[e]}) < 1e-9 * sp) dihedral = std::max(dihedral, ref.angles[e]);
+    std::fprintf(stderr, "  worst %.3f sp at (%.5f %.5f %.5f), dihedral %.0f deg, nearest edge corner %.2f sp; near:",
+                 d / sp, q.x(), q.y(), q.z(), dihedral, corner / sp);
+    std::vector<std::uint32_t> idx;
+    std::vector<double> d2;
+    index.knn(q, 4, idx, d2);
+    for (std::size_t t = 0; t < idx.size(); ++t) {
+      const Eigen::Vector3d& p = pts[idx[t]];
+      const double toMesh = ref.mesh->distances({p}).max;
+      std::fprintf(stderr, " [%s %.2f sp, edge %.2f, mesh %.3f, corner %.2f]", held[idx[t]] ? "F" : "free",
+                   std::sqrt(d2[t]) / sp, iires::distanceToSegments(p, ref.edges) / sp, toMesh / sp,
+                   (p - cp).norm() / sp);
+    }
+    std::fprintf(stderr, "\n");
+    // The held samples within 3 spacings of the spot along its edge: (position along the edge, off the edge).
+    Eigen::Vector3d dir = Eigen::Vector3d::UnitX();
+    for (const auto& e : ref.edges)
+      if (iires::distanceToSegments(q, {e}) < 1e-9 * sp && (e[1] - e[0]).norm() > 0) dir = (e[1] - e[0]).normalized();
+    index.radius(q, 3 * sp, idx, d2);
+    std::vector<std::pair<double, double>> along;
+    for (std::uint32_t j : idx)
+      if (held[j]) along.emplace_back((pts[j] - q).dot(dir) / sp, iires::distanceToSegments(pts[j], ref.edges) / sp);
+    std::sort(along.begin(), along.end());
+    std::fprintf(stderr, "    held along the edge (sp, off):");
+    for (const auto& [t, off] : along) std::fprintf(stderr, " %.2f/%.2f", t, off);
+    std::fprintf(stderr, "\n");
+  }
 }
 
 std::vector<Point> toCgal(const std::vector<Eigen::Vector3d>& pts) {
@@ -84,12 +202,18 @@ std::vector<Point> wlop(const std::vector<Point>& input, std::size_t n) {
 
 int main(int argc, char** argv) {
   std::string methods = "iires,iires_sharp,cgal_wlop,cgal_ear";
+  int dump = 0;
   const iires::bench::GridArgs args = iires::bench::parseGridArgs(
       argc, argv, 1.0,
       "sharp_edge_bench MESH INPUT_COUNT N [N ...] [--density-ratio R] [--threads T] "
-      "[--methods iires,iires_sharp,cgal_wlop,cgal_ear]",
+      "[--methods iires,iires_sharp,cgal_wlop,cgal_ear] [--dump K]",
       [&](const std::string& arg, int& a) {
-        if (arg != "--methods" || a + 1 >= argc) return false;
+        if (a + 1 >= argc) return false;
+        if (arg == "--dump") {
+          dump = std::stoi(argv[++a]);
+          return true;
+        }
+        if (arg != "--methods") return false;
         methods = argv[++a];
         return true;
       });
@@ -99,7 +223,8 @@ int main(int argc, char** argv) {
   const iires::TriangleMesh mesh = iires::readMesh(args.meshPath);
   const iires::PointCloud cloud = iires::bench::scanLikeSampling(mesh, inputCount, ratio);
   const iires::MeshDistance distance(mesh);
-  const Reference ref{&distance, iires::sharpMeshEdges(mesh, 45.0)};
+  Reference ref{&distance, iires::sharpMeshEdges(mesh, 45.0), {}};
+  if (dump > 0) ref.angles = edgeAngles(mesh, ref.edges);
   const std::string name = args.name();
   auto run = [&](const std::string& method) { return ("," + methods + ",").find("," + method + ",") != std::string::npos; };
   const std::vector<Point> cgalInput = toCgal(cloud.points);
@@ -118,6 +243,7 @@ int main(int argc, char** argv) {
       const auto r = iires::resample(cloud, p);
       report(prefix, sharp ? "iires_sharp" : "iires", r.cloud.points, now() - t, ref,
              sharp ? " feature_samples=" + std::to_string(r.featureSamples) : "");
+      if (dump > 0) dumpWorst(r.cloud.points, r.fixedIndices, ref, dump);
     }
     double t = now();
     if (run("cgal_wlop")) {

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <string>
@@ -222,6 +224,77 @@ TEST(Features, TracingFromOneChainCoversTheCubesEdges) {
   }
   for (std::size_t i = 0; i < out.size(); ++i)
     for (std::size_t j = i + 1; j < out.size(); ++j) EXPECT_GT((out[i] - out[j]).norm(), 0.5 * step) << i << " " << j;
+}
+
+// Where no two-plane fit holds along a stretch of a crease (here: the input normals within 0.05 of the middle of
+// the cube edge x = z = 1 all set to one vector, so the normal 2-means finds one sheet), tracing cannot step
+// through it; the gap between the chain's two pieces is filled on the line through them (the samples on either
+// side run in line), so the edge has no gap over 1.5 steps and every sample stays on it.
+TEST(Features, GapWhereNoFitHoldsIsFilledOnTheChainsLine) {
+  const auto mesh = cubeMesh();
+  auto cloud = sampledWithEstimatedNormals(mesh, 60000);
+  const Eigen::Vector3d middle(1.0, 0.5, 1.0);
+  for (std::size_t i = 0; i < cloud.size(); ++i)
+    if ((cloud.points[i] - middle).norm() < 0.05) cloud.normals[i] = Eigen::Vector3d(1, 0, 1).normalized();
+  FeatureParams p;
+  const double h = iires::estimateSpacing(cloud.points);
+  const double step = 0.02;
+  std::vector<Eigen::Vector3d> samples;
+  for (int t = 0; t <= 30; ++t) {
+    const double y = 0.2 + step * t;
+    if (std::abs(y - 0.5) < 0.05) continue;  // a hole of 6 steps around the middle
+    samples.emplace_back(1.0, y, 1.0);
+  }
+  const std::vector<std::uint32_t> chain(samples.size(), 0u);
+  const auto out = iires::snapToCreases(cloud, samples, chain, h, p);
+  const auto edges = iires::sharpMeshEdges(mesh, 45.0);
+  const Segment edge{Eigen::Vector3d(1, 0, 1), Eigen::Vector3d(1, 1, 1)};
+  std::vector<double> ys;
+  for (const auto& q : out) {
+    EXPECT_LE(iires::distanceToSegments(q, edges), 0.25 * h) << q.transpose();
+    if (iires::distanceToSegments(q, {edge}) < 0.5 * h && q.y() > 0.3 && q.y() < 0.7) ys.push_back(q.y());
+  }
+  std::sort(ys.begin(), ys.end());
+  ASSERT_FALSE(ys.empty());
+  double worst = 0;
+  for (std::size_t t = 1; t < ys.size(); ++t) worst = std::max(worst, ys[t] - ys[t - 1]);
+  EXPECT_LE(worst, 1.5 * step) << ::testing::PrintToString(ys);
+  EXPECT_LE(ys.front(), 0.3 + 1.5 * step);
+  EXPECT_GE(ys.back(), 0.7 - 1.5 * step);
+}
+
+// Next to a corner: no fit holds on the last stretch of the edge x = z = 1 before the corner (1, 1, 1) (the normals
+// within 0.06 of (1, 0.9, 1) set to one vector); the corner is placed by tracing the edge y = z = 1 into it. The
+// gap between the chain's last sample and the corner sample is filled on the chain's line (only the chain side
+// runs in line: the corner has no neighbour in line), so the edge has no gap over 1.5 steps; every sample is on
+// the edges up to the fits' noise (0.4 h, as for traced samples).
+TEST(Features, GapBeforeACornerIsFilledFromTheChainSide) {
+  const auto mesh = cubeMesh();
+  auto cloud = sampledWithEstimatedNormals(mesh, 60000);
+  const Eigen::Vector3d spot(1.0, 0.9, 1.0);
+  for (std::size_t i = 0; i < cloud.size(); ++i)
+    if ((cloud.points[i] - spot).norm() < 0.06) cloud.normals[i] = Eigen::Vector3d(1, 0, 1).normalized();
+  FeatureParams p;
+  const double h = iires::estimateSpacing(cloud.points);
+  const double step = 0.02;
+  std::vector<Eigen::Vector3d> samples;
+  std::vector<std::uint32_t> chain;
+  for (int t = 0; t <= 20; ++t) samples.emplace_back(1.0, 0.4 + step * t, 1.0), chain.push_back(0);  // up to y = 0.8
+  for (int t = 0; t <= 20; ++t) samples.emplace_back(0.4 + step * t, 1.0, 1.0), chain.push_back(1);  // up to x = 0.8
+  const auto out = iires::snapToCreases(cloud, samples, chain, h, p);
+  const auto edges = iires::sharpMeshEdges(mesh, 45.0);
+  const Segment edge{Eigen::Vector3d(1, 0, 1), Eigen::Vector3d(1, 1, 1)};
+  std::vector<double> ys;
+  for (const auto& q : out) {
+    EXPECT_LE(iires::distanceToSegments(q, edges), 0.4 * h) << q.transpose();
+    if (iires::distanceToSegments(q, {edge}) < 0.5 * h && q.y() > 0.6) ys.push_back(q.y());
+  }
+  std::sort(ys.begin(), ys.end());
+  ASSERT_FALSE(ys.empty());
+  double worst = 0;
+  for (std::size_t t = 1; t < ys.size(); ++t) worst = std::max(worst, ys[t] - ys[t - 1]);
+  EXPECT_LE(worst, 1.5 * step) << ::testing::PrintToString(ys);
+  EXPECT_GE(ys.back(), 1.0 - 0.25 * h);  // the corner
 }
 
 // A scan 5× denser at one end than at the other: the fits take the local spacing where the sampling is sparser

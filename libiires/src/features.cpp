@@ -1018,6 +1018,134 @@ void traceChainEnds(const PointCloud& cloud, const KnnIndex& index, double h, co
   }
 }
 
+/// Step 5 of snapToCreases(): fill the gaps the tracing and the corners leave between neighbouring samples.
+/// Two samples a, b more than 1.5 × the chains' median spacing (`step`) and at most 6 steps apart, with no other
+/// sample within 0.45 × their distance of their midpoint and half a step of the line a–b (nothing lies between
+/// them), get samples at ≤ step on the crease between them, each
+///  - at the snap fit's crease point near its chord point (the fitted crease running along a→b within
+///    maxChainTurn, its point within 0.3 step of the chord), else
+///  - on the fitted crease line of a or b where that line runs along a→b and passes within 0.1 step of the
+///    chord point, else
+///  - on the chord itself where the samples run on in line through a and b: a sample 0.5–1.6 steps behind a
+///    (and one behind b) lies within 20° (or 0.15 step) of the line a–b (both for gaps over 4.5 steps; one of
+///    them suffices for shorter ones, as next to a corner, where the corner sample has no neighbour in line).
+///    This fills the holes where no two-plane fit holds (a plane beside a small-radius cylinder, a corner's
+///    neighbourhood), which the tracing cannot step through.
+/// A gap where one new sample has none of these is left open (two creases meeting, not one). Each new sample
+/// lies within 1.5·maxOffCrease (local) spacings of an input point (an edge point of a random sampling may have
+/// none within one spacing). Sequential in sample order, each gap seeing the samples added before it:
+/// deterministic. The new samples are appended, owned by a's chain.
+void fillCreaseGaps(const PointCloud& cloud, const KnnIndex& index, double h, const FeatureParams& params,
+                    std::vector<Eigen::Vector3d>& out, std::vector<std::uint32_t>& owner) {
+  std::vector<double> gaps;
+  for (std::size_t t = 1; t < out.size(); ++t)
+    if (owner[t] == owner[t - 1]) gaps.push_back((out[t] - out[t - 1]).norm());
+  if (gaps.empty()) return;
+  std::nth_element(gaps.begin(), gaps.begin() + static_cast<long>(gaps.size() / 2), gaps.end());
+  const double step = gaps[gaps.size() / 2];
+  if (!(step > 1e-9 * h)) return;
+  const double cosTurn = std::cos(params.maxChainTurn * kDeg);
+  const std::size_t n0 = out.size();
+  const KnnIndex placed(out);  // the samples before filling; the added ones are checked by brute force
+  std::vector<Eigen::Vector3d> added;
+  std::vector<std::uint32_t> addedOwner;
+  std::vector<std::uint32_t> idx;
+  std::vector<double> d2;
+  // The snap fit at y (re-centred once on the crease), as in tracing; false where it fails the thresholds.
+  auto fit = [&](const Eigen::Vector3d& y0, Crease& c) {
+    Eigen::Vector3d y = y0;
+    const double hl = localSpacing(index, y, h);
+    for (int it = 0; it < 2; ++it) {
+      index.radius(y, params.radius * hl, idx, d2);
+      if (idx.size() > 200) idx.resize(200);
+      if (!twoPlaneTest(cloud.points, cloud.normals, y, idx, hl, params, c, params.snapSigma * hl)) return false;
+      y = c.point;
+    }
+    return true;
+  };
+  std::vector<signed char> fitted(n0, -1);  // lazily: the crease at each original sample
+  std::vector<Crease> creaseAt(n0);
+  auto creaseOf = [&](std::size_t i) -> const Crease* {
+    if (fitted[i] < 0) fitted[i] = fit(out[i], creaseAt[i]) ? 1 : 0;
+    return fitted[i] ? &creaseAt[i] : nullptr;
+  };
+  std::vector<std::uint32_t> near, ci;
+  std::vector<double> nd2, cd2;
+  // A sample within r of the midpoint m of a–b and within half a step of the line a–b splits the gap (one off
+  // the line, e.g. an outlier of a biased fit, does not).
+  auto covered = [&](const Eigen::Vector3d& m, double r, const Eigen::Vector3d& u) {
+    auto blocks = [&](const Eigen::Vector3d& q) {
+      const Eigen::Vector3d v = q - m;
+      return v.squaredNorm() < r * r && (v - u * v.dot(u)).squaredNorm() <= 0.25 * step * step;
+    };
+    placed.radius(m, r, ci, cd2);
+    for (std::uint32_t c : ci)
+      if (blocks(out[c])) return true;
+    for (const auto& q : added)
+      if (blocks(q)) return true;
+    return false;
+  };
+  // A sample 0.5–1.6 steps behind e (away from f) within 20° (or 0.15 step) of the line e–f: the samples run on in
+  // line (up to the wobble of samples placed by biased fits).
+  const double kInLine = std::tan(20.0 * kDeg);
+  auto inLine = [&](const Eigen::Vector3d& e, const Eigen::Vector3d& f) {
+    const Eigen::Vector3d u = (f - e).normalized();
+    placed.radius(e, 1.6 * step, ci, cd2);
+    for (std::uint32_t c : ci) {
+      const Eigen::Vector3d v = out[c] - e;
+      const double t = v.dot(u);
+      if (-t >= 0.5 * step && (v - t * u).norm() <= std::max(0.15 * step, -t * kInLine)) return true;
+    }
+    return false;
+  };
+  std::vector<Eigen::Vector3d> fill;
+  for (std::size_t i = 0; i < n0; ++i) {
+    placed.radius(out[i], 6.0 * step, near, nd2);
+    std::vector<std::uint32_t> later;
+    for (std::uint32_t j : near)
+      if (j > i) later.push_back(j);
+    std::sort(later.begin(), later.end());
+    for (std::uint32_t j : later) {
+      const Eigen::Vector3d &a = out[i], &b = out[j];
+      const double g = (b - a).norm();
+      if (g <= 1.5 * step || g > 6.0 * step) continue;
+      const Eigen::Vector3d m = 0.5 * (a + b), u = (b - a) / g;
+      if (covered(m, 0.45 * g, u)) continue;
+      const bool lineA = inLine(a, b), lineB = inLine(b, a);
+      const bool chord = g <= 4.5 * step ? (lineA || lineB) : (lineA && lineB);
+      const int pieces = static_cast<int>(std::ceil(g / step - 1e-9));
+      fill.clear();
+      bool ok = true;
+      for (int k = 1; k < pieces && ok; ++k) {
+        const Eigen::Vector3d q = a + (b - a) * (static_cast<double>(k) / pieces);
+        Crease c;
+        ok = false;
+        if (fit(q, c) && std::abs(c.direction.dot(u)) >= cosTurn) {
+          const Eigen::Vector3d off = c.point - a - u * (c.point - a).dot(u);  // off the chord
+          if (off.norm() <= 0.3 * step && (c.point - q).norm() <= 0.5 * step) fill.push_back(c.point), ok = true;
+        }
+        for (std::size_t e : {static_cast<std::size_t>(i), static_cast<std::size_t>(j)}) {
+          if (ok) break;
+          const Crease* ce = creaseOf(e);
+          if (!ce || std::abs(ce->direction.dot(u)) < cosTurn) continue;
+          const Eigen::Vector3d onLine = ce->point + ce->direction * (q - ce->point).dot(ce->direction);
+          if ((onLine - q).norm() <= 0.1 * step) fill.push_back(onLine), ok = true;
+        }
+        if (!ok && chord) fill.push_back(q), ok = true;
+        if (ok) {
+          double nearest = 0;
+          index.nearest(fill.back(), &nearest);
+          ok = std::sqrt(nearest) <= 1.5 * params.maxOffCrease * localSpacing(index, fill.back(), h);
+        }
+      }
+      if (!ok) continue;
+      for (const auto& q : fill) added.push_back(q), addedOwner.push_back(owner[i]);
+    }
+  }
+  out.insert(out.end(), added.begin(), added.end());
+  owner.insert(owner.end(), addedOwner.begin(), addedOwner.end());
+}
+
 }  // namespace
 
 std::vector<Eigen::Vector3d> snapToCreases(const PointCloud& cloud, const std::vector<Eigen::Vector3d>& samples,
@@ -1154,7 +1282,7 @@ std::vector<Eigen::Vector3d> snapToCreases(const PointCloud& cloud, const std::v
       if (ea.chain == eb.chain || (ea.point - eb.point).norm() > reach) continue;
       // Closest points of the two lines: ea.point + s·da and eb.point + t·db.
       const double c = ea.direction.dot(eb.direction);
-      if (1.0 - c * c < 0.1) continue;  // nearly parallel: no corner between them
+      if (1.0 - c * c < 0.05) continue;  // nearly parallel (under 13°): no corner between them
       const Eigen::Vector3d w = ea.point - eb.point;
       const double d = ea.direction.dot(w), e = eb.direction.dot(w);
       const double sa = (c * e - d) / (1.0 - c * c), tb = (e - c * d) / (1.0 - c * c);
@@ -1183,6 +1311,7 @@ std::vector<Eigen::Vector3d> snapToCreases(const PointCloud& cloud, const std::v
     }
   owner.insert(owner.end(), cornerOwner.begin(), cornerOwner.end());
   out.insert(out.end(), corners.begin(), corners.end());
+  fillCreaseGaps(cloud, index, h, params, out, owner);
   if (chainOut) *chainOut = std::move(owner);
   return out;
 }

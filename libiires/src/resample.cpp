@@ -1008,6 +1008,8 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
   resampler.run(s, result);
   clock.end("resample", t);
 
+  for (std::size_t i = 0; i < s.size(); ++i)
+    if (s.fixed[i]) result.fixedIndices.push_back(static_cast<std::uint32_t>(i));
   result.cloud.points = std::move(s.pos);
   result.cloud.normals = std::move(s.nrm);
   t = clock.begin("report");

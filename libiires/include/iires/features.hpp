@@ -139,15 +139,21 @@ std::vector<Eigen::Vector3d> sampleFeatureChains(const std::vector<FeatureChain>
 ///     (the third plane with each sheet, on the side where the sheet lies) are followed along those planes while
 ///     the points around stay explained by them, handing over to the stepped fit once it holds. Traced
 ///     branches get chain indices after the given ones. Sequential in a fixed order: deterministic.
-///  4. Where two chains' end lines, continued, meet within 3·radius spacings of both ends and within
+///  4. Where two chains' end lines (at least 13° apart), continued, meet within 3·radius spacings of both ends and within
 ///     params.maxOffCrease spacings of an input point, and no sample is within half a spacing of it (tracing
 ///     placed most corners already), a corner sample is added there, and the gap from each of those chain ends
 ///     to the corner gets samples at the chain's spacing on the straight line.
+///  5. Gaps: two samples 1.5–6 × the chains' median spacing apart with no sample between them (within 0.45 × their
+///     distance of the midpoint and half a spacing of their line) get samples at ≤ that spacing between them: on
+///     the snap fit's crease where it runs along them and near their chord, else on the fitted crease line of
+///     either, else on the chord where the samples on either side run on in line with it (within 20°; one side
+///     suffices up to 4.5 spacings); a gap where none holds (two creases meeting) stays open.
 /// @param chainOfSample the chain index of each sample (sampleFeatureChains' output: a chain's samples are
 ///     consecutive and in order)
 /// @param spacing the input spacing h (FeatureResult::spacing)
 /// @param[out] chainOut (optional) the chain index of each returned sample (a corner: one of its two chains)
-/// @return the kept and traced samples, chain by chain in order, then the corners of step 4 and their gap samples
+/// @return the kept and traced samples, chain by chain in order, then the corners of step 4 and their gap
+/// samples, then the samples of step 5
 /// @note O(samples · m log n + ends² + traced · samples), m the neighbours in the radius. Deterministic for any
 /// thread count.
 std::vector<Eigen::Vector3d> snapToCreases(const PointCloud& cloud, const std::vector<Eigen::Vector3d>& samples,

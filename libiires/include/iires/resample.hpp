@@ -124,6 +124,8 @@ struct ResampleResult {
   std::vector<double> spacingPerLevel;      ///< curvature mode: mean nearest-neighbour spacing per level
   std::size_t featurePoints = 0;     ///< sharp edges: input points detected on features
   std::size_t featureSamples = 0;    ///< sharp edges: samples held on the feature lines (part of the N)
+  /// Indices into cloud of the held samples (ResampleParams::fixedSamples and the feature samples), increasing.
+  std::vector<std::uint32_t> fixedIndices;
   std::size_t components = 0;        ///< connected components of the input (intrinsic control), else 0
   std::size_t satellites = 0;        ///< geodesic satellites in all (3 per component)
   /// The geodesic coordinates of the input (intrinsic control), e.g. for writeGeodesicPly; else null.
