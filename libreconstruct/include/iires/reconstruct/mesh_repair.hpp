@@ -73,8 +73,8 @@ struct LargeHoleReport {
 
 /// @brief Close the boundary loops whose bounding-box diagonal is at most params.maxRefinedExtent × that of their
 /// component (through shared vertices) with new vertices: CGAL's refined, faired hole filling (Liepa 2003: a
-/// minimal-area triangulation, refined to the loop's edge density, its new vertices faired for C¹ continuity with
-/// the surrounding mesh), then params.refineIterations of isotropic remeshing of the patch at the loop's mean edge
+/// minimal-area triangulation, refined to the loop's edge density, its new vertices faired with C⁰ continuity — a
+/// membrane, flat for a planar loop, where C¹ would carry the surrounding walls into a dome), then params.refineIterations of isotropic remeshing of the patch at the loop's mean edge
 /// length (the loop's own edges and vertices unchanged). Meant for what fillSmallHoles() leaves: a gap of a scan
 /// wider than many mesh edges (e.g. an object's flat cap sampled only at its rim), while the boundary of an open
 /// surface, spanning most of it, is kept. New vertices are appended to the mesh, and their normals (of the
