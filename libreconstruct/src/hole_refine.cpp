@@ -18,6 +18,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "iires/disjoint_sets.hpp"
 #include "iires/reconstruct/mesh_quality.hpp"
 #include "iires/reconstruct/mesh_repair.hpp"
 
@@ -42,20 +43,12 @@ LargeHoleReport fillLargeHoles(TriangleMesh& mesh, std::vector<Eigen::Vector3d>&
   if (!(params.maxRefinedExtent > 0) || mesh.triangles.empty()) return report;
   const std::size_t nv = mesh.vertices.size();
   // Components (through shared vertices) and their bounding boxes: a loop is measured against its own part.
-  std::vector<std::uint32_t> parent(nv);
-  for (std::uint32_t i = 0; i < nv; ++i) parent[i] = i;
-  auto find = [&](std::uint32_t x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  };
+  DisjointSets parts(nv);
   for (const auto& t : mesh.triangles)
-    for (int c = 1; c < 3; ++c) {
-      const std::uint32_t a = find(static_cast<std::uint32_t>(t[0])), b = find(static_cast<std::uint32_t>(t[c]));
-      if (a != b) parent[std::max(a, b)] = std::min(a, b);
-    }
+    for (int c = 1; c < 3; ++c) parts.unite(static_cast<std::uint32_t>(t[0]), static_cast<std::uint32_t>(t[c]));
   std::unordered_map<std::uint32_t, Eigen::AlignedBox3d> boxes;
   for (const auto& t : mesh.triangles)
-    for (int c = 0; c < 3; ++c) boxes[find(static_cast<std::uint32_t>(t[c]))].extend(mesh.vertices[static_cast<std::size_t>(t[c])]);
+    for (int c = 0; c < 3; ++c) boxes[parts.find(static_cast<std::uint32_t>(t[c]))].extend(mesh.vertices[static_cast<std::size_t>(t[c])]);
 
   Mesh sm;
   sm.reserve(static_cast<Mesh::size_type>(nv), static_cast<Mesh::size_type>(3 * mesh.triangles.size() / 2),
@@ -98,7 +91,7 @@ LargeHoleReport fillLargeHoles(TriangleMesh& mesh, std::vector<Eigen::Vector3d>&
       ++edges;
       g = sm.next(g);
     } while (g != h);
-    const Eigen::AlignedBox3d& whole = boxes[find(static_cast<std::uint32_t>(sm.target(h)))];
+    const Eigen::AlignedBox3d& whole = boxes[parts.find(static_cast<std::uint32_t>(sm.target(h)))];
     if (edges < 3 || box.diagonal().norm() > params.maxRefinedExtent * whole.diagonal().norm()) {
       ++report.kept;
       continue;
@@ -177,23 +170,16 @@ std::size_t remeshBadRegions(TriangleMesh& mesh, std::vector<Eigen::Vector3d>& n
   }
   std::vector<std::vector<std::size_t>> regions;
   {
-    std::vector<std::uint32_t> parent(mesh.vertices.size());
-    for (std::uint32_t i = 0; i < parent.size(); ++i) parent[i] = i;
-    auto find = [&](std::uint32_t x) {
-      while (parent[x] != x) x = parent[x] = parent[parent[x]];
-      return x;
-    };
+    DisjointSets linked(mesh.vertices.size());
     for (std::size_t f = 0; f < selected.size(); ++f)
       if (selected[f])
-        for (int c = 1; c < 3; ++c) {
-          const std::uint32_t a = find(static_cast<std::uint32_t>(mesh.triangles[f][0])),
-                              b = find(static_cast<std::uint32_t>(mesh.triangles[f][c]));
-          if (a != b) parent[std::max(a, b)] = std::min(a, b);
-        }
+        for (int c = 1; c < 3; ++c)
+          linked.unite(static_cast<std::uint32_t>(mesh.triangles[f][0]), static_cast<std::uint32_t>(mesh.triangles[f][c]));
     std::map<std::uint32_t, std::size_t> id;
     for (std::size_t f = 0; f < selected.size(); ++f)
       if (selected[f]) {
-        const auto [it, fresh] = id.emplace(find(static_cast<std::uint32_t>(mesh.triangles[f][0])), regions.size());
+        const auto [it, fresh] =
+            id.emplace(linked.find(static_cast<std::uint32_t>(mesh.triangles[f][0])), regions.size());
         if (fresh) regions.emplace_back();
         regions[it->second].push_back(f);
       }
