@@ -77,4 +77,29 @@ TEST(MlsSurface, FlagsPointsBeyondAnOpenBoundary) {
   EXPECT_NEAR(surface.area(), 1.0, 0.35);  // a density estimate: right to within tens of per cent
 }
 
+// `beyond` (distance past the hull of the input neighbours, in kernel widths) is 0 inside the cloud, even in
+// a sampling hole where offSurface is large, and grows past an open boundary.
+TEST(MlsSurface, BeyondIsZeroInAHoleAndGrowsPastTheBoundary) {
+  auto cloud = iires::test::planeCloud(20000);  // spacing ≈ 0.0035, kernel width ≈ 0.011
+  const Eigen::Vector3d hole(0.5, 0.5, 0.0);
+  iires::PointCloud holed;
+  for (const auto& p : cloud.points)
+    if ((p - hole).norm() > 0.03) holed.points.push_back(p);
+  holed.normals.assign(holed.size(), Eigen::Vector3d::UnitZ());
+  iires::MlsSurface surface(holed.points, holed.normals);
+  double off = 0, beyond = 1;
+  surface.project(Eigen::Vector3d(0.3, 0.6, 0.01), nullptr, &off, nullptr, nullptr, 0, &beyond);
+  EXPECT_EQ(beyond, 0.0);
+  surface.project(hole, nullptr, &off, nullptr, nullptr, 0, &beyond);
+  EXPECT_GT(off, 1.0);
+  EXPECT_EQ(beyond, 0.0);
+  double last = 0;
+  for (const double x : {1.01, 1.02, 1.04}) {
+    surface.project(Eigen::Vector3d(x, 0.5, 0.0), nullptr, &off, nullptr, nullptr, 0, &beyond);
+    EXPECT_GT(beyond, last) << "x = " << x;
+    last = beyond;
+  }
+  EXPECT_GT(last, 1.0);  // 0.04 past the last points: more than a kernel width
+}
+
 }  // namespace

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <random>
 
 #include "shapes.hpp"
 
@@ -107,6 +108,37 @@ TEST(Resample, TwoNearlyTouchingSpheresSplitByArea) {
   for (std::uint32_t i = 0; i < 2000; ++i) count += onSmall(i);
   EXPECT_NEAR(static_cast<double>(count) / 2000.0, 0.1225 / 0.3725, 0.02);
   for (const auto& e : r.ringEdges) EXPECT_EQ(onSmall(e[0]), onSmall(e[1])) << "a 1-ring edge links the spheres";
+}
+
+// A sparse open tube (mesh-vertex-like rings of 24 points, 0.065 apart, the end rings exactly at z = 0 and
+// z = 1) upsampled ten times: samples stay within a quarter input spacing of the open ends, where the MLS
+// surface would carry on along the tube (it used to put samples 1.5 input spacings past them, like the CGAL
+// hand's wrist), and on the tube.
+TEST(Resample, UpsampledSparseTubeEndsStayAtTheInputsRims) {
+  constexpr int kRing = 24, kRings = 16;
+  constexpr double kRadius = 0.25;
+  std::mt19937_64 rng(41);
+  std::uniform_real_distribution<double> turn(0.0, 2.0 * M_PI / kRing);
+  iires::PointCloud cloud;
+  for (int z = 0; z <= kRings; ++z) {
+    const double offset = turn(rng);
+    for (int a = 0; a < kRing; ++a) {
+      const double t = offset + 2.0 * M_PI * a / kRing;
+      cloud.points.emplace_back(kRadius * std::cos(t), kRadius * std::sin(t), static_cast<double>(z) / kRings);
+      cloud.normals.emplace_back(std::cos(t), std::sin(t), 0.0);
+    }
+  }
+  const double spacing = 2.0 * M_PI * kRadius / kRing;  // ≈ 0.065, the ring spacing 1/16 ≈ 0.0625
+  const auto r = iires::resample(cloud, paramsFor(4000));
+  ASSERT_EQ(r.cloud.size(), 4000u);
+  EXPECT_LT(r.spacing.cv, 0.08);
+  double past = 0, radial = 0;
+  for (const auto& p : r.cloud.points) {
+    past = std::max({past, -p.z(), p.z() - 1.0});
+    radial = std::max(radial, std::abs(std::hypot(p.x(), p.y()) - kRadius));
+  }
+  EXPECT_LE(past, 0.25 * spacing);
+  EXPECT_LE(radial, 0.1 * spacing);
 }
 
 TEST(Resample, RejectsBadInputAndParameters) {

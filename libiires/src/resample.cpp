@@ -27,6 +27,11 @@ using Clock = std::chrono::steady_clock;
 
 constexpr std::uint32_t kNone = 0xffffffffu;
 constexpr double kOffSurfaceLimit = 0.6;  // MlsSurface::project's offSurface beyond which a move left the cloud
+// MlsSurface::project's `beyond` (tangent-plane distance outside the input neighbours' hull, in kernel widths,
+// ≈ 0.15 input spacings) past which a move left the input's extent at an open boundary. kOffSurfaceLimit alone
+// lets a sample sit 0.6 kernel widths (≈ 2 input spacings) from the nearest input point, which at an open
+// boundary of a sparse input is several output spacings past the data (upsampling).
+constexpr double kBeyondLimit = 0.05;
 constexpr double kCarryShare = 0.05;     // edits touching more than this share of samples restart the relaxation
 
 /// The working sample set S.
@@ -363,7 +368,9 @@ Rings Resampler::computeRings(const Samples& s, double cellRadius, const Relaxat
     for (std::uint32_t j : coincident)
       if (w < k) r.ring[i * static_cast<std::size_t>(k) + static_cast<std::size_t>(w++)] = j;
     // Open boundary: the 1-ring leaves an angular gap wider than 135° and the surface does not continue into
-    // it (a probe half a cell into the gap leaves the cloud); the gap's bisector then points off the surface.
+    // it (a probe half a cell into the gap leaves the cloud, or the input's extent: when upsampling, half a cell
+    // is a fraction of the input spacing and stays near the last input points); the gap's bisector then points
+    // off the surface.
     // A gap with surface behind it is merely a sparse region (e.g. while upsampling) and stays open to moves.
     std::sort(dirs.begin(), dirs.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
     for (std::size_t a = 0; a < dirs.size(); ++a) {
@@ -372,9 +379,9 @@ Rings Resampler::computeRings(const Samples& s, double cellRadius, const Relaxat
           gapBisector(dirs[a].second, dirs[wrap ? 0 : a + 1].second, wrap && dirs[0].first == dirs[a].first);
       if (!mid) continue;
       const Eigen::Vector3d dir = mid->x() * u + mid->y() * v;
-      double off = 0;
-      surface_.project(s.pos[i] + 0.5 * radius * dir, nullptr, &off, &s.nrm[i]);
-      if (off > kOffSurfaceLimit) r.outward[i] = dir;
+      double off = 0, out = 0;
+      surface_.project(s.pos[i] + 0.5 * radius * dir, nullptr, &off, &s.nrm[i], nullptr, 0, &out);
+      if (off > kOffSurfaceLimit || out > kBeyondLimit) r.outward[i] = dir;
     }
   });
   return r;
@@ -421,11 +428,12 @@ double Resampler::relax(Samples& s, double l, int iterations, Relaxation& state,
       Eigen::Vector3d target = s.pos[i] + step;
       for (int attempt = 0; attempt < 3; ++attempt) {
         Eigen::Vector3d nn;
-        double off = 0;
-        const Eigen::Vector3d p = surface_.project(target, &nn, &off, &s.nrm[i], &s.cache[i], projectionSteps);
+        double off = 0, out = 0;
+        const Eigen::Vector3d p =
+            surface_.project(target, &nn, &off, &s.nrm[i], &s.cache[i], projectionSteps, &out);
         // A boundary sample never ends farther out than it was (the projection itself may push it there,
         // where the MLS surface only extrapolates past the last input points) and stays closer to the cloud.
-        if (off <= (r.outward[i].isZero() ? kOffSurfaceLimit : 0.5 * kOffSurfaceLimit) &&
+        if (off <= (r.outward[i].isZero() ? kOffSurfaceLimit : 0.5 * kOffSurfaceLimit) && out <= kBeyondLimit &&
             (p - s.pos[i]).dot(r.outward[i]) <= 0) {
           pos[i] = p;
           nrm[i] = nn;
@@ -477,13 +485,13 @@ EditMap Resampler::splitAndCollapse(Samples& s, const std::vector<Edge>& sorted,
          ++next)
       batch.push_back(&*next);
     std::vector<Eigen::Vector3d> pos(batch.size()), nrm(batch.size());
-    std::vector<double> off(batch.size());
+    std::vector<double> off(batch.size()), out(batch.size());
     parallelFor(batch.size(), params_.threads, [&](std::size_t c) {
       const Edge& e = *batch[c];
-      pos[c] = surface_.project(0.5 * (s.pos[e.a] + s.pos[e.b]), &nrm[c], &off[c], &s.nrm[e.a]);
+      pos[c] = surface_.project(0.5 * (s.pos[e.a] + s.pos[e.b]), &nrm[c], &off[c], &s.nrm[e.a], nullptr, 0, &out[c]);
     });
     for (std::size_t c = 0; c < batch.size() && newPos.size() < splits; ++c)
-      if (off[c] <= kOffSurfaceLimit) {
+      if (off[c] <= kOffSurfaceLimit && out[c] <= kBeyondLimit) {
         newPos.push_back(pos[c]), newNrm.push_back(nrm[c]);
         map.touched.push_back(batch[c]->a), map.touched.push_back(batch[c]->b);
       }
