@@ -771,8 +771,11 @@ void traceChainEnds(const PointCloud& cloud, const KnnIndex& index, double h, co
     // a step) that neither plane explains belong to a third sheet (off both planes by 3·maxResidual, a normal
     // unlike both, off the rounded crease); its plane is fitted, the corner refined as the three planes'
     // intersection. On success the gap from the tip is filled, the corner placed and its two other creases
-    // followed.
-    auto cornerAhead = [&](const Crease& c, const Eigen::Vector3d& o, std::vector<Eigen::Vector3d>& added) {
+    // followed (1). A third plane within the detector's angle of one sheet but not of the other is no corner but
+    // the crease bending on (a faceted or small cylinder beside a plane): @p bend gets the next sample, one step
+    // on along the other sheet ∩ the third plane (2). Else 0.
+    auto cornerAhead = [&](const Crease& c, const Eigen::Vector3d& o, std::vector<Eigen::Vector3d>& added,
+                           Crease* bend) -> int {
       const Eigen::Vector3d y = o + 0.5 * step * dir;
       const double hc = localSpacing(index, y, h), tolc = 3.0 * params.maxResidual * hc;
       const double reachC = params.radius * hc + 0.5 * step;
@@ -858,6 +861,38 @@ void traceChainEnds(const PointCloud& cloud, const KnnIndex& index, double h, co
             n3 = pn[2];
             o3 = po[2];
           }
+          // A sheet curving on (a small cylinder beside a plane): its points ahead fit a "third plane" within
+          // the detector's angle of it, while the other sheet meets that plane at a crease. No corner then: the
+          // crease bends; the next sample goes one step on along the other sheet ∩ the third plane.
+          const double cosSharp = std::cos(params.angle * kDeg);
+          const bool smoothA = std::abs(cc.normalA.dot(n3)) > cosSharp, smoothB = std::abs(cc.normalB.dot(n3)) > cosSharp;
+          if (smoothA != smoothB) {
+            const Eigen::Vector3d nO = smoothA ? cc.normalB : cc.normalA;
+            const double oO = smoothA ? cc.offsetB : cc.offsetA;
+            Eigen::Vector3d d = nO.cross(n3);
+            if (d.norm() < 0.3) return 0;
+            d.normalize();
+            if (d.dot(dir) < 0) d = -d;
+            if (d.dot(dir) < cosTurn) return 0;
+            // The line's point nearest the tip, then one step on along it.
+            Eigen::Matrix2d g;
+            g << 1.0, nO.dot(n3), nO.dot(n3), 1.0;
+            const Eigen::Vector2d ab = g.inverse() * Eigen::Vector2d(oO - nO.dot(tip), o3 - n3.dot(tip));
+            const Eigen::Vector3d foot = tip + ab(0) * nO + ab(1) * n3;
+            if ((foot - tip).norm() > 0.5 * step) return 0;
+            const Eigen::Vector3d yb = foot + (step - (foot - tip).dot(dir)) / d.dot(dir) * d;
+            double nb = 0;
+            index.nearest(yb, &nb);
+            if (std::sqrt(nb) > params.maxOffCrease * localSpacing(index, yb, h)) return 0;
+            bend->valid = true;
+            bend->point = yb;
+            bend->direction = d;
+            bend->normalA = nO;
+            bend->offsetA = oO;
+            bend->normalB = n3;
+            bend->offsetB = o3;
+            return 2;
+          }
           const double ahead3 = (corner - tip).dot(dir);
           double nearest = 0;
           index.nearest(corner, &nearest);
@@ -895,6 +930,10 @@ void traceChainEnds(const PointCloud& cloud, const KnnIndex& index, double h, co
                 const double oO = sheet ? cc.offsetA : cc.offsetB;
                 Eigen::Vector3d u = nS.cross(n3);
                 if (u.norm() < 0.3) continue;
+                // No crease between the sheet and the third one by the detector's angle (a sheet curving on, as
+                // a small cylinder beside a plane: its points ahead fit a "third plane" a few tens of degrees
+                // off): no branch there.
+                if (std::abs(nS.dot(n3)) > std::cos(params.angle * kDeg)) continue;
                 u.normalize();
                 Eigen::Vector3d side = Eigen::Vector3d::Zero();
                 for (std::uint32_t j : halfBall) {
@@ -950,7 +989,7 @@ void traceChainEnds(const PointCloud& cloud, const KnnIndex& index, double h, co
           }
         }
       }
-      return placed;
+      return placed ? 1 : 0;
     };
     Crease last;  // the planes at the tip (the last full fit)
     {
@@ -977,7 +1016,17 @@ void traceChainEnds(const PointCloud& cloud, const KnnIndex& index, double h, co
       if (ok && nearPlaced(y, tip, step)) break;  // bridged to a sample already placed
       if (!ok || oneSided) {
         // Near a corner: fitted on the half-ball behind, or not at all (then the tip's planes go on).
-        if (ok ? cornerAhead(c, y - step * dir, added) : (last.valid && cornerAhead(last, tip, added))) break;
+        Crease bent;
+        const int found = ok ? cornerAhead(c, y - step * dir, added, &bent)
+                             : (last.valid ? cornerAhead(last, tip, added, &bent) : 0);
+        if (found == 1) break;
+        if (found == 2) {
+          if (nearPlaced(bent.point, tip, step)) break;  // bridged
+          y = bent.point;
+          c = bent;
+          ok = true;
+          oneSided = false;
+        }
         if (!ok) {
           // A fit fails now and then on a random sampling (a lopsided neighbourhood): the crease goes on if the
           // full fit holds one or two steps further; the skipped samples go on the straight line to it.
