@@ -226,16 +226,21 @@ TEST(Features, TracingFromOneChainCoversTheCubesEdges) {
     for (std::size_t j = i + 1; j < out.size(); ++j) EXPECT_GT((out[i] - out[j]).norm(), 0.5 * step) << i << " " << j;
 }
 
+// The cloud with the normals within @p radius of @p spot (on the cube edge x = z = 1) all set to the edge's mean
+// normal: the normal 2-means finds one sheet there, so no two-plane fit holds.
+iires::PointCloud withBlindSpot(iires::PointCloud cloud, const Eigen::Vector3d& spot, double radius) {
+  for (std::size_t i = 0; i < cloud.size(); ++i)
+    if ((cloud.points[i] - spot).norm() < radius) cloud.normals[i] = Eigen::Vector3d(1, 0, 1).normalized();
+  return cloud;
+}
+
 // Where no two-plane fit holds along a stretch of a crease (here: the input normals within 0.05 of the middle of
 // the cube edge x = z = 1 all set to one vector, so the normal 2-means finds one sheet), tracing cannot step
 // through it; the gap between the chain's two pieces is filled on the line through them (the samples on either
 // side run in line), so the edge has no gap over 1.5 steps and every sample stays on it.
 TEST(Features, GapWhereNoFitHoldsIsFilledOnTheChainsLine) {
   const auto mesh = cubeMesh();
-  auto cloud = sampledWithEstimatedNormals(mesh, 60000);
-  const Eigen::Vector3d middle(1.0, 0.5, 1.0);
-  for (std::size_t i = 0; i < cloud.size(); ++i)
-    if ((cloud.points[i] - middle).norm() < 0.05) cloud.normals[i] = Eigen::Vector3d(1, 0, 1).normalized();
+  const auto cloud = withBlindSpot(sampledWithEstimatedNormals(mesh, 60000), Eigen::Vector3d(1.0, 0.5, 1.0), 0.05);
   FeatureParams p;
   const double h = iires::estimateSpacing(cloud.points);
   const double step = 0.02;
@@ -270,10 +275,7 @@ TEST(Features, GapWhereNoFitHoldsIsFilledOnTheChainsLine) {
 // the edges up to the fits' noise (0.4 h, as for traced samples).
 TEST(Features, GapBeforeACornerIsFilledFromTheChainSide) {
   const auto mesh = cubeMesh();
-  auto cloud = sampledWithEstimatedNormals(mesh, 60000);
-  const Eigen::Vector3d spot(1.0, 0.9, 1.0);
-  for (std::size_t i = 0; i < cloud.size(); ++i)
-    if ((cloud.points[i] - spot).norm() < 0.06) cloud.normals[i] = Eigen::Vector3d(1, 0, 1).normalized();
+  const auto cloud = withBlindSpot(sampledWithEstimatedNormals(mesh, 60000), Eigen::Vector3d(1.0, 0.9, 1.0), 0.06);
   FeatureParams p;
   const double h = iires::estimateSpacing(cloud.points);
   const double step = 0.02;
