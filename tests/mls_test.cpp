@@ -12,6 +12,12 @@
 
 namespace {
 
+/// A uniformly random unit vector.
+Eigen::Vector3d randomDirection(std::mt19937_64& rng) {
+  std::normal_distribution<double> g(0.0, 1.0);
+  return Eigen::Vector3d(g(rng), g(rng), g(rng)).normalized();
+}
+
 TEST(MlsSurface, ProjectsOntoSphere) {
   const auto cloud = iires::test::sphereCloud(20000, 1.0, 11);
   for (int degree : {1, 2}) {
@@ -22,8 +28,7 @@ TEST(MlsSurface, ProjectsOntoSphere) {
     std::normal_distribution<double> g(0.0, 1.0);
     double worst = 0;
     for (int i = 0; i < 200; ++i) {
-      Eigen::Vector3d d(g(rng), g(rng), g(rng));
-      d.normalize();
+      const Eigen::Vector3d d = randomDirection(rng);
       const Eigen::Vector3d x = d * (1.0 + 0.01 * g(rng));  // a little off the surface
       Eigen::Vector3d n;
       double off = 0;
@@ -49,11 +54,9 @@ TEST(MlsSurface, BorrowedIndexAndSingleStepProjection) {
   EXPECT_DOUBLE_EQ(own.area(), borrowed.area());  // the kernel widths from the table are the tree's
   EXPECT_DOUBLE_EQ(own.meanSpacing(), borrowed.meanSpacing());
   std::mt19937_64 rng(4);
-  std::normal_distribution<double> g(0.0, 1.0);
   double worstStep = 0;
   for (int i = 0; i < 200; ++i) {
-    Eigen::Vector3d d(g(rng), g(rng), g(rng));
-    d.normalize();
+    const Eigen::Vector3d d = randomDirection(rng);
     const Eigen::Vector3d x = own.project(d);
     EXPECT_EQ(x, borrowed.project(d));
     const Eigen::Vector3d t = d.unitOrthogonal();
