@@ -166,7 +166,7 @@ TEST(Outliers, BorrowedNeighbourTableGivesTheSameOutput) {
   const iires::KnnIndex index(data.cloud.points);
   const iires::NeighbourTable table(index, data.cloud.points, iires::outlierNeighbours({}));
   const auto own = iires::processOutliers(data.cloud),
-             borrowed = iires::processOutliers(data.cloud, {}, nullptr, &table);
+             borrowed = iires::processOutliers(data.cloud, {}, &table);
   EXPECT_GT(own.found, 0u);
   EXPECT_EQ(own.outliers, borrowed.outliers);
   EXPECT_EQ(own.cloud.points, borrowed.cloud.points);

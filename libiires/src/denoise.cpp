@@ -157,8 +157,7 @@ std::size_t denoiseNeighbours(const DenoiseParams& params) {
   return static_cast<std::size_t>(std::max(params.neighbours, params.kernelNeighbour + 1));
 }
 
-DenoiseResult denoise(const PointCloud& input, const DenoiseParams& params, const KnnIndex* givenIndex,
-                      const NeighbourTable* table) {
+DenoiseResult denoise(const PointCloud& input, const DenoiseParams& params, const NeighbourTable* table) {
   params.validate();
   const auto start = Clock::now();
   const std::size_t k = static_cast<std::size_t>(params.neighbours);
@@ -182,22 +181,20 @@ DenoiseResult denoise(const PointCloud& input, const DenoiseParams& params, cons
   std::vector<std::uint32_t> found(n);
   std::vector<double> h(n, 0.0), nearest(n, 0.0);
   {
-    // A given tree or table indexes the caller's order: query it with the caller's point and map the answers
-    // to ours.
+    // A given table's rows are in the caller's order: read the caller's point and map its neighbours to ours.
     if (table && table->k() < K) table = nullptr;
-    if (table) givenIndex = &table->index();
     std::optional<KnnIndex> own;
-    const KnnIndex& index = givenIndex ? *givenIndex : own.emplace(in);
+    if (!table) own.emplace(in);
     std::vector<std::uint32_t> rankOf;
-    if (givenIndex) {
+    if (table) {
       rankOf.resize(n);
       for (std::size_t a = 0; a < n; ++a) rankOf[order[a]] = static_cast<std::uint32_t>(a);
     }
     parallelFor(n, params.threads, [&](std::size_t i) {
       std::vector<std::uint32_t> idx;
       std::vector<double> d2;
-      const std::size_t f = table ? table->get(order[i], K, idx, d2) : index.knn(in[i], K, idx, d2);
-      if (givenIndex)
+      const std::size_t f = table ? table->get(order[i], K, idx, d2) : own->knn(in[i], K, idx, d2);
+      if (table)
         for (std::uint32_t& j : idx) j = rankOf[j];
       std::copy(idx.begin(), idx.begin() + static_cast<long>(f), nbr.begin() + static_cast<long>(i * K));
       std::fill(nbr.begin() + static_cast<long>(i * K + f), nbr.begin() + static_cast<long>((i + 1) * K),

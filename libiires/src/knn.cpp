@@ -81,8 +81,7 @@ std::int64_t KnnIndex::nearest(const Eigen::Vector3d& query, double* sqDist) con
 
 NeighbourTable::NeighbourTable(const KnnIndex& index, const std::vector<Eigen::Vector3d>& points,
                                std::size_t k, int threads)
-    : index_(index),
-      points_(points),
+    : points_(points),
       k_(std::min<std::size_t>(k, 255)),
       rows_(points.size() * k_),
       found_(points.size()) {

@@ -88,8 +88,7 @@ std::size_t outlierNeighbours(const OutlierParams& params) {
   return std::max({k, planeK, kSpacingNeighbours}) + 1;
 }
 
-OutlierResult processOutliers(const PointCloud& input, const OutlierParams& params, const KnnIndex* given,
-                              const NeighbourTable* table) {
+OutlierResult processOutliers(const PointCloud& input, const OutlierParams& params, const NeighbourTable* table) {
   params.validate();
   const auto start = Clock::now();
   const std::size_t k = static_cast<std::size_t>(params.k);
@@ -110,11 +109,11 @@ OutlierResult processOutliers(const PointCloud& input, const OutlierParams& para
   {
     if (table && table->k() < K) table = nullptr;
     std::optional<KnnIndex> own;
-    const KnnIndex& index = table ? table->index() : given ? *given : own.emplace(P);
+    if (!table) own.emplace(P);
     forEachPoint([&](std::size_t i) {
       std::vector<std::uint32_t> idx;
       std::vector<double> d2;
-      const std::size_t f = table ? table->get(i, K, idx, d2) : index.knn(P[i], K, idx, d2);
+      const std::size_t f = table ? table->get(i, K, idx, d2) : own->knn(P[i], K, idx, d2);
       // Put i itself first even when exact duplicates tie with it.
       const auto self =
           std::find(idx.begin(), idx.begin() + static_cast<long>(f), static_cast<std::uint32_t>(i));

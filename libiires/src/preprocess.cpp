@@ -49,7 +49,7 @@ PreprocessResult preprocess(const PointCloud& input, const PreprocessParams& par
     index.emplace(input.points);
     table = &own.emplace(*index, input.points, preprocessNeighbours(params), params.threads);
   }
-  OutlierResult outliers = processOutliers(input, op, nullptr, table);  // eq. (4)–(5)
+  OutlierResult outliers = processOutliers(input, op, table);  // eq. (4)–(5)
   const bool unchanged = outliers.found == 0;
   result.outliersFound = outliers.found;
   result.outliersPulled = outliers.pulled;
@@ -60,7 +60,7 @@ PreprocessResult preprocess(const PointCloud& input, const PreprocessParams& par
     // cleanDisplacement input spacings on average, the cloud is already clean and further sweeps would only
     // erode tight curvature (folds, thin parts, sparse clouds) — denoise() keeps the positions then.
     dp.cleanDisplacement = params.cleanDisplacement;
-    DenoiseResult denoised = denoise(outliers.cloud, dp, nullptr, unchanged ? table : nullptr);
+    DenoiseResult denoised = denoise(outliers.cloud, dp, unchanged ? table : nullptr);
     result.denoiseSeconds = denoised.seconds;
     result.cleanInput = denoised.cleanInput;
     result.denoiseIterations = denoised.iterations;

@@ -91,6 +91,9 @@ struct DenoiseResult {
   double seconds = 0;           ///< wall time, all stages
 };
 
+/// @brief Neighbours per point denoise() finds (the point itself included): what a table must hold.
+std::size_t denoiseNeighbours(const DenoiseParams& params);
+
 /// @brief Denoise a cloud by repeated projection onto its MLS surface (paper eq. 1–3).
 ///
 /// For each point p with neighbours p_j (its k nearest, itself included, found once on the input):
@@ -103,15 +106,11 @@ struct DenoiseResult {
 /// already found (orientNormals()). Internally the points are processed in Morton order (cache locality).
 /// @throws InputError when the cloud is empty, holds NaN/Inf, or has fewer than neighbours + 1 points;
 /// std::invalid_argument for bad parameters.
-/// @param index (optional) a k-d tree over exactly input.points, borrowed, to save building one
-/// @param table (optional) neighbour lists of exactly input.points (k ≥ max(neighbours, kernelNeighbour +
-/// 1)), borrowed, to save the neighbour search
+/// @param table (optional) neighbour lists of exactly input.points with k ≥ denoiseNeighbours(params),
+/// borrowed, to save the neighbour search
 /// @note O(n k log n) for the neighbour search plus O(n k) per sweep. Deterministic: every sweep reads the
 /// previous positions only, so the output does not depend on the thread count.
-/// @brief Neighbours per point denoise() finds (the point itself included): what a table must hold.
-std::size_t denoiseNeighbours(const DenoiseParams& params);
-
 DenoiseResult denoise(const PointCloud& input, const DenoiseParams& params = {},
-                      const KnnIndex* index = nullptr, const NeighbourTable* table = nullptr);
+                      const NeighbourTable* table = nullptr);
 
 }  // namespace iires

@@ -45,7 +45,7 @@ class KnnIndex {
 /// first few of every row (outlier test, denoising, geodesic graph, MLS kernel widths: one k-NN pass instead
 /// of four). Row i holds what KnnIndex::knn(points[i], k) returns (point i itself among them, nearest first);
 /// get() hands out a prefix with the squared distances recomputed, so the table costs 4 bytes per neighbour.
-/// @note The points and the index must outlive the table and stay unchanged.
+/// @note The points must outlive the table and stay unchanged (the index is only read while constructing).
 class NeighbourTable {
  public:
   NeighbourTable(const KnnIndex& index, const std::vector<Eigen::Vector3d>& points, std::size_t k,
@@ -54,14 +54,12 @@ class NeighbourTable {
   std::size_t k() const { return k_; }
   std::size_t size() const { return found_.size(); }
   const std::vector<Eigen::Vector3d>& points() const { return points_; }
-  const KnnIndex& index() const { return index_; }
   /// @brief The first min(@p k, found) neighbours of point @p i, as KnnIndex::knn(points()[i], k) gives them.
   /// @pre k ≤ k()
   std::size_t get(std::size_t i, std::size_t k, std::vector<std::uint32_t>& indices,
                   std::vector<double>& sqDists) const;
 
  private:
-  const KnnIndex& index_;
   const std::vector<Eigen::Vector3d>& points_;
   std::size_t k_;
   std::vector<std::uint32_t> rows_;  // size()·k, row-major

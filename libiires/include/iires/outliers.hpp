@@ -58,6 +58,9 @@ struct OutlierResult {
   double seconds = 0;                   ///< wall time
 };
 
+/// @brief Neighbours per point processOutliers() finds (the point itself included): what a table must hold.
+std::size_t outlierNeighbours(const OutlierParams& params);
+
 /// @brief Detect outliers and pull them back, remove them or keep them.
 ///
 /// The rule (eq. 4 plus a geometric check): point p is *suspect* when it is in fewer than minMutual of the
@@ -78,14 +81,10 @@ struct OutlierResult {
 /// like q's normal when the input has normals.
 /// @throws InputError when the cloud is empty, holds NaN/Inf, or has fewer than planeNeighbours + 1
 /// points; std::invalid_argument for bad parameters.
-/// @param index (optional) a k-d tree over exactly input.points, borrowed, to save building one
-/// @param table (optional) neighbour lists of exactly input.points (k ≥ max(k, planeNeighbours, 6) + 1),
-/// borrowed, to save the k-NN search; its index then serves as @p index
+/// @param table (optional) neighbour lists of exactly input.points with k ≥ outlierNeighbours(params),
+/// borrowed, to save the k-NN search
 /// @note O(n k log n). Deterministic for any thread count.
-/// @brief Neighbours per point processOutliers() finds (the point itself included): what a table must hold.
-std::size_t outlierNeighbours(const OutlierParams& params);
-
 OutlierResult processOutliers(const PointCloud& input, const OutlierParams& params = {},
-                              const KnnIndex* index = nullptr, const NeighbourTable* table = nullptr);
+                              const NeighbourTable* table = nullptr);
 
 }  // namespace iires
