@@ -48,7 +48,7 @@ TEST(MlsSurface, BorrowedIndexAndSingleStepProjection) {
   const auto cloud = iires::test::sphereCloud(20000, 1.0, 12);
   const iires::KnnIndex index(cloud.points);
   const iires::MlsSurface own(cloud.points, cloud.normals);
-  const iires::NeighbourTable table(index, cloud.points, 9);
+  const iires::NeighbourTable table(index, cloud.points, iires::MlsSurface::kWidthNeighbours);
   const iires::MlsSurface borrowed(cloud.points, cloud.normals, {}, &index, &table);
   EXPECT_EQ(&borrowed.index(), &index);
   EXPECT_DOUBLE_EQ(own.area(), borrowed.area());  // the kernel widths from the table are the tree's

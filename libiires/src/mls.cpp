@@ -9,7 +9,7 @@
 
 namespace iires {
 namespace {
-constexpr std::size_t kKernelNeighbour = 8;  // paper: h from the 8th neighbour
+constexpr std::size_t kKernelNeighbour = MlsSurface::kWidthNeighbours - 1;  // paper: h from the 8th neighbour
 constexpr double kMaxQuadricHeight = 2.0;     // kernel widths: a quadric fit beyond this is not trusted
 
 /// Distance from the origin to the segment [p, r].
@@ -81,12 +81,12 @@ MlsSurface::MlsSurface(const std::vector<Eigen::Vector3d>& points,
   const std::size_t n = points.size();
   h_.assign(n, 0.0);
   std::vector<double> nearest(n, 0.0);
-  if (table && (table->k() < kKernelNeighbour + 1 || table->size() != n)) table = nullptr;
+  if (table && (table->k() < MlsSurface::kWidthNeighbours || table->size() != n)) table = nullptr;
   parallelFor(n, params.threads, [&](std::size_t i) {
     std::vector<std::uint32_t> idx;
     std::vector<double> d2;
-    const std::size_t found = table ? table->get(i, kKernelNeighbour + 1, idx, d2)
-                                    : index_->knn(points[i], kKernelNeighbour + 1, idx, d2);
+    const std::size_t found = table ? table->get(i, MlsSurface::kWidthNeighbours, idx, d2)
+                                    : index_->knn(points[i], MlsSurface::kWidthNeighbours, idx, d2);
     if (found < 2) return;
     h_[i] = std::sqrt(d2[found - 1]);
     nearest[i] = std::sqrt(d2[1]);

@@ -908,7 +908,7 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
   std::optional<KnnIndex> index(std::in_place, cloud.points);
   const std::size_t tableK =
       std::max({preprocessing ? preprocessNeighbours(pp) : std::size_t{0},
-                params.intrinsic ? static_cast<std::size_t>(gp.k) + 1 : 0, std::size_t{9}});
+                params.intrinsic ? static_cast<std::size_t>(gp.k) + 1 : 0, MlsSurface::kWidthNeighbours});
   std::optional<NeighbourTable> neighbours(std::in_place, *index, cloud.points, tableK, params.threads);
   clock.end("neighbours", t);
   if (preprocessing) {

@@ -34,8 +34,11 @@ struct MlsCache {
 /// then outlive the surface); the cloud must outlive the surface. project() is thread-safe.
 class MlsSurface {
  public:
-  /// @param table (optional) neighbour lists of exactly these points (k ≥ 9), borrowed while constructing, to
-  /// save the kernel widths' k-NN search
+  /// Neighbours per point (itself included) the kernel widths read: h = the distance to the 8th [paper].
+  static constexpr std::size_t kWidthNeighbours = 9;
+
+  /// @param table (optional) neighbour lists of exactly these points (k ≥ kWidthNeighbours), borrowed while
+  /// constructing, to save the kernel widths' k-NN search
   MlsSurface(const std::vector<Eigen::Vector3d>& points, const std::vector<Eigen::Vector3d>& normals,
              const MlsParams& params = {}, const KnnIndex* index = nullptr,
              const NeighbourTable* table = nullptr);
