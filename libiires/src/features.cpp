@@ -144,6 +144,19 @@ bool twoPlaneTest(const std::vector<Eigen::Vector3d>& points, const std::vector<
   return true;
 }
 
+constexpr std::size_t kMaxFitPoints = 200;  // a snap fit uses at most this many input points, the nearest
+
+/// The snap fit at @p y: twoPlaneTest() with thresholds @p prm on the input points within params.radius local
+/// spacings @p hl of y (the kMaxFitPoints nearest), weighted at params.snapSigma·hl. @p idx keeps that
+/// neighbourhood for a caller that refits part of it; @p d2 is scratch.
+bool snapFit(const PointCloud& cloud, const KnnIndex& index, const Eigen::Vector3d& y, double hl,
+             const FeatureParams& params, const FeatureParams& prm, Crease& c, std::vector<std::uint32_t>& idx,
+             std::vector<double>& d2) {
+  index.radius(y, params.radius * hl, idx, d2);
+  if (idx.size() > kMaxFitPoints) idx.resize(kMaxFitPoints);
+  return twoPlaneTest(cloud.points, cloud.normals, y, idx, hl, prm, c, params.snapSigma * hl);
+}
+
 // ---- Voronoi covariance measure (CGAL's compute_vcm, parallelised; see vcm_estimate_normals.h) ----------
 
 using K = CGAL::Exact_predicates_inexact_constructions_kernel;
@@ -709,10 +722,8 @@ void traceChainEnds(const PointCloud& cloud, const KnnIndex& index, double h, co
       std::vector<std::uint32_t> idx;
       std::vector<double> d2;
       const double hs = localSpacing(index, p[0], h);
-      index.radius(p[0], params.radius * hs, idx, d2);
-      if (idx.size() > 200) idx.resize(200);
       Crease c;
-      if (twoPlaneTest(cloud.points, cloud.normals, p[0], idx, hs, params, c, params.snapSigma * hs)) {
+      if (snapFit(cloud, index, p[0], hs, params, params, c, idx, d2)) {
         jobs.push_back({r, false, p[0], -c.direction, typicalStep});
         jobs.push_back({r, true, p[0], c.direction, typicalStep});
       }
@@ -745,10 +756,7 @@ void traceChainEnds(const PointCloud& cloud, const KnnIndex& index, double h, co
     oneSided = false;
     hl = localSpacing(index, y, h);
     for (int it = 0; it < 2 && ok; ++it) {  // fitted at the prediction, then re-centred on the crease
-      index.radius(y, params.radius * hl, idx, d2);
-      if (idx.size() > 200) idx.resize(200);
-      ok = twoPlaneTest(cloud.points, cloud.normals, y, idx, hl, params, c, params.snapSigma * hl) &&
-           std::abs(c.direction.dot(dir)) >= cosTurn;
+      ok = snapFit(cloud, index, y, hl, params, params, c, idx, d2) && std::abs(c.direction.dot(dir)) >= cosTurn;
       oneSided = false;
       if (!ok) {
         behind.clear();
@@ -1105,9 +1113,7 @@ void fillCreaseGaps(const PointCloud& cloud, const KnnIndex& index, double h, co
     Eigen::Vector3d y = y0;
     const double hl = localSpacing(index, y, h);
     for (int it = 0; it < 2; ++it) {
-      index.radius(y, params.radius * hl, idx, d2);
-      if (idx.size() > 200) idx.resize(200);
-      if (!twoPlaneTest(cloud.points, cloud.normals, y, idx, hl, params, c, params.snapSigma * hl)) return false;
+      if (!snapFit(cloud, index, y, hl, params, params, c, idx, d2)) return false;
       y = c.point;
     }
     return true;
@@ -1229,11 +1235,8 @@ std::vector<Eigen::Vector3d> snapToCreases(const PointCloud& cloud, const std::v
       moved[i] = samples[i];
       onCrease = true;
       for (int it = 0; it < 2 && onCrease; ++it) {  // re-centred once: the second fit is centred on the crease
-        index.radius(moved[i], params.radius * hl, idx, d2);
-        if (idx.size() > 200) idx.resize(200);
         Crease c;
-        onCrease = twoPlaneTest(cloud.points, cloud.normals, moved[i], idx, hl, it == 0 ? *prm : params, c,
-                                params.snapSigma * hl);
+        onCrease = snapFit(cloud, index, moved[i], hl, params, it == 0 ? *prm : params, c, idx, d2);
         // A jump must land on a crease running along the chain (not on another crease meeting it at a corner).
         if (onCrease && prm == &far && std::abs(c.direction.dot(along)) < std::cos(params.maxChainTurn * kDeg))
           onCrease = false;
@@ -1250,10 +1253,8 @@ std::vector<Eigen::Vector3d> snapToCreases(const PointCloud& cloud, const std::v
     loose.angle = 1.0;
     loose.maxResidual = 2.0 * params.maxResidual;
     loose.minClusterShare = 0.5 * params.minClusterShare;
-    index.radius(samples[i], params.radius * hl, idx, d2);
-    if (idx.size() > 200) idx.resize(200);
     Crease c;
-    if (twoPlaneTest(cloud.points, cloud.normals, samples[i], idx, hl, loose, c, params.snapSigma * hl) &&
+    if (snapFit(cloud, index, samples[i], hl, params, loose, c, idx, d2) &&
         (c.point - samples[i]).norm() <= 0.25 * hl) {
       moved[i] = c.point;
       creaseDir[i] = c.direction;
@@ -1407,7 +1408,7 @@ FeatureResult detectFeatures(const PointCloud& cloud, const FeatureParams& param
   auto neighbourhood = [&](std::size_t i, std::vector<std::uint32_t>& idx, double hi) {
     std::vector<double> d2;
     index.radius(pts[i], params.radius * hi, idx, d2);
-    if (idx.size() > 200) idx.resize(200);  // nearest first; bounds the cost in dense clusters
+    if (idx.size() > kMaxFitPoints) idx.resize(kMaxFitPoints);  // nearest first; bounds the cost in dense clusters
   };
   if (params.detector == FeatureDetector::NormalVariation) {
     parallelFor(n, params.threads, [&](std::size_t i) {
