@@ -250,8 +250,8 @@ void GeodesicCoordinates::Impl::build(const NeighbourTable* table,
     if (!identity) sortedCopy[i] = points[order[i]];
     pos[i] = (zp[i] - centre).cast<float>();
   }
-  index = std::make_unique<KnnIndex>(zp);
   if (table && (table->k() < k + 1 || table->size() != n)) table = nullptr;
+  if (!table) index = std::make_unique<KnnIndex>(zp);  // with a table only nearest() needs it: built below
   std::vector<std::uint32_t> knn(n * k, kNone);
   std::vector<float> knnDist(n * k, kInf);
   std::vector<float> rho(n, 0.0f), nearestDist(n, 0.0f);
@@ -467,7 +467,12 @@ void GeodesicCoordinates::Impl::build(const NeighbourTable* table,
     }
     sweepSeconds = secondsSince(t);
   };
-  if (alongside && team > nThreads) {  // the sweeps on a thread of their own, the other work on the idle ones
+  // What does not need the fields: the caller's work and the k-d tree for nearest(), if not built yet.
+  auto besides = [&](int threads) {
+    if (!index) index = std::make_unique<KnnIndex>(zp);
+    if (alongside) alongside(threads);
+  };
+  if (team > nThreads) {  // the sweeps on a thread of their own, the other work on the idle ones
     std::exception_ptr failure;
     std::thread sweeper([&] {
       try {
@@ -477,7 +482,7 @@ void GeodesicCoordinates::Impl::build(const NeighbourTable* table,
       }
     });
     try {
-      alongside(team - nThreads);
+      besides(team - nThreads);
     } catch (...) {
       sweeper.join();
       throw;
@@ -486,7 +491,7 @@ void GeodesicCoordinates::Impl::build(const NeighbourTable* table,
     if (failure) std::rethrow_exception(failure);
   } else {
     sweeps();
-    if (alongside) alongside(team);
+    besides(team);
   }
   report.satelliteSeconds = seedSeconds;
   // Back to the caller's order.
@@ -534,7 +539,6 @@ std::int64_t GeodesicCoordinates::nearest(const Eigen::Vector3d& query, double* 
   const std::int64_t i = impl_->index->nearest(query, sqDist);
   return i < 0 ? i : static_cast<std::int64_t>(impl_->order[static_cast<std::size_t>(i)]);
 }
-const KnnIndex* GeodesicCoordinates::pointIndex() const { return impl_->sortedCopy.empty() ? impl_->index.get() : nullptr; }
 const GeodesicParams& GeodesicCoordinates::params() const { return impl_->params; }
 int GeodesicCoordinates::dimensions() const { return impl_->params.satellites; }
 float GeodesicCoordinates::coordinate(std::size_t i, int s) const {

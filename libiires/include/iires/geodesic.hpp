@@ -107,9 +107,6 @@ class GeodesicCoordinates {
   /// @brief Index of the cloud point nearest to @p query (-1 only for an empty cloud); thread-safe.
   /// @param[out] sqDist squared distance to it, when not null
   std::int64_t nearest(const Eigen::Vector3d& query, double* sqDist = nullptr) const;
-  /// @brief The k-d tree over points() in their order, when the cloud came in Z-order (mortonOrder(), as the
-  /// resampler's working cloud does) so that the internal tree is one; else null. Lives as long as this object.
-  const KnnIndex* pointIndex() const;
   const GeodesicParams& params() const;
 
   /// @brief Number of coordinates per point (params().satellites).
