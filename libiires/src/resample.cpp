@@ -607,17 +607,20 @@ Crowding crowdingPairs(const std::vector<Eigen::Vector3d>& pos, const std::vecto
   auto size = [&](std::size_t i) { return sz.empty() ? 1.0 : sz[i]; };
   const double maxSize = sz.empty() ? 1.0 : *std::max_element(sz.begin(), sz.end());
   const KnnIndex index(pos);
-  Crowding nb(pos.size());  // float: 8 bytes a pair (memory at 5M)
+  Crowding nb(pos.size());  // float, and each row allocated once at its size: memory at 5M
   parallelFor(pos.size(), threads, [&](std::size_t i) {
-    std::vector<std::uint32_t> idx;
-    std::vector<double> d2;
+    thread_local std::vector<std::uint32_t> idx;
+    thread_local std::vector<double> d2;
+    thread_local std::vector<std::pair<std::uint32_t, float>> row;
     index.radius(pos[i], 2.0 * rmax * 0.5 * (size(i) + maxSize), idx, d2);
+    row.clear();
     for (std::size_t c = 0; c < idx.size(); ++c) {
       if (idx[c] == i) continue;
       const double scale = 0.5 * (size(i) + size(idx[c])), radius = 2.0 * rmax * scale;
       const double d = std::max(std::sqrt(d2[c]), 2.0 * rmin * scale);
-      if (d < radius) nb[i].emplace_back(idx[c], pow8(1.0 - d / radius));
+      if (d < radius) row.emplace_back(idx[c], pow8(1.0 - d / radius));
     }
+    nb[i].assign(row.begin(), row.end());
   });
   return nb;
 }
@@ -934,27 +937,23 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
   GeodesicParams gp = params.geodesic;
   gp.threads = params.threads;
   // One k-NN search for every stage that reads the working cloud's neighbours (pre-processing, the geodesic
-  // graph, the MLS kernel widths), one k-d tree for it and the MLS. Pre-processing that moves or drops points
-  // invalidates both: they are found again on its output, for the stages after it.
-  const std::size_t laterK =
-      std::max(params.intrinsic ? static_cast<std::size_t>(gp.k) + 1 : 0, MlsSurface::kWidthNeighbours);
-  std::optional<KnnIndex> index;
-  std::optional<NeighbourTable> neighbours;
-  auto findNeighbours = [&](std::size_t k) {
-    index.emplace(cloud.points);
-    neighbours.emplace(*index, cloud.points, k, params.threads);
-  };
+  // graph, the MLS kernel widths) while pre-processing keeps the positions; one k-d tree for it and the MLS.
   t = clock.begin("neighbours");
-  findNeighbours(std::max(preprocessing ? preprocessNeighbours(pp) : std::size_t{0}, laterK));
+  std::optional<KnnIndex> index(std::in_place, cloud.points);
+  const std::size_t tableK =
+      std::max({preprocessing ? preprocessNeighbours(pp) : std::size_t{0},
+                params.intrinsic ? static_cast<std::size_t>(gp.k) + 1 : 0, MlsSurface::kWidthNeighbours});
+  std::optional<NeighbourTable> neighbours(std::in_place, *index, cloud.points, tableK, params.threads);
   clock.end("neighbours", t);
   if (preprocessing) {
-    t = clock.begin("preprocess");  // includes finding the neighbours again
+    t = clock.begin("preprocess");
     result.preprocessing = iires::preprocess(cloud, pp, &*neighbours);
     if (result.preprocessing.positionsKept()) {
       cloud.normals = std::move(result.preprocessing.cloud.normals);
-    } else {
+    } else {  // moved or dropped points: the table and the tree no longer match them
+      neighbours.reset();
+      index.reset();
       cloud = std::move(result.preprocessing.cloud);
-      findNeighbours(laterK);
     }
     result.preprocessing.cloud = {};
     clock.end("preprocess", t);
@@ -970,8 +969,9 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
   }
   clock.end("normals", t);
 
-  // What does not need the geodesic coordinates: the MLS surface and the initial candidates. It runs where
-  // the geodesic satellite sweeps (serial per component) leave threads idle.
+  // What does not need the geodesic coordinates: the MLS surface (with a new k-d tree when pre-processing
+  // moved the points), the initial candidates and their elimination pairs. It runs where the geodesic
+  // satellite sweeps (serial per component) leave threads idle.
   std::optional<MlsSurface> surface;
   std::vector<std::uint32_t> candidates;
   Crowding crowding;
@@ -979,7 +979,9 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
     auto t = clock.begin("surface");
     MlsParams mp = params.mls;
     mp.threads = threads;
-    surface.emplace(cloud.points, cloud.normals, mp, &*index, &*neighbours);
+    if (!index) index.emplace(cloud.points);
+    surface.emplace(cloud.points, cloud.normals, mp, &*index, neighbours ? &*neighbours : nullptr);
+    neighbours.reset();  // read by nothing after the surface and the geodesic graph (memory at 5M)
     clock.end("surface", t);
     t = clock.begin("candidates");
     candidates = initialCandidates(cloud, *surface, params, threads);
@@ -998,7 +1000,8 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
     t = clock.begin("geodesic");  // includes the independent stages where they ran during its sweeps
     IntrinsicParams ip = params.intrinsicRule;
     ip.threads = params.threads;
-    result.geodesic = std::make_shared<const GeodesicCoordinates>(cloud, gp, &*neighbours, independent);
+    result.geodesic = std::make_shared<const GeodesicCoordinates>(cloud, gp, neighbours ? &*neighbours : nullptr,
+                                                                  independent);
     rule = std::make_shared<IntrinsicRule>(result.geodesic, ip);
     result.components = result.geodesic->components();
     result.satellites = result.components * static_cast<std::size_t>(gp.satellites);
@@ -1007,7 +1010,6 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
     independent(params.threads);
   }
   if (!rule) rule = std::make_shared<EuclideanRule>();
-  neighbours.reset();
 
   std::optional<CurvatureResult> curvature;
   if (params.mode == ResampleMode::kCurvature) {

@@ -85,7 +85,7 @@ class GeodesicCoordinates {
  public:
   /// @param cloud points, with normals (oriented) or without
   /// @param table (optional) neighbour lists of exactly cloud.points with k ≥ params.k + 1, borrowed for the
-  /// build, to save its k-NN search
+  /// build of the graph, to save its k-NN search; not read once @p alongside runs (which may free it)
   /// @param alongside (optional) work that does not need the coordinates, called once with the number of
   /// threads it may use: during the satellite sweeps when those leave threads idle (fewer components than
   /// threads: each component's sweeps are serial), else after them. Its exceptions propagate.
