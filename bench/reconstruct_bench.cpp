@@ -3,11 +3,15 @@
 //   iires local (the whole pipeline from the dense input, as iires-reconstruct runs it; its resampling is
 //   deterministic, so its points are the ones the others get), iires + CGAL advancing front, Open3D ball
 //   pivoting, Open3D Poisson;
+// and, on request, input-advancing-front: CGAL's advancing front on the model's input itself, no resampling
+// (for hand-vertices the mesh through exactly the true vertices: how close an interpolation of the input
+// alone gets to the true mesh);
 // each method runs in a child process (Debian's Open3D Poisson aborts on some models) and prints one
 // key=value line: quality (Q, angles), topology, Hausdorff to the TRUE mesh (% of its diagonal), time.
 //
 // Usage: reconstruct_bench [--data DIR] [--models a,b,c] [--counts 10000,20000] [--dense 100000]
-//                          [--methods local,advancing-front,bpa,poisson] [--threads T] [--seed S] [--dump DIR]
+//                          [--methods local,advancing-front,bpa,poisson,input-advancing-front] [--threads T]
+//                          [--seed S] [--dump DIR]
 // --seed: the sampleMesh seed of the dense input (default 3); --dump DIR writes each local mesh to
 // DIR/MODEL_N_sSEED.off.
 // (internally: --child METHOD --cloud FILE --truth MESH --spacing L --n N runs one method and prints its line)
@@ -56,8 +60,10 @@ std::string describe(const iires::TriangleMesh& mesh, const iires::TriangleMesh&
      << " boundary_edges=" << q.boundaryEdges << " boundary_loops=" << q.boundaryLoops
      << " nonmanifold_edges=" << q.nonManifoldEdges << " nonmanifold_vertices=" << q.nonManifoldVertices
      << " components=" << q.components << " euler=" << q.euler << " closed=" << q.closed << " oriented=" << q.oriented
-     << " hausdorff_pct_diag=" << 100.0 * d.relativeHausdorff() << " mean_dist_pct_diag=" << 100.0 * d.relativeMean()
-     << " time_s=" << seconds;
+     << " genus=" << q.genus << " hausdorff_pct_diag=" << 100.0 * d.relativeHausdorff()
+     << " mesh_to_truth_pct_diag=" << 100.0 * d.forwardMax / d.diagonal
+     << " truth_to_mesh_pct_diag=" << 100.0 * d.backwardMax / d.diagonal
+     << " mean_dist_pct_diag=" << 100.0 * d.relativeMean() << " time_s=" << seconds;
   return os.str();
 }
 
@@ -82,6 +88,16 @@ std::string runMethod(const std::string& method, const iires::PointCloud& sample
                       const std::string& dump) {
   const auto t = Clock::now();
   iires::TriangleMesh mesh;
+  // The input itself, every point kept exactly: an interpolation floor.
+  if (method == "input-advancing-front") {
+    iires::ReconstructParams p;
+    p.evaluate = false;
+    p.threads = threads;
+    p.resample = false;
+    p.method = iires::ReconstructMethod::kAdvancingFront;
+    const iires::ReconstructResult r = iires::reconstruct(modelInput(truth, sparse, dense, seed), p);
+    return describe(r.mesh, truth, r.meshingSeconds(), threads);
+  }
   if (method == "local" || method == "advancing-front") {
     iires::ReconstructParams p;
     p.evaluate = false;

@@ -4,7 +4,8 @@ import re
 import sys
 
 NAMES = {"local": "iires local", "advancing-front": "iires + CGAL advancing front",
-         "bpa": "Open3D ball pivoting", "poisson": "Open3D Poisson"}
+         "bpa": "Open3D ball pivoting", "poisson": "Open3D Poisson",
+         "input-advancing-front": "CGAL advancing front on the input (no resampling)"}
 print("| model | N | method | Q_avg | Q_min | angles < 30° | boundary edges | closed / manifold / oriented "
       "| Euler | Hausdorff % diag | time (s) |")
 print("|---|---|---|---|---|---|---|---|---|---|---|")

@@ -210,6 +210,33 @@ TEST(Denoise, NinetyDegreeEdgeStaysSharpWithTheBilateralTerm) {
   EXPECT_LT(with, 0.6 * input) << "input/l " << input / l << " bilateral/l " << with / l;
 }
 
+TEST(Denoise, GivenNormalsKeepTwoFacingSheetsApart) {
+  // Two parallel sheets facing each other across a gap of 1.5 spacings (the inside of two touching fingers):
+  // z = 0 with normals +z and z = g with normals −z, noise-free, normals given. Every fit's kernel reaches the
+  // other sheet; its points face the other way, so they must get no weight: the sheets stay where they are
+  // (with |n_j·n_p| the sheets moved by half the gap towards each other).
+  constexpr int kSide = 24;
+  constexpr double s = 0.05, g = 1.5 * s;
+  PointCloud cloud;
+  for (int sheet = 0; sheet < 2; ++sheet)
+    for (int i = 0; i < kSide; ++i)
+      for (int j = 0; j < kSide; ++j) {
+        // A half-spacing stagger, so the sheets' points are not stacked above each other.
+        cloud.points.emplace_back(s * (i + 0.5 * sheet), s * (j + 0.5 * sheet), sheet ? g : 0.0);
+        cloud.normals.emplace_back(0, 0, sheet ? -1.0 : 1.0);
+      }
+  const auto r = iires::denoise(cloud);
+  ASSERT_EQ(r.cloud.size(), cloud.size());
+  double worst = 0;
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    const Eigen::Vector3d& p = cloud.points[i];
+    if (p.x() < 4 * s || p.x() > (kSide - 5) * s || p.y() < 4 * s || p.y() > (kSide - 5) * s) continue;  // borders
+    worst = std::max(worst, std::abs(r.cloud.points[i].z() - p.z()));
+    EXPECT_GT(r.cloud.normals[i].dot(cloud.normals[i]), 0.999) << i;
+  }
+  EXPECT_LT(worst, 0.01 * g) << "largest move towards the other sheet " << worst / g << " gaps";
+}
+
 TEST(Denoise, BunnyWithNoiseAndOutliersEndToEnd) {
   const iires::TriangleMesh mesh = iires::readMesh(iires::test::dataPath("meshes/bunny00.off"));
   const iires::MeshDistance md(mesh);

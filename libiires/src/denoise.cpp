@@ -230,7 +230,11 @@ DenoiseResult denoise(const PointCloud& input, const DenoiseParams& params, cons
       for (std::size_t j = 0; j < count; ++j) {
         double e = -(cur[nb[j]] - cur[i]).squaredNorm() * invN2;
         if (useBilateral) {
-          const double c = 1.0 - std::abs(normals[nb[j]].dot(normals[i]));
+          // Oriented normals (given, and every sweep's fits oriented like them): signed, so a neighbour facing
+          // the other way — another sheet across a thin gap, e.g. between fingers — gets no weight, as in
+          // MlsSurface. Unoriented fits (no normals given) only tell the line, not the side.
+          const double dn = normals[nb[j]].dot(normals[i]);
+          const double c = 1.0 - (given ? dn : std::abs(dn));
           e -= c * c * invSharp2;  // the two factors in one exp
         }
         wn[j] = std::exp(e);

@@ -60,8 +60,10 @@ struct DenoiseParams {
   /// Bilateral normal term, so a fit does not average across a sharp edge: every weight of the sweep is
   /// multiplied by exp(−(1 − |n_j·n_p|)² / σ²) with σ = 1 − cos(sharpnessAngle) in the covariance's wide
   /// kernel, and as θ_j = wide_j⁴ that makes σ/2 (≈ 31° here) in the centre's and the quadric's weights.
-  /// Normals: the given ones in the first sweep, then each sweep's fitted ones. In degrees, in (0, 90]; 0 switches
-  /// the term off. 45: fandisk (100k points, noise 0.33·l) error within 2·l of the sharp edges 3.95 → 2.75
+  /// Normals: the given ones in the first sweep, then each sweep's fitted ones. With given (oriented) normals the
+  /// term reads the signed n_j·n_p, so a neighbour facing the other way (another sheet across a gap thinner than
+  /// the kernel, e.g. between fingers) gets no weight instead of pulling the two sheets together; without, |n_j·n_p|.
+  /// In degrees, in (0, 90]; 0 switches the term off. 45: fandisk (100k points, noise 0.33·l) error within 2·l of the sharp edges 3.95 → 2.75
   /// ×10⁻⁴ diagonal (CGAL bilateral 3.08), mean error 2.00 → 1.85; bunny00 1.70 → 1.71.
   double sharpnessAngle = 45.0;
   /// Noise probe: when the first sweep moves the points by less than this many input spacings (mean distance to
