@@ -176,14 +176,37 @@ TEST(Geodesic, RunsIndependentWorkAlongsideTheSweeps) {
   for (int threads : {1, 2}) {
     p.threads = threads;
     int calls = 0, given = 0;
-    const GeodesicCoordinates g(c, p, nullptr, [&](int t) { ++calls, given = t; });
+    const GeodesicCoordinates g(c, p, nullptr, [&](int t, const KnnIndex*) { ++calls, given = t; });
     EXPECT_EQ(calls, 1);
     EXPECT_EQ(given, 1)
         << "one component: one thread sweeps, the other is free (or, on one thread, after it)";
     EXPECT_EQ(g.coordinates(), plain.coordinates());
     EXPECT_THROW(
-        GeodesicCoordinates(c, p, nullptr, [](int) { throw std::runtime_error("alongside failed"); }),
+        GeodesicCoordinates(c, p, nullptr,
+                            [](int, const KnnIndex*) { throw std::runtime_error("alongside failed"); }),
         std::runtime_error);
+  }
+}
+
+// The work beside the sweeps gets the graph's k-d tree when the cloud comes in Z-order (it then indexes the
+// cloud's own order), else none.
+TEST(Geodesic, AlongsideGetsThePointIndexOfAZOrderedCloud) {
+  const PointCloud c = uStrip(8000, 0.05, 9);
+  PointCloud z;
+  for (std::uint32_t i : mortonOrder(c.points)) z.points.push_back(c.points[i]);
+  for (const bool ordered : {false, true}) {
+    const PointCloud& cloud = ordered ? z : c;
+    const KnnIndex* seen = nullptr;
+    std::int64_t nearest = -1;
+    const GeodesicCoordinates g(cloud, {}, nullptr, [&](int, const KnnIndex* index) {
+      seen = index;
+      if (index) nearest = index->nearest(cloud.points[1234]);
+    });
+    EXPECT_EQ(seen != nullptr, ordered);
+    if (ordered) {
+      EXPECT_EQ(seen->size(), cloud.size());
+      EXPECT_EQ(nearest, 1234);
+    }
   }
 }
 

@@ -220,11 +220,11 @@ struct GeodesicCoordinates::Impl {
   double spacing = 0;
   GeodesicReport report;
 
-  void build(const NeighbourTable* table, const std::function<void(int)>& alongside);
+  void build(const NeighbourTable* table, const GeodesicCoordinates::Alongside& alongside);
 };
 
 void GeodesicCoordinates::Impl::build(const NeighbourTable* table,
-                                      const std::function<void(int)>& alongside) {
+                                      const GeodesicCoordinates::Alongside& alongside) {
   const auto start = Clock::now();
   const std::size_t n = points.size();
   const int threads = params.threads;
@@ -470,7 +470,7 @@ void GeodesicCoordinates::Impl::build(const NeighbourTable* table,
   // What does not need the fields: the caller's work and the k-d tree for nearest(), if not built yet.
   auto besides = [&](int threads) {
     if (!index) index = std::make_unique<KnnIndex>(zp);
-    if (alongside) alongside(threads);
+    if (alongside) alongside(threads, sortedCopy.empty() ? index.get() : nullptr);
   };
   if (team > nThreads) {  // the sweeps on a thread of their own, the other work on the idle ones
     std::exception_ptr failure;
@@ -513,8 +513,7 @@ void GeodesicCoordinates::Impl::build(const NeighbourTable* table,
 }
 
 GeodesicCoordinates::GeodesicCoordinates(const PointCloud& cloud, const GeodesicParams& params,
-                                         const NeighbourTable* table,
-                                         const std::function<void(int)>& alongside)
+                                         const NeighbourTable* table, const Alongside& alongside)
     : impl_(std::make_unique<Impl>()) {
   params.validate();
   if (cloud.empty()) throw InputError("geodesic coordinates: the cloud is empty");

@@ -969,18 +969,18 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
   }
   clock.end("normals", t);
 
-  // What does not need the geodesic coordinates: the MLS surface (with a new k-d tree when pre-processing
-  // moved the points), the initial candidates and their elimination pairs. It runs where the geodesic
-  // satellite sweeps (serial per component) leave threads idle.
+  // What does not need the geodesic coordinates: the MLS surface (on the geodesic graph's k-d tree when
+  // pre-processing moved the points), the initial candidates and their elimination pairs. It runs where the
+  // geodesic satellite sweeps (serial per component) leave threads idle.
   std::optional<MlsSurface> surface;
   std::vector<std::uint32_t> candidates;
   Crowding crowding;
-  auto independent = [&](int threads) {
+  auto independent = [&](int threads, const KnnIndex* pointIndex) {
     auto t = clock.begin("surface");
     MlsParams mp = params.mls;
     mp.threads = threads;
-    if (!index) index.emplace(cloud.points);
-    surface.emplace(cloud.points, cloud.normals, mp, &*index, neighbours ? &*neighbours : nullptr);
+    surface.emplace(cloud.points, cloud.normals, mp, index ? &*index : pointIndex,
+                    neighbours ? &*neighbours : nullptr);
     neighbours.reset();  // read by nothing after the surface and the geodesic graph (memory at 5M)
     clock.end("surface", t);
     t = clock.begin("candidates");
@@ -1007,7 +1007,7 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
     result.satellites = result.components * static_cast<std::size_t>(gp.satellites);
     clock.end("geodesic", t);
   } else {
-    independent(params.threads);
+    independent(params.threads, nullptr);
   }
   if (!rule) rule = std::make_shared<EuclideanRule>();
 
