@@ -173,9 +173,6 @@ Samples spatiallySorted(Samples& s, const std::vector<char>& removed) {
   return out;
 }
 
-/// Per sample, the other samples crowding it in the elimination and by how much (crowdingPairs()).
-using Crowding = std::vector<std::vector<std::pair<std::uint32_t, float>>>;
-
 class Resampler {
  public:
   /// @param size per input point target-size factor (curvature mode), or null (isotropic)
@@ -184,10 +181,8 @@ class Resampler {
             const std::vector<double>* size)
       : pts_(pts), normals_(normals), surface_(surface), params_(params), rule_(rule), size_(size) {}
 
-  /// @p chosen: the input points to start from (initialCandidates()); @p crowding: their crowdingPairs(),
-  /// when found already (only without fixed samples, which come first in the sample set).
-  Samples initialise(const std::vector<std::uint32_t>& chosen, ResampleResult& result,
-                     Crowding crowding = {});
+  /// @p chosen: the input points to start from (initialCandidates()).
+  Samples initialise(const std::vector<std::uint32_t>& chosen, ResampleResult& result);
   void run(Samples& s, ResampleResult& result);
 
  private:
@@ -200,7 +195,7 @@ class Resampler {
                            std::size_t collapses, double maxCollapse, ResampleResult& result);
   void carry(Relaxation& state, const EditMap& edits, std::size_t count) const;
   Rings edgeRings(const Samples& s, double l, const Relaxation& state) const;
-  void eliminate(Samples& s, std::size_t count, Crowding crowding);
+  void eliminate(Samples& s, std::size_t count);
   void forceCount(Samples& s, Relaxation& relaxation) const;
 
   const std::vector<Eigen::Vector3d>& pts_;
@@ -594,59 +589,35 @@ Rings Resampler::edgeRings(const Samples& s, double l, const Relaxation& state) 
   return computeRings(s, 1.5 * l, &wide, false);
 }
 
-/// The pairs of samples that crowd each other in the weighted sample elimination (Yuksel 2015): for each
-/// sample of @p pos, the others within 2·r_max (scaled by the pair's mean size factor @p sz, empty = all 1)
-/// with weight (1 − d/r)⁸, d clamped below at 2·r_min; r_max from the surface @p area and the @p count to
-/// eliminate down to. The neighbour rule is not applied here (eliminate() filters by it), so this can run
-/// before the rule exists.
-Crowding crowdingPairs(const std::vector<Eigen::Vector3d>& pos, const std::vector<double>& sz, double area,
-                       std::size_t count, int threads) {
-  const double rmax = std::sqrt(area / (2.0 * std::sqrt(3.0) * static_cast<double>(count)));
-  const double ratio = static_cast<double>(count) / static_cast<double>(pos.size());
+/// Weighted sample elimination (Yuksel 2015) of free samples down to @p count: repeatedly drop the sample whose
+/// neighbours within 2·r_max crowd it most. Gives a Poisson-disk-like set whatever the input density.
+void Resampler::eliminate(Samples& s, std::size_t count) {
+  if (s.size() <= count) return;
+  const double rmax = std::sqrt(surface_.area() / (2.0 * std::sqrt(3.0) * static_cast<double>(count)));
+  const double ratio = static_cast<double>(count) / static_cast<double>(s.size());
   const double rmin = rmax * (1.0 - std::pow(ratio, 1.5)) * 0.65;  // Yuksel 2015: γ = 1.5, β = 0.65
-  auto size = [&](std::size_t i) { return sz.empty() ? 1.0 : sz[i]; };
-  const double maxSize = sz.empty() ? 1.0 : *std::max_element(sz.begin(), sz.end());
-  const KnnIndex index(pos);
-  Crowding nb(pos.size());  // float, and each row allocated once at its size: memory at 5M
-  parallelFor(pos.size(), threads, [&](std::size_t i) {
+  // Adaptive mode: the Poisson-disk radius of a pair scales with the mean size factor of its two samples.
+  std::vector<double> sz(s.size(), 1.0);
+  if (size_)
+    parallelFor(s.size(), params_.threads, [&](std::size_t i) { sz[i] = (*size_)[surface_.index().nearest(s.pos[i])]; });
+  const double maxSize = *std::max_element(sz.begin(), sz.end());
+  KnnIndex index(s.pos);
+  rule_.update(s.pos, s.nrm);  // only neighbours by the rule crowd each other (not across a thin gap)
+  // float: 8 bytes a pair, and each row allocated once at its size (memory at 5M)
+  std::vector<std::vector<std::pair<std::uint32_t, float>>> nb(s.size());
+  parallelFor(s.size(), params_.threads, [&](std::size_t i) {
     thread_local std::vector<std::uint32_t> idx;
     thread_local std::vector<double> d2;
     thread_local std::vector<std::pair<std::uint32_t, float>> row;
-    index.radius(pos[i], 2.0 * rmax * 0.5 * (size(i) + maxSize), idx, d2);
+    index.radius(s.pos[i], 2.0 * rmax * 0.5 * (sz[i] + maxSize), idx, d2);
     row.clear();
     for (std::size_t c = 0; c < idx.size(); ++c) {
-      if (idx[c] == i) continue;
-      const double scale = 0.5 * (size(i) + size(idx[c])), radius = 2.0 * rmax * scale;
+      if (idx[c] == i || !rule_.accept(i, idx[c])) continue;
+      const double scale = 0.5 * (sz[i] + sz[idx[c]]), radius = 2.0 * rmax * scale;
       const double d = std::max(std::sqrt(d2[c]), 2.0 * rmin * scale);
       if (d < radius) row.emplace_back(idx[c], pow8(1.0 - d / radius));
     }
     nb[i].assign(row.begin(), row.end());
-  });
-  return nb;
-}
-
-/// Weighted sample elimination (Yuksel 2015) of free samples down to @p count: repeatedly drop the sample
-/// whose neighbours (by the rule) within 2·r_max crowd it most. Gives a Poisson-disk-like set whatever the
-/// input density. @p crowding: crowdingPairs() of these samples, when already found.
-void Resampler::eliminate(Samples& s, std::size_t count, Crowding crowding) {
-  if (s.size() <= count) return;
-  if (crowding.empty()) {
-    // Adaptive mode: the Poisson-disk radius of a pair scales with the mean size factor of its two samples.
-    std::vector<double> sz;
-    if (size_) {
-      sz.resize(s.size());
-      parallelFor(s.size(), params_.threads,
-                  [&](std::size_t i) { sz[i] = (*size_)[surface_.index().nearest(s.pos[i])]; });
-    }
-    crowding = crowdingPairs(s.pos, sz, surface_.area(), count, params_.threads);
-  }
-  rule_.update(s.pos, s.nrm);  // only neighbours by the rule crowd each other (not across a thin gap)
-  Crowding& nb = crowding;
-  parallelFor(s.size(), params_.threads, [&](std::size_t i) {
-    auto& row = nb[i];
-    row.erase(
-        std::remove_if(row.begin(), row.end(), [&](const auto& x) { return !rule_.accept(i, x.first); }),
-        row.end());
   });
   std::vector<double> weight(s.size(), 0.0);
   for (std::size_t i = 0; i < s.size(); ++i)
@@ -733,8 +704,7 @@ std::vector<std::uint32_t> initialCandidates(const PointCloud& cloud, const MlsS
                    params.seed, threads);
 }
 
-Samples Resampler::initialise(const std::vector<std::uint32_t>& chosen, ResampleResult& result,
-                              Crowding crowding) {
+Samples Resampler::initialise(const std::vector<std::uint32_t>& chosen, ResampleResult& result) {
   const std::size_t n = params_.targetCount;
   Samples s;
   for (const auto& p : params_.fixedSamples) {
@@ -744,7 +714,7 @@ Samples Resampler::initialise(const std::vector<std::uint32_t>& chosen, Resample
   }
   // Candidates are input points (on the cloud already): only the survivors of the elimination are projected.
   for (std::uint32_t c : chosen) s.add(pts_[c], normals_[c], false);
-  eliminate(s, n, crowding.size() == s.size() ? std::move(crowding) : Crowding{});
+  eliminate(s, n);
   parallelFor(s.size(), params_.threads, [&](std::size_t i) {
     if (!s.fixed[i]) s.pos[i] = surface_.project(s.pos[i], &s.nrm[i], nullptr, &s.nrm[i], &s.cache[i]);
   });
@@ -970,11 +940,10 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
   clock.end("normals", t);
 
   // What does not need the geodesic coordinates: the MLS surface (on the geodesic graph's k-d tree when
-  // pre-processing moved the points), the initial candidates and their elimination pairs. It runs where the
-  // geodesic satellite sweeps (serial per component) leave threads idle.
+  // pre-processing moved the points) and the initial candidates. It runs where the geodesic satellite sweeps
+  // (serial per component) leave threads idle.
   std::optional<MlsSurface> surface;
   std::vector<std::uint32_t> candidates;
-  Crowding crowding;
   auto independent = [&](int threads, const KnnIndex* pointIndex) {
     auto t = clock.begin("surface");
     MlsParams mp = params.mls;
@@ -985,13 +954,6 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
     clock.end("surface", t);
     t = clock.begin("candidates");
     candidates = initialCandidates(cloud, *surface, params, threads);
-    // Isotropic, nothing held: the elimination's sample set is the candidates, whose pairs can be found here.
-    if (params.mode == ResampleMode::kIsotropic && !params.sharpEdges && params.fixedSamples.empty() &&
-        candidates.size() > params.targetCount) {
-      std::vector<Eigen::Vector3d> pos(candidates.size());
-      for (std::size_t c = 0; c < candidates.size(); ++c) pos[c] = cloud.points[candidates[c]];
-      crowding = crowdingPairs(pos, {}, surface->area(), params.targetCount, threads);
-    }
     clock.end("candidates", t);
   };
 
@@ -1044,7 +1006,7 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
   Resampler resampler(cloud.points, cloud.normals, *surface, local, *rule,
                       curvature ? &curvature->sizeFactor : nullptr);
   t = clock.begin("initialise");
-  Samples s = resampler.initialise(candidates, result, std::move(crowding));
+  Samples s = resampler.initialise(candidates, result);
   clock.end("initialise", t);
 
   t = clock.begin("resample");
