@@ -670,7 +670,6 @@ namespace {
 /// the detector missed, brings the ends into their corners and recovers short creases between corners.
 /// New runs get chain indices after the existing ones. Sequential in a fixed order (each trace sees the
 /// samples placed before it): deterministic.
-
 void traceChainEnds(const PointCloud& cloud, const KnnIndex& index, double h, const FeatureParams& params,
                     std::vector<Eigen::Vector3d>& out, std::vector<std::uint32_t>& owner) {
   struct Run {
