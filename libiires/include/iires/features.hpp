@@ -139,6 +139,11 @@ std::vector<Eigen::Vector3d> sampleFeatureChains(const std::vector<FeatureChain>
 ///     (the third plane with each sheet, on the side where the sheet lies) are followed along those planes while
 ///     the points around stay explained by them, handing over to the stepped fit once it holds. Traced
 ///     branches get chain indices after the given ones. Sequential in a fixed order: deterministic.
+///  3b. Tips: two open ends whose crease lines (each the last fit that holds within 3 samples of the end,
+///     its planes refitted without the points off both) share a plane and converge at 8°–maxChainTurn,
+///     meeting ahead of both within 6·radius spacings, are continued on those lines to the tip: the common
+///     point of the shared plane and the two other sheets' planes, refitted on the points around it (a step
+///     in a surface fading out, as fandisk's wedge: two creases end at one point without a third crease).
 ///  4. Where two chains' end lines (at least 13° apart), continued, meet within 3·radius spacings of both ends and within
 ///     params.maxOffCrease spacings of an input point, and no sample is within half a spacing of it (tracing
 ///     placed most corners already), a corner sample is added there, and the gap from each of those chain ends
@@ -152,7 +157,7 @@ std::vector<Eigen::Vector3d> sampleFeatureChains(const std::vector<FeatureChain>
 ///     consecutive and in order)
 /// @param spacing the input spacing h (FeatureResult::spacing)
 /// @param[out] chainOut (optional) the chain index of each returned sample (a corner: one of its two chains)
-/// @return the kept and traced samples, chain by chain in order, then the corners of step 4 and their gap
+/// @return the kept, traced and tip samples, chain by chain in order, then the corners of step 4 and their gap
 /// samples, then the samples of step 5
 /// @note O(samples · m log n + ends² + traced · samples), m the neighbours in the radius. Deterministic for any
 /// thread count.
