@@ -299,6 +299,45 @@ TEST(Features, GapBeforeACornerIsFilledFromTheChainSide) {
   EXPECT_GE(ys.back(), 1.0 - 0.25 * h);  // the corner
 }
 
+// A stray: chain 1 is one sample beside the middle of chain 0 (the cube edge x = z = 1), 0.3 h off the edge
+// in the top face and a quarter step along (as a short chain piece beside a crease another chain holds, on
+// fandisk near a corner). Its trace leads at once into chain 0's samples: nothing is traced from it, and it
+// is dropped (before: snapped and held, half a step from chain 0's samples). A lone sample with no other
+// chain near it (chain 2, on the edge x = 0, z = 1) is traced both ways and stays.
+TEST(Features, StrayLoneSampleBesideAChainIsDropped) {
+  const auto mesh = cubeMesh();
+  const auto cloud = sampledWithEstimatedNormals(mesh, 60000);
+  const auto edges = iires::sharpMeshEdges(mesh, 45.0);
+  FeatureParams p;
+  const double h = iires::estimateSpacing(cloud.points);
+  const double step = 0.02;
+  std::vector<Eigen::Vector3d> samples;
+  std::vector<std::uint32_t> chain;
+  for (int t = 0; t <= 30; ++t) samples.emplace_back(1.0, 0.2 + step * t, 1.0), chain.push_back(0);
+  const Eigen::Vector3d stray(1.0 - 0.3 * h, 0.5 + 0.25 * step, 1.0);
+  samples.push_back(stray), chain.push_back(1);
+  const Eigen::Vector3d alone(0.0, 0.5, 1.0);
+  samples.push_back(alone), chain.push_back(2);
+  std::vector<std::uint32_t> owner;
+  const auto out = iires::snapToCreases(cloud, samples, chain, h, p, &owner);
+  ASSERT_EQ(out.size(), owner.size());
+  double nearAlone = 1e300;
+  for (std::size_t i = 0; i < out.size(); ++i) {
+    EXPECT_NE(owner[i], 1u) << "the stray is held at " << out[i].transpose();
+    if ((out[i] - stray).norm() < 3 * step) {
+      EXPECT_LE(iires::distanceToSegments(out[i], edges), 0.25 * h) << out[i].transpose();
+    }
+    nearAlone = std::min(nearAlone, (out[i] - alone).norm());
+  }
+  EXPECT_LE(nearAlone, 0.25 * h);
+  // Nothing crowds the middle of chain 0.
+  for (std::size_t i = 0; i < out.size(); ++i) {
+    if ((out[i] - stray).norm() >= 3 * step) continue;
+    for (std::size_t j = i + 1; j < out.size(); ++j)
+      EXPECT_GT((out[i] - out[j]).norm(), 0.5 * step) << out[i].transpose() << " / " << out[j].transpose();
+  }
+}
+
 /// A plate (z = 0, about [0, 1]², open) with a cylinder of radius @p r and height @p height standing on it at
 /// (0.5, 0.5) as a prism of @p segments facets, closed by a cap: its foot is a 90° plate/cylinder crease.
 iires::TriangleMesh plateWithCylinder(double r, double height, int segments) {

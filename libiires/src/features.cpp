@@ -770,8 +770,11 @@ void traceChainEnds(const PointCloud& cloud, const KnnIndex& index, double h, co
     }
     return ok;
   };
+  const std::size_t inputRuns = runs.size();     // the runs after it are corners' branches
+  std::vector<char> tracedFrom(runs.size(), 0);  // a job of the run added a sample or a corner's branch
   for (std::size_t jb = 0; jb < jobs.size() && all.size() <= budget; ++jb) {
     const Job job = jobs[jb];
+    const std::size_t runsBefore = runs.size();
     std::vector<Eigen::Vector3d> added;
     Eigen::Vector3d tip = job.tip, dir = job.dir;
     const double step = job.step;
@@ -1064,12 +1067,48 @@ void traceChainEnds(const PointCloud& cloud, const KnnIndex& index, double h, co
       dir = (c.direction.dot(dir) < 0 ? -c.direction : c.direction);
       tip = y;
     }
+    tracedFrom.resize(runs.size(), 0);
+    if (!added.empty() || runs.size() > runsBefore) tracedFrom[job.run] = 1;
     Run& run = runs[job.run];
     (job.back ? run.pts : run.front).insert(job.back ? run.pts.end() : run.front.end(), added.begin(), added.end());
   }
+  tracedFrom.resize(runs.size(), 0);
+  // A lone sample of the input runs that nothing was traced from (its crease fit fails, or it leads at once
+  // into samples placed already), within one chain step of another chain's sample and within maxLineDistance
+  // (local) spacings of that chain's line there (the line through the sample's two neighbours), is a stray: a
+  // chain piece on a crease another chain (or its trace) holds, snapped onto a fit biased by a nearby corner
+  // (fandisk: 0.18 output spacings off the crease, 0.1–0.7 h off the other chain's line). It is dropped: the
+  // crease is held without it. A lone sample off that line (on another crease leaving a corner) stays.
+  std::vector<char> stray(runs.size(), 0);
+  for (std::size_t r = 0; r < inputRuns && typicalStep > 0; ++r) {
+    const Run& run = runs[r];
+    if (run.pts.size() != 1 || !run.front.empty() || tracedFrom[r]) continue;
+    double nearest = 1e300, lateral = 1e300;
+    for (std::size_t s = 0; s < runs.size(); ++s) {
+      // Against samples that stay: another chain's run of several samples or one traced from.
+      if (runs[s].chain == run.chain || (runs[s].pts.size() + runs[s].front.size() < 2 && !tracedFrom[s]))
+        continue;
+      // The other run's samples in order (front reversed, then pts).
+      std::vector<Eigen::Vector3d> seq(runs[s].front.rbegin(), runs[s].front.rend());
+      seq.insert(seq.end(), runs[s].pts.begin(), runs[s].pts.end());
+      for (std::size_t k = 0; k < seq.size(); ++k) {
+        const double d = (seq[k] - run.pts[0]).norm();
+        if (d >= nearest) continue;
+        nearest = d;
+        const Eigen::Vector3d dir =
+            (seq[std::min(k + 1, seq.size() - 1)] - seq[k > 0 ? k - 1 : 0]).normalized();
+        const Eigen::Vector3d off = run.pts[0] - seq[k];
+        lateral = (off - dir * off.dot(dir)).norm();
+      }
+    }
+    stray[r] =
+        nearest < typicalStep && lateral <= params.maxLineDistance * localSpacing(index, run.pts[0], h);
+  }
   out.clear();
   owner.clear();
-  for (const Run& run : runs) {
+  for (std::size_t r = 0; r < runs.size(); ++r) {
+    const Run& run = runs[r];
+    if (stray[r]) continue;
     for (std::size_t t = run.front.size(); t-- > 0;) out.push_back(run.front[t]), owner.push_back(run.chain);
     for (const auto& q : run.pts) out.push_back(q), owner.push_back(run.chain);
   }
