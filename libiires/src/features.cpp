@@ -657,6 +657,22 @@ void FeatureParams::validate() const {
 
 namespace {
 
+/// Each of @p idx to the nearest of three planes (n·x = o), if within @p tol of it: @p part[k] for plane k.
+void partitionByPlanes(const std::vector<Eigen::Vector3d>& points, const std::vector<std::uint32_t>& idx,
+                       const Eigen::Vector3d (&n)[3], const double (&o)[3], double tol,
+                       std::vector<std::uint32_t> (&part)[3]) {
+  for (auto& pt : part) pt.clear();
+  for (std::uint32_t j : idx) {
+    int best = 0;
+    double bd = 1e300;
+    for (int k = 0; k < 3; ++k) {
+      const double dk = std::abs(n[k].dot(points[j]) - o[k]);
+      if (dk < bd) bd = dk, best = k;
+    }
+    if (bd <= tol) part[best].push_back(j);
+  }
+}
+
 /// Continue every open run of chain samples (@p out, consecutive samples of one chain in @p owner) along its
 /// crease: from the end sample, step forward by the run's end spacing, fit the two sheets' local planes there
 /// (the snap fit) and put the next sample on their intersection, while the fit passes the detector's thresholds,
@@ -838,16 +854,7 @@ void traceChainEnds(const PointCloud& cloud, const KnnIndex& index, double h, co
             std::vector<double> ad2;
             index.radius(corner, params.radius * hc, around, ad2);
             for (int it = 0; it < 2; ++it) {
-              for (auto& pt : part) pt.clear();
-              for (std::uint32_t j : around) {
-                int best = 0;
-                double bd = 1e300;
-                for (int k = 0; k < 3; ++k) {
-                  const double dk = std::abs(pn[k].dot(cloud.points[j]) - po[k]);
-                  if (dk < bd) bd = dk, best = k;
-                }
-                if (bd <= tolc) part[best].push_back(j);
-              }
+              partitionByPlanes(cloud.points, around, pn, po, tolc, part);
               Eigen::Vector3d tn[3];
               double to[3];
               bool fitted = true;
@@ -1396,16 +1403,7 @@ void placeCreaseTips(const PointCloud& cloud, const KnnIndex& index, double h, c
         std::vector<std::uint32_t> part[3];
         for (int it = 0; it < 4; ++it) {
           index.radius(tip, params.radius * hl, idx, d2);
-          for (auto& pt : part) pt.clear();
-          for (std::uint32_t j : idx) {
-            int best = 0;
-            double bd = 1e300;
-            for (int k = 0; k < 3; ++k) {
-              const double dk = std::abs(pn[k].dot(cloud.points[j]) - po[k]);
-              if (dk < bd) bd = dk, best = k;
-            }
-            if (bd <= tolc) part[best].push_back(j);
-          }
+          partitionByPlanes(cloud.points, idx, pn, po, tolc, part);
           Eigen::Vector3d tn[3] = {pn[0], pn[1], pn[2]};
           double to[3] = {po[0], po[1], po[2]};
           bool fitted = true;
