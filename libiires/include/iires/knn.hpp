@@ -53,7 +53,6 @@ class NeighbourTable {
 
   std::size_t k() const { return k_; }
   std::size_t size() const { return found_.size(); }
-  const std::vector<Eigen::Vector3d>& points() const { return points_; }
   /// @brief The first min(@p k, found) neighbours of point @p i, as KnnIndex::knn(points()[i], k) gives them.
   /// @pre k ≤ k()
   std::size_t get(std::size_t i, std::size_t k, std::vector<std::uint32_t>& indices,
