@@ -88,29 +88,19 @@ std::string runMethod(const std::string& method, const iires::PointCloud& sample
                       const std::string& dump) {
   const auto t = Clock::now();
   iires::TriangleMesh mesh;
-  // The input itself, every point kept exactly: an interpolation floor.
-  if (method == "input-advancing-front") {
+  if (method == "local" || method == "advancing-front" || method == "input-advancing-front") {
     iires::ReconstructParams p;
     p.evaluate = false;
     p.threads = threads;
-    p.resample = false;
-    p.method = iires::ReconstructMethod::kAdvancingFront;
-    const iires::ReconstructResult r = iires::reconstruct(modelInput(truth, sparse, dense, seed), p);
-    return describe(r.mesh, truth, r.meshingSeconds(), threads);
-  }
-  if (method == "local" || method == "advancing-front") {
-    iires::ReconstructParams p;
-    p.evaluate = false;
-    p.threads = threads;
-    p.method = iires::parseReconstructMethod(method);
+    p.method = iires::parseReconstructMethod(method == "local" ? method : "advancing-front");
     iires::ReconstructResult r;
     if (method == "local") {  // the whole pipeline, as iires-reconstruct runs it
       p.targetCount = n;
       r = iires::reconstruct(modelInput(truth, sparse, dense, seed), p);
       if (r.samples.points != samples.points) return "status=error message=\"resampling differs from the parent's\"";
-    } else {
+    } else {  // the resampled points, or (input-advancing-front: an interpolation floor) the input itself
       p.resample = false;
-      r = iires::reconstruct(samples, p);
+      r = iires::reconstruct(method == "advancing-front" ? samples : modelInput(truth, sparse, dense, seed), p);
     }
     mesh = r.mesh;
     if (!dump.empty()) iires::writeMesh(dump, mesh);

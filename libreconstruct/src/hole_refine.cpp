@@ -34,6 +34,20 @@ namespace PMP = CGAL::Polygon_mesh_processing;
 
 Eigen::Vector3d toEigen(const Kernel::Point_3& p) { return {p.x(), p.y(), p.z()}; }
 
+/// @p mesh as a Surface_mesh with the same vertex and face indices; false when it is not an oriented
+/// 2-manifold (a face CGAL cannot add).
+bool toSurfaceMesh(const TriangleMesh& mesh, Mesh& sm) {
+  sm.reserve(static_cast<Mesh::size_type>(mesh.vertices.size()),
+             static_cast<Mesh::size_type>(3 * mesh.triangles.size() / 2),
+             static_cast<Mesh::size_type>(mesh.triangles.size()));
+  for (const auto& p : mesh.vertices) sm.add_vertex(Kernel::Point_3(p.x(), p.y(), p.z()));
+  for (const auto& t : mesh.triangles)
+    if (sm.add_face(VertexIndex(static_cast<Mesh::size_type>(t[0])), VertexIndex(static_cast<Mesh::size_type>(t[1])),
+                    VertexIndex(static_cast<Mesh::size_type>(t[2]))) == Mesh::null_face())
+      return false;
+  return true;
+}
+
 }  // namespace
 
 LargeHoleReport fillLargeHoles(TriangleMesh& mesh, std::vector<Eigen::Vector3d>& normals,
@@ -51,15 +65,10 @@ LargeHoleReport fillLargeHoles(TriangleMesh& mesh, std::vector<Eigen::Vector3d>&
     for (int c = 0; c < 3; ++c) boxes[parts.find(static_cast<std::uint32_t>(t[c]))].extend(mesh.vertices[static_cast<std::size_t>(t[c])]);
 
   Mesh sm;
-  sm.reserve(static_cast<Mesh::size_type>(nv), static_cast<Mesh::size_type>(3 * mesh.triangles.size() / 2),
-             static_cast<Mesh::size_type>(mesh.triangles.size()));
-  for (const auto& p : mesh.vertices) sm.add_vertex(Kernel::Point_3(p.x(), p.y(), p.z()));
-  for (const auto& t : mesh.triangles)
-    if (sm.add_face(VertexIndex(static_cast<Mesh::size_type>(t[0])), VertexIndex(static_cast<Mesh::size_type>(t[1])),
-                    VertexIndex(static_cast<Mesh::size_type>(t[2]))) == Mesh::null_face()) {
-      report.skipped = true;  // not an oriented 2-manifold: leave the mesh alone
-      return report;
-    }
+  if (!toSurfaceMesh(mesh, sm)) {
+    report.skipped = true;  // not an oriented 2-manifold: leave the mesh alone
+    return report;
+  }
   // The border cycles, each once (by its smallest halfedge index).
   std::vector<HalfedgeIndex> cycles;
   {
@@ -190,11 +199,7 @@ std::size_t remeshBadRegions(TriangleMesh& mesh, std::vector<Eigen::Vector3d>& n
     if (region.empty()) continue;
     const std::size_t nv = mesh.vertices.size(), oldFaces = mesh.triangles.size();
     Mesh sm;
-    for (const auto& p : mesh.vertices) sm.add_vertex(Kernel::Point_3(p.x(), p.y(), p.z()));
-    for (const auto& t : mesh.triangles)
-      if (sm.add_face(VertexIndex(static_cast<Mesh::size_type>(t[0])), VertexIndex(static_cast<Mesh::size_type>(t[1])),
-                      VertexIndex(static_cast<Mesh::size_type>(t[2]))) == Mesh::null_face())
-        return changed;  // not an oriented 2-manifold
+    if (!toSurfaceMesh(mesh, sm)) return changed;  // not an oriented 2-manifold
     std::vector<char> inRegion(oldFaces, 0);
     std::vector<FaceIndex> faces;
     double before = 1, edgeSum = 0;
@@ -229,13 +234,16 @@ std::size_t remeshBadRegions(TriangleMesh& mesh, std::vector<Eigen::Vector3d>& n
         continue;
       }
       index[v] = old ? static_cast<std::uint32_t>(static_cast<std::size_t>(v)) : static_cast<std::uint32_t>(mesh.vertices.size());
-      const Kernel::Vector_3 n = PMP::compute_vertex_normal(v, sm);
-      if (old) {
+      if (old)
         mesh.vertices[v] = x;
-        if (haveNormals) normals[v] = Eigen::Vector3d(n.x(), n.y(), n.z());
-      } else {
+      else
         mesh.vertices.push_back(x);
-        if (haveNormals) normals.emplace_back(n.x(), n.y(), n.z());
+      if (haveNormals) {
+        const Kernel::Vector_3 n = PMP::compute_vertex_normal(v, sm);
+        if (old)
+          normals[v] = Eigen::Vector3d(n.x(), n.y(), n.z());
+        else
+          normals.emplace_back(n.x(), n.y(), n.z());
       }
       ++changed;
     }

@@ -162,6 +162,7 @@ ReconstructResult reconstruct(const PointCloud& input, const ReconstructParams& 
   }
   clock.end("triangulate", t);
 
+  std::size_t flippedEarlier = 0;  // by the orientation passes that large holes and remeshing need first
   t = clock.begin("holes");
   std::vector<Eigen::Vector3d> normals = result.samples.normals;  // grows with any vertex hole filling adds
   if (params.minComponentFaces > 1) result.smallComponentFaces = removeSmallComponents(result.mesh, params.minComponentFaces);
@@ -180,7 +181,7 @@ ReconstructResult reconstruct(const PointCloud& input, const ReconstructParams& 
     }
     if (params.holes.maxRefinedExtent > 0 && result.holes.kept > 0) {
       // What is left open: a gap small next to its part gets a refined fill (it needs an oriented 2-manifold).
-      orientConsistently(result.mesh, normals);
+      flippedEarlier += orientConsistently(result.mesh, normals).facesFlipped;
       result.largeHoles = fillLargeHoles(result.mesh, normals, params.holes);
     }
     if (params.method == ReconstructMethod::kLocal && params.local.flipMaxDihedral > 0 &&
@@ -190,7 +191,7 @@ ReconstructResult reconstruct(const PointCloud& input, const ReconstructParams& 
   if (params.repairQuality > 0) {
     result.badTriangles = repairBadTriangles(result.mesh, normals, params.repairQuality, params.repairDeviation);
     if (params.remeshBadRegions) {
-      orientConsistently(result.mesh, normals);  // remeshing needs an oriented 2-manifold
+      flippedEarlier += orientConsistently(result.mesh, normals).facesFlipped;  // remeshing needs it oriented
       result.remeshedVertices = remeshBadRegions(result.mesh, normals, params.repairQuality);
     }
   }
@@ -198,6 +199,7 @@ ReconstructResult reconstruct(const PointCloud& input, const ReconstructParams& 
 
   t = clock.begin("orient");
   result.orientation = orientConsistently(result.mesh, normals);
+  result.orientation.facesFlipped += flippedEarlier;  // the earlier passes' flips (before large holes, remeshing)
   const std::size_t before = result.mesh.vertices.size();
   removeUnusedVertices(result.mesh);
   result.unusedVertices = before - result.mesh.vertices.size();
