@@ -74,6 +74,15 @@ double fitPlane(const std::vector<Eigen::Vector3d>& points, const std::vector<st
   return std::sqrt(std::max(0.0, es.eigenvalues()(0)) / sum);
 }
 
+/// The point of the line {x : na·x = oa, nb·x = ob} (unit normals) nearest @p p: x = p + α na + β nb.
+Eigen::Vector3d lineNearest(const Eigen::Vector3d& na, double oa, const Eigen::Vector3d& nb, double ob,
+                            const Eigen::Vector3d& p) {
+  Eigen::Matrix2d g;
+  g << 1.0, na.dot(nb), na.dot(nb), 1.0;
+  const Eigen::Vector2d ab = g.inverse() * Eigen::Vector2d(oa - na.dot(p), ob - nb.dot(p));
+  return p + ab(0) * na + ab(1) * nb;
+}
+
 /// Two-plane fit of the neighbourhood @p nbr of the point @p p (the normal-variation test). Returns whether the
 /// point is on a crease by the thresholds in @p prm; fills @p crease. @p sigma > 0: the plane fits weight each
 /// point by exp(−d²/σ²), d its distance to p (local planes: less bias from curved sheets); 0 = unweighted.
@@ -127,12 +136,7 @@ bool twoPlaneTest(const std::vector<Eigen::Vector3d>& points, const std::vector<
   const Eigen::Vector3d dir = pa.cross(pb);
   const double sinAngle = dir.norm();
   if (pa.dot(pb) > std::cos(prm.angle * kDeg) || sinAngle < 1e-6) return false;
-  // Closest point of the line {x : pa·x = oa, pb·x = ob} to p: x = p + α pa + β pb.
-  Eigen::Matrix2d g;
-  g << 1.0, pa.dot(pb), pa.dot(pb), 1.0;
-  const Eigen::Vector2d rhs(oa - pa.dot(p), ob - pb.dot(p));
-  const Eigen::Vector2d ab = g.inverse() * rhs;
-  const Eigen::Vector3d x = p + ab(0) * pa + ab(1) * pb;
+  const Eigen::Vector3d x = lineNearest(pa, oa, pb, ob, p);
   if ((x - p).norm() > prm.maxLineDistance * h) return false;
   crease.valid = true;
   crease.point = x;
@@ -155,6 +159,25 @@ bool snapFit(const PointCloud& cloud, const KnnIndex& index, const Eigen::Vector
   index.radius(y, params.radius * hl, idx, d2);
   if (idx.size() > kMaxFitPoints) idx.resize(kMaxFitPoints);
   return twoPlaneTest(cloud.points, cloud.normals, y, idx, hl, prm, c, params.snapSigma * hl);
+}
+
+/// The crease at @p y running along ±@p dir (within params.maxChainTurn): the snap fit, else two planes fitted
+/// on the points behind y only (an end where the crease stops ahead, or another crease crowds the ball ahead);
+/// @p oneSided says the second held. @p idx keeps the ball, @p d2 and @p behind are scratch.
+bool creaseAlong(const PointCloud& cloud, const KnnIndex& index, const Eigen::Vector3d& y,
+                 const Eigen::Vector3d& dir, double hl, const FeatureParams& params, Crease& c,
+                 std::vector<std::uint32_t>& idx, std::vector<double>& d2, std::vector<std::uint32_t>& behind,
+                 bool& oneSided) {
+  const double cosTurn = std::cos(params.maxChainTurn * kDeg);
+  oneSided = false;
+  if (snapFit(cloud, index, y, hl, params, params, c, idx, d2) && std::abs(c.direction.dot(dir)) >= cosTurn)
+    return true;
+  behind.clear();
+  for (std::uint32_t j : idx)
+    if ((cloud.points[j] - y).dot(dir) <= 0) behind.push_back(j);
+  oneSided = twoPlaneTest(cloud.points, cloud.normals, y, behind, hl, params, c, params.snapSigma * hl) &&
+             std::abs(c.direction.dot(dir)) >= cosTurn;
+  return oneSided;
 }
 
 // ---- Voronoi covariance measure (CGAL's compute_vcm, parallelised; see vcm_estimate_normals.h) ----------
@@ -772,16 +795,7 @@ void traceChainEnds(const PointCloud& cloud, const KnnIndex& index, double h, co
     oneSided = false;
     hl = localSpacing(index, y, h);
     for (int it = 0; it < 2 && ok; ++it) {  // fitted at the prediction, then re-centred on the crease
-      ok = snapFit(cloud, index, y, hl, params, params, c, idx, d2) && std::abs(c.direction.dot(dir)) >= cosTurn;
-      oneSided = false;
-      if (!ok) {
-        behind.clear();
-        for (std::uint32_t j : idx)
-          if ((cloud.points[j] - y).dot(dir) <= 0) behind.push_back(j);
-        ok = twoPlaneTest(cloud.points, cloud.normals, y, behind, hl, params, c, params.snapSigma * hl) &&
-             std::abs(c.direction.dot(dir)) >= cosTurn;
-        oneSided = ok;
-      }
+      ok = creaseAlong(cloud, index, y, dir, hl, params, c, idx, d2, behind, oneSided);
       if (ok) y = c.point;
     }
     return ok;
@@ -893,10 +907,7 @@ void traceChainEnds(const PointCloud& cloud, const KnnIndex& index, double h, co
             if (d.dot(dir) < 0) d = -d;
             if (d.dot(dir) < cosTurn) return 0;
             // The line's point nearest the tip, then one step on along it.
-            Eigen::Matrix2d g;
-            g << 1.0, nO.dot(n3), nO.dot(n3), 1.0;
-            const Eigen::Vector2d ab = g.inverse() * Eigen::Vector2d(oO - nO.dot(tip), o3 - n3.dot(tip));
-            const Eigen::Vector3d foot = tip + ab(0) * nO + ab(1) * n3;
+            const Eigen::Vector3d foot = lineNearest(nO, oO, n3, o3, tip);
             if ((foot - tip).norm() > 0.5 * step) return 0;
             const Eigen::Vector3d yb = foot + (step - (foot - tip).dot(dir)) / d.dot(dir) * d;
             double nb = 0;
@@ -1276,10 +1287,7 @@ bool refitPlanesRobust(const std::vector<Eigen::Vector3d>& points, const Eigen::
   }
   const Eigen::Vector3d dir = na.cross(nb);
   if (dir.norm() < 1e-6) return false;
-  Eigen::Matrix2d g;
-  g << 1.0, na.dot(nb), na.dot(nb), 1.0;
-  const Eigen::Vector2d ab = g.inverse() * Eigen::Vector2d(oa - na.dot(y), ob - nb.dot(y));
-  c.point = y + ab(0) * na + ab(1) * nb;
+  c.point = lineNearest(na, oa, nb, ob, y);
   c.direction = dir.normalized();
   c.normalA = na, c.normalB = nb, c.offsetA = oa, c.offsetB = ob;
   return true;
@@ -1336,15 +1344,8 @@ void placeCreaseTips(const PointCloud& cloud, const KnnIndex& index, double h, c
       for (std::size_t k = 0; k <= 3 && k <= b - a && !ok; ++k) {
         const Eigen::Vector3d& y = side ? out[b - k] : out[a + k];
         hl = localSpacing(index, y, h);
-        ok = snapFit(cloud, index, y, hl, params, params, c, idx, d2) &&
-             std::abs(c.direction.dot(forward)) >= cosTurn;
-        if (!ok) {
-          behind.clear();
-          for (std::uint32_t j : idx)
-            if ((cloud.points[j] - y).dot(forward) <= 0) behind.push_back(j);
-          ok = twoPlaneTest(cloud.points, cloud.normals, y, behind, hl, params, c, params.snapSigma * hl) &&
-               std::abs(c.direction.dot(forward)) >= cosTurn;
-        }
+        bool oneSided = false;
+        ok = creaseAlong(cloud, index, y, forward, hl, params, c, idx, d2, behind, oneSided);
         Crease robust = c;
         if (ok && refitPlanesRobust(cloud.points, y, idx, hl, params, params.snapSigma * hl, robust) &&
             std::abs(robust.direction.dot(forward)) >= cosTurn)
