@@ -226,6 +226,14 @@ TEST(Features, TracingFromOneChainCoversTheCubesEdges) {
     for (std::size_t j = i + 1; j < out.size(); ++j) EXPECT_GT((out[i] - out[j]).norm(), 0.5 * step) << i << " " << j;
 }
 
+/// The largest step between consecutive values of @p v (sorted here).
+double largestGap(std::vector<double>& v) {
+  std::sort(v.begin(), v.end());
+  double worst = 0;
+  for (std::size_t t = 1; t < v.size(); ++t) worst = std::max(worst, v[t] - v[t - 1]);
+  return worst;
+}
+
 // The cloud with the normals within @p radius of @p spot (on the cube edge x = z = 1) all set to the edge's mean
 // normal: the normal 2-means finds one sheet there, so no two-plane fit holds.
 iires::PointCloud withBlindSpot(iires::PointCloud cloud, const Eigen::Vector3d& spot, double radius) {
@@ -259,11 +267,8 @@ TEST(Features, GapWhereNoFitHoldsIsFilledOnTheChainsLine) {
     EXPECT_LE(iires::distanceToSegments(q, edges), 0.25 * h) << q.transpose();
     if (iires::distanceToSegments(q, {edge}) < 0.5 * h && q.y() > 0.3 && q.y() < 0.7) ys.push_back(q.y());
   }
-  std::sort(ys.begin(), ys.end());
   ASSERT_FALSE(ys.empty());
-  double worst = 0;
-  for (std::size_t t = 1; t < ys.size(); ++t) worst = std::max(worst, ys[t] - ys[t - 1]);
-  EXPECT_LE(worst, 1.5 * step) << ::testing::PrintToString(ys);
+  EXPECT_LE(largestGap(ys), 1.5 * step) << ::testing::PrintToString(ys);
   EXPECT_LE(ys.front(), 0.3 + 1.5 * step);
   EXPECT_GE(ys.back(), 0.7 - 1.5 * step);
 }
@@ -291,11 +296,8 @@ TEST(Features, GapBeforeACornerIsFilledFromTheChainSide) {
     EXPECT_LE(iires::distanceToSegments(q, edges), 0.4 * h) << q.transpose();
     if (iires::distanceToSegments(q, {edge}) < 0.5 * h && q.y() > 0.6) ys.push_back(q.y());
   }
-  std::sort(ys.begin(), ys.end());
   ASSERT_FALSE(ys.empty());
-  double worst = 0;
-  for (std::size_t t = 1; t < ys.size(); ++t) worst = std::max(worst, ys[t] - ys[t - 1]);
-  EXPECT_LE(worst, 1.5 * step) << ::testing::PrintToString(ys);
+  EXPECT_LE(largestGap(ys), 1.5 * step) << ::testing::PrintToString(ys);
   EXPECT_GE(ys.back(), 1.0 - 0.25 * h);  // the corner
 }
 
@@ -395,10 +397,8 @@ TEST(Features, TracingBendsAroundAPlaneCylinderCrease) {
     EXPECT_LE(off, 0.6 * h) << q.transpose();  // the fits' noise with ~15 neighbours
     if (off <= 0.6 * h) angles.push_back(std::atan2(d.y(), d.x()));
   }
-  std::sort(angles.begin(), angles.end());
   ASSERT_GE(angles.size(), 2u);
-  double worst = angles.front() + 2.0 * M_PI - angles.back();
-  for (std::size_t t = 1; t < angles.size(); ++t) worst = std::max(worst, angles[t] - angles[t - 1]);
+  const double inner = largestGap(angles), worst = std::max(inner, angles.front() + 2.0 * M_PI - angles.back());
   EXPECT_LE(worst * r, 2.5 * step) << angles.size() << " samples on the circle";
 }
 
