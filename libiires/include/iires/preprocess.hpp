@@ -18,7 +18,7 @@ struct PreprocessParams {
   /// Denoising stops after its first sweep when that sweep moved points by less than this many input spacings
   /// on average: the input is clean, and smoothing it further would only erode tight curvature. Overrides
   /// denoise.cleanDisplacement (whose default, 0, is off for denoise() on its own).
-  double cleanDisplacement = 0.05;
+  double cleanDisplacement = 0.07;
   int threads = 0;         ///< overrides outliers.threads and denoise.threads when > 0
 
   /// @throws std::invalid_argument with a readable message when a field is out of range.
