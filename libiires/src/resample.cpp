@@ -628,23 +628,28 @@ void Resampler::eliminate(Samples& s, std::size_t count) {
     z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
     return z ^ (z >> 27);
   };
+  // The most crowded sample (largest weight) goes first. Weights only decrease, so an entry's key is at least its sample's weight:
+  // a stale entry that reaches the top is put back with the current weight, and a current one at the top is the
+  // true maximum (the same order as pushing every decrease, with a heap of the candidates' size).
   using Item = std::tuple<double, std::uint64_t, std::uint32_t>;
-  std::priority_queue<Item> heap;
+  std::vector<Item> items;
+  items.reserve(s.size());
   for (std::uint32_t i = 0; i < s.size(); ++i)
-    if (!s.fixed[i]) heap.emplace(weight[i], tie(i), i);
+    if (!s.fixed[i]) items.emplace_back(weight[i], tie(i), i);
+  std::priority_queue<Item> heap(std::less<Item>(), std::move(items));
   std::vector<char> removed(s.size(), 0);
   std::size_t alive = s.size();
   while (alive > count && !heap.empty()) {
     const auto [w, t, i] = heap.top();
     heap.pop();
-    if (removed[i] || w != weight[i]) continue;
+    if (w != weight[i]) {
+      heap.emplace(weight[i], t, i);
+      continue;
+    }
     removed[i] = 1;
     --alive;
-    for (const auto& [j, wj] : nb[i]) {
-      if (removed[j]) continue;
-      weight[j] -= wj;
-      if (!s.fixed[j]) heap.emplace(weight[j], tie(j), j);
-    }
+    for (const auto& [j, wj] : nb[i])
+      if (!removed[j]) weight[j] -= wj;
   }
   s = spatiallySorted(s, removed);
 }
