@@ -65,18 +65,11 @@ void orientOverGraph(const std::vector<Eigen::Vector3d>& points, std::vector<Eig
   const std::size_t n = points.size();
   std::vector<char> done(n, 0);
   std::vector<float> best(n, std::numeric_limits<float>::infinity());
-  // Roots: points in decreasing x, so each component starts at its extreme point (normal made to face +x).
-  std::vector<std::uint32_t> order(n);
-  for (std::size_t i = 0; i < n; ++i) order[i] = static_cast<std::uint32_t>(i);
-  std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
-    return std::make_tuple(-points[a].x(), a) < std::make_tuple(-points[b].x(), b);
-  });
   using Item = std::tuple<float, std::uint32_t, std::uint32_t>;  // weight, to, from
   std::vector<Item> storage;
   storage.reserve(n);
   std::priority_queue<Item, std::vector<Item>, std::greater<Item>> heap(std::greater<Item>(), std::move(storage));
-  for (std::uint32_t root : order) {
-    if (done[root]) continue;
+  auto grow = [&](std::uint32_t root) {  // the tree of root's component
     if (normals[root].x() < 0) normals[root] = -normals[root];
     heap.emplace(0.0f, root, root);
     while (!heap.empty()) {
@@ -95,7 +88,22 @@ void orientOverGraph(const std::vector<Eigen::Vector3d>& points, std::vector<Eig
         }
       }
     }
-  }
+  };
+  // Roots in decreasing x, so each component starts at its extreme point (normal made to face +x): the largest
+  // x first; the points its tree leaves (other components) are sorted only when there are any.
+  auto higher = [&](std::uint32_t a, std::uint32_t b) {
+    return std::make_tuple(-points[a].x(), a) < std::make_tuple(-points[b].x(), b);
+  };
+  std::uint32_t first = 0;
+  for (std::uint32_t i = 1; i < n; ++i)
+    if (higher(i, first)) first = i;
+  if (n > 0) grow(first);
+  std::vector<std::uint32_t> rest;
+  for (std::uint32_t i = 0; i < n; ++i)
+    if (!done[i]) rest.push_back(i);
+  std::sort(rest.begin(), rest.end(), higher);
+  for (std::uint32_t root : rest)
+    if (!done[root]) grow(root);
 }
 
 }  // namespace

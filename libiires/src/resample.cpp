@@ -138,16 +138,16 @@ std::vector<std::uint32_t> voxelThin(const std::vector<Eigen::Vector3d>& pts, co
     cell *= std::sqrt(std::clamp(ratio, 0.25, 4.0));
   }
   sortCells(cell);  // (already sorted when the loop stopped on it)
-  // Per cell the point nearest its centre (ties: the lowest index, the first of its run).
-  std::vector<std::uint32_t> chosen;
-  for (std::size_t r = 0; r < n; ++r) {
+  // Per cell the point nearest its centre (ties: the lowest index, the first of its run), returned in index order.
+  std::vector<char> picked(n, 0);
+  for (std::size_t r = 0, best = 0; r < n; ++r) {
     const std::uint32_t i = byCell[r].second;
-    if (r == 0 || byCell[r].first != byCell[r - 1].first)
-      chosen.push_back(i);
-    else if (toCentre[i] < toCentre[chosen.back()])
-      chosen.back() = i;
+    if (r == 0 || byCell[r].first != byCell[r - 1].first || toCentre[i] < toCentre[best]) best = i;
+    if (r + 1 == n || byCell[r + 1].first != byCell[r].first) picked[best] = 1;
   }
-  std::sort(chosen.begin(), chosen.end());
+  std::vector<std::uint32_t> chosen;
+  for (std::size_t i = 0; i < n; ++i)
+    if (picked[i]) chosen.push_back(static_cast<std::uint32_t>(i));
   return chosen;
 }
 

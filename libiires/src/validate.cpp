@@ -16,8 +16,8 @@ namespace {
 using Eigen::Vector3d;
 
 /// Removes exact duplicate positions, keeping the first occurrence and the normals of the kept points.
-/// @return the number of points removed. O(n): points are sorted by a hash of their coordinates (radix sort,
-/// stable), so duplicates share a run; within a run a point is a duplicate when an earlier one equals it.
+/// @return the number of points removed. O(n): points are sorted by a 32-bit hash of their coordinates (radix
+/// sort, stable), so duplicates share a run; within a run a point is a duplicate when an earlier one equals it.
 std::size_t mergeDuplicates(PointCloud& cloud, int threads) {
   const std::size_t n = cloud.size();
   std::vector<KeyedIndex> byHash(n);
@@ -30,7 +30,7 @@ std::size_t mergeDuplicates(PointCloud& cloud, int threads) {
       h = (h ^ bits) * 0xbf58476d1ce4e5b9ull;
       h ^= h >> 31;
     }
-    byHash[i] = {h, static_cast<std::uint32_t>(i)};
+    byHash[i] = {h >> 32, static_cast<std::uint32_t>(i)};  // 32 bits: two radix passes; runs check equality
   });
   radixSort(byHash);
   std::vector<bool> keep(n, true);
