@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <fstream>
 #include <numeric>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 #include <thread>
@@ -420,46 +421,79 @@ void GeodesicCoordinates::Impl::build(const NeighbourTable* table,
   knnDist = {};
   keep = {};
 
-  // --- 4. Satellites and fields (paper §3.2): per component, satellite 1 is the point geodesically farthest
-  // from its first point; satellite s+1 the farthest from satellites 1..s (farthest-point sampling on the
-  // accurate fields, which are the coordinates gₛ themselves). Components run in parallel.
+  // --- 4. Satellites and fields (paper §3.2): per component, satellite 1 is the point farthest (straight-line)
+  // from its first point; satellite s+1 the point farthest from satellites 1..s on their accurate fields, which
+  // are the coordinates gₛ themselves (farthest-point sampling). Satellite 3 is chosen before field 2 exists —
+  // farthest from satellite 1 on g₁ and from satellite 2 in straight line — so that fields 2 and 3 are swept
+  // at once where a thread is free. Components run in parallel.
   t = Clock::now();
   const int m = params.satellites;
+  // Members of each component (internal indices, ascending).
+  std::vector<std::uint32_t> memberOffset(count + 1, 0), memberList(n);
+  for (std::size_t i = 0; i < n; ++i) ++memberOffset[comp[i] + 1];
+  for (std::uint32_t c = 0; c < count; ++c) memberOffset[c + 1] += memberOffset[c];
+  {
+    std::vector<std::uint32_t> fill(memberOffset.begin(), memberOffset.end() - 1);
+    for (std::size_t i = 0; i < n; ++i) memberList[fill[comp[i]]++] = static_cast<std::uint32_t>(i);
+  }
   std::vector<std::uint32_t> seed(count, kNone);
   for (std::size_t o = n; o-- > 0;) seed[comp[rank[o]]] = rank[o];
   std::vector<std::vector<std::uint32_t>> sat(count);
   std::vector<float> field(n * static_cast<std::size_t>(m), kInf);  // internal order
   const int team = resolveThreads(threads);
   const int nThreads = std::max(1, std::min<int>(team, static_cast<int>(std::min<std::size_t>(count, 1024))));
+  const bool spareThread = team > nThreads;  // fields 2 and 3 are swept on two threads
   double seedSeconds = 0, sweepSeconds = 0;
   auto sweeps = [&] {
 #pragma omp parallel num_threads(nThreads) reduction(+ : seedSeconds)
     {
       Sweep sweep(n);
+      std::optional<Sweep> second;  // for the second of two fields swept at once
       std::vector<float> minDist;
 #pragma omp for schedule(dynamic, 1)
       for (long long c = 0; c < static_cast<long long>(count); ++c) {
         const auto t0 = Clock::now();
         std::vector<std::uint32_t>& sc = sat[static_cast<std::size_t>(c)];
-        // Plain Dijkstra is enough for a seed.
-        sweep.run(graph, pos, seed[static_cast<std::size_t>(c)], false);
-        std::vector<std::uint32_t> members = sweep.visited();
-        std::sort(members.begin(), members.end());
-        minDist.assign(members.size(), kInf);
+        const std::uint32_t* members = memberList.data() + memberOffset[static_cast<std::size_t>(c)];
+        const std::size_t size = memberOffset[static_cast<std::size_t>(c) + 1] - memberOffset[static_cast<std::size_t>(c)];
+        minDist.assign(size, kInf);
         auto pickFarthest = [&](auto value) {
           std::size_t best = 0;
-          for (std::size_t x = 1; x < members.size(); ++x)
+          for (std::size_t x = 1; x < size; ++x)
             if (value(x) > value(best)) best = x;  // ties: lowest internal index (members are sorted)
           return members[best];
         };
-        sc.push_back(pickFarthest([&](std::size_t x) { return sweep.distance(members[x]); }));
+        const Eigen::Vector3f& first = pos[seed[static_cast<std::size_t>(c)]];
+        sc.push_back(pickFarthest([&](std::size_t x) { return (pos[members[x]] - first).squaredNorm(); }));
         seedSeconds += secondsSince(t0);
-        for (int s = 0; s < m; ++s) {
-          sweep.run(graph, pos, sc.back(), params.fastMarching);
-          for (std::size_t x = 0; x < members.size(); ++x) {
-            const float d = sweep.distance(members[x]);
+        auto keep = [&](const Sweep& from, int s) {  // field s from a finished sweep
+          for (std::size_t x = 0; x < size; ++x) {
+            const float d = from.distance(members[x]);
             field[members[x] * static_cast<std::size_t>(m) + static_cast<std::size_t>(s)] = d;
             minDist[x] = std::min(minDist[x], d);
+          }
+        };
+        for (int s = 0; s < m; ++s) {
+          if (s == 1 && m >= 3) {
+            const Eigen::Vector3f& satellite2 = pos[sc.back()];
+            sc.push_back(pickFarthest([&](std::size_t x) { return std::min(minDist[x], (pos[members[x]] - satellite2).norm()); }));
+            if (spareThread) {
+              if (!second) second.emplace(n);
+              std::thread other([&] { second->run(graph, pos, sc[2], params.fastMarching); });
+              sweep.run(graph, pos, sc[1], params.fastMarching);
+              other.join();
+              keep(sweep, 1);
+              keep(*second, 2);
+            } else {
+              for (int f : {1, 2}) {
+                sweep.run(graph, pos, sc[static_cast<std::size_t>(f)], params.fastMarching);
+                keep(sweep, f);
+              }
+            }
+            ++s;
+          } else {
+            sweep.run(graph, pos, sc.back(), params.fastMarching);
+            keep(sweep, s);
           }
           if (s + 1 < m) sc.push_back(pickFarthest([&](std::size_t x) { return minDist[x]; }));
         }

@@ -60,7 +60,7 @@ struct GeodesicReport {
   double spacing = 0;                  ///< median nearest-neighbour distance of the cloud
   double graphSeconds = 0;             ///< k-NN search, filtering, adjacency
   double componentSeconds = 0;         ///< union-find and attaching
-  double satelliteSeconds = 0;         ///< seed sweeps (the point farthest from each component's first point)
+  double satelliteSeconds = 0;         ///< picking satellite 1 (farthest from each component's first point)
   double fieldSeconds = 0;             ///< the satellites' distance fields (farthest-point sampling on them)
   double totalSeconds = 0;
 
@@ -73,11 +73,12 @@ struct GeodesicReport {
 /// Build: k-NN graph (filtered: mutual neighbours, length bound by the local spacing, tangent and normal
 /// tests, so it does not cross gaps of a few spacings) → connected components (union-find; components
 /// smaller than minComponentSize attached by their shortest k-NN link) → per component (components in
-/// parallel): satellite 1 = the point geodesically farthest from the component's first point (plain Dijkstra),
-/// satellite s+1 = the point farthest from satellites 1..s on their accurate fields, which are the
-/// coordinates gₛ. Points are processed internally in Z-order for cache locality; every public index is the
+/// parallel): satellite 1 = the point farthest (straight-line) from the component's first point, satellite
+/// s+1 = the point farthest from satellites 1..s on their accurate fields, which are the coordinates gₛ —
+/// except satellite 3, farthest from satellite 1 on g₁ and from satellite 2 in straight line, so that fields 2
+/// and 3 are swept at once when a thread is free (equal on any thread count). Points are processed internally in Z-order for cache locality; every public index is the
 /// caller's.
-/// @note Cost O(n k log n) for the graph, O(n k + n log n) per field (1 + satellites fields per component);
+/// @note Cost O(n k log n) for the graph, O(n k + n log n) per field (satellites fields per component);
 /// memory O(n k).
 /// Deterministic: same cloud and params give the same coordinates for any thread count (ties broken by
 /// point index).
