@@ -57,8 +57,7 @@ bool projectOntoQuadric(const Eigen::Vector3d& p, const std::vector<Eigen::Vecto
     Eigen::Matrix<double, 6, 1> row;
     row << 1, pu, pv, pu * pu, pu * pv, pv * pv;
     const Eigen::Matrix<double, 6, 1> wrow = w * row;
-    for (int r = 0; r < 6; ++r)
-      for (int q = 0; q <= r; ++q) ata(r, q) += wrow[r] * row[q];  // lower triangle: the solvers read only it
+    ata.noalias() += wrow * row.transpose();  // whole (vectorised); the solvers read the lower triangle
     atb.noalias() += d.dot(n) * wrow;
     wsum += w;
   }

@@ -172,8 +172,7 @@ Eigen::Vector3d MlsSurface::project(const Eigen::Vector3d& x0, Eigen::Vector3d* 
         const double pu = d.dot(u), pv = d.dot(v);
         row << 1, pu, pv, pu * pu, pu * pv, pv * pv;
         const Eigen::Matrix<double, 6, 1> wrow = w[j] * row;
-        for (int r = 0; r < 6; ++r)
-          for (int q = 0; q <= r; ++q) ata(r, q) += wrow[r] * row[q];  // lower triangle: ldlt reads only it
+        ata.noalias() += wrow * row.transpose();  // whole (vectorised); the solvers read the lower triangle
         atb += wrow * d.dot(normal);
       }
       for (int r = 3; r < 6; ++r) ata(r, r) += 1e-3 * wsum;  // mild ridge: flat when under-determined
