@@ -12,6 +12,7 @@
 #include "iires/knn.hpp"
 #include "iires/normals.hpp"
 #include "iires/parallel.hpp"
+#include "quadric_fit.hpp"
 
 namespace iires {
 namespace {
@@ -53,12 +54,7 @@ bool projectOntoQuadric(const Eigen::Vector3d& p, const std::vector<Eigen::Vecto
   for (std::size_t j = 0; j < count; ++j) {
     const double w = weights[j];
     const Eigen::Vector3d d = (points[nbr[j]] - plane.centre) / h;  // scaled, for conditioning
-    const double pu = d.dot(u), pv = d.dot(v);
-    Eigen::Matrix<double, 6, 1> row;
-    row << 1, pu, pv, pu * pu, pu * pv, pv * pv;
-    const Eigen::Matrix<double, 6, 1> wrow = w * row;
-    ata.noalias() += wrow * row.transpose();  // whole (vectorised); the solvers read the lower triangle
-    atb.noalias() += d.dot(n) * wrow;
+    addQuadricSample(ata, atb, w, d.dot(u), d.dot(v), d.dot(n));
     wsum += w;
   }
   for (int r = 3; r < 6; ++r) ata(r, r) += 1e-2 * wsum;  // ridge on the curvature terms: flat if unsure

@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "iires/parallel.hpp"
+#include "quadric_fit.hpp"
 
 namespace iires {
 namespace {
@@ -168,12 +169,7 @@ Eigen::Vector3d MlsSurface::project(const Eigen::Vector3d& x0, Eigen::Vector3d* 
       Eigen::Matrix<double, 6, 1> atb = Eigen::Matrix<double, 6, 1>::Zero();
       for (std::size_t j = 0; j < found; ++j) {
         const Eigen::Vector3d d = (points_[idx[j]] - a) / h;
-        Eigen::Matrix<double, 6, 1> row;
-        const double pu = d.dot(u), pv = d.dot(v);
-        row << 1, pu, pv, pu * pu, pu * pv, pv * pv;
-        const Eigen::Matrix<double, 6, 1> wrow = w[j] * row;
-        ata.noalias() += wrow * row.transpose();  // whole (vectorised); the solvers read the lower triangle
-        atb += wrow * d.dot(normal);
+        addQuadricSample(ata, atb, w[j], d.dot(u), d.dot(v), d.dot(normal));
       }
       for (int r = 3; r < 6; ++r) ata(r, r) += 1e-3 * wsum;  // mild ridge: flat when under-determined
       // The ridge makes the system positive definite: Cholesky (unrolled at this fixed size) is several times
