@@ -80,8 +80,8 @@ struct Edge {
   std::uint32_t a, b;
 };
 
-/// Voxel thinning (DESIGN §3.5): cells sized by secant steps on the cell size (from @p cell) so that about
-/// @p target are occupied; per cell the point nearest its centre, indices ascending. With normals, the normal's
+/// Voxel thinning (DESIGN §3.5): cells sized by secant steps on the cell size (from @p cell) so that @p target
+/// ± 10 % are occupied; per cell the point nearest its centre, indices ascending. With normals, the normal's
 /// dominant signed axis is part of the cell key, so facing sheets of a thin part that share a cell (a gap
 /// narrower than the cell) each keep a point.
 std::vector<std::uint32_t> voxelThin(const std::vector<Eigen::Vector3d>& pts, const std::vector<Eigen::Vector3d>& normals,
@@ -134,7 +134,7 @@ std::vector<std::uint32_t> voxelThin(const std::vector<Eigen::Vector3d>& pts, co
   // Occupied cells scale like cell⁻² on a surface.
   for (int step = 0; step < 8; ++step) {
     const double ratio = static_cast<double>(occupied(cell)) / static_cast<double>(target);
-    if (ratio > 0.85 && ratio < 1.2) break;
+    if (ratio > 0.9 && ratio < 1.1) break;
     cell *= std::sqrt(std::clamp(ratio, 0.25, 4.0));
   }
   sortCells(cell);  // (already sorted when the loop stopped on it)
@@ -409,7 +409,7 @@ std::vector<Edge> Resampler::edges(const Samples& s, const Rings& r) const {
 /// kStillMove·l last time has (nearly) the same cell and centroid, and keeps them. Late in the relaxation most
 /// samples are still, so an iteration costs a fraction of the first ones.
 double Resampler::relax(Samples& s, double l, int iterations, Relaxation& state, int projectionSteps) {
-  constexpr double kStillMove = 0.005;  // in units of l
+  constexpr double kStillMove = 0.0075;  // in units of l
   constexpr int kRequeryEvery = 4;     // iterations between fresh k-d tree candidate lists
   const std::size_t n = s.size(), k = static_cast<std::size_t>(params_.neighbours);
   double cv = 0;
