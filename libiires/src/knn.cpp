@@ -136,7 +136,10 @@ std::vector<std::uint32_t> mortonOrder(const std::vector<Eigen::Vector3d>& point
                     spreadBits(static_cast<std::uint64_t>(q.z())) << 2,
                 static_cast<std::uint32_t>(i)};
   }
-  radixSort(keyed);  // stable: ties keep index order
+  // Already in Z-order (the resampler's working cloud, met again by each stage that sorts): no sort needed.
+  const bool sorted = std::is_sorted(keyed.begin(), keyed.end(),
+                                     [](const KeyedIndex& a, const KeyedIndex& b) { return a.first < b.first; });
+  if (!sorted) radixSort(keyed);  // stable: ties keep index order
   for (std::size_t i = 0; i < keyed.size(); ++i) order[i] = keyed[i].second;
   return order;
 }

@@ -45,7 +45,8 @@ std::size_t mergeDuplicates(PointCloud& cloud, int threads) {
   }
 
   std::size_t kept = 0;
-  for (std::size_t i = 0; i < n; ++i) {
+  while (kept < n && keep[kept]) ++kept;  // points before the first duplicate stay where they are
+  for (std::size_t i = kept; i < n; ++i) {
     if (!keep[i]) continue;
     cloud.points[kept] = cloud.points[i];
     if (cloud.hasNormals()) cloud.normals[kept] = cloud.normals[i];
