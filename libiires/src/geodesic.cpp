@@ -1,6 +1,8 @@
 // Geodesic coordinates on a point cloud: paper §3.2 ("efficient intrinsic control"), DESIGN §3 step 6.
 #include "iires/geodesic.hpp"
 
+#include <unistd.h>
+
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <array>
@@ -16,7 +18,6 @@
 #include <sstream>
 #include <stdexcept>
 #include <thread>
-#include <unistd.h>
 
 #include "iires/disjoint_sets.hpp"
 #include "iires/knn.hpp"
@@ -421,11 +422,11 @@ void GeodesicCoordinates::Impl::build(const NeighbourTable* table,
   knnDist = {};
   keep = {};
 
-  // --- 4. Satellites and fields (paper §3.2): per component, satellite 1 is the point farthest (straight-line)
-  // from its first point; satellite s+1 the point farthest from satellites 1..s on their accurate fields, which
-  // are the coordinates gₛ themselves (farthest-point sampling). Satellite 3 is chosen before field 2 exists —
-  // farthest from satellite 1 on g₁ and from satellite 2 in straight line — so that fields 2 and 3 are swept
-  // at once where a thread is free. Components run in parallel.
+  // --- 4. Satellites and fields (paper §3.2): per component, satellite 1 is the point farthest
+  // (straight-line) from its first point; satellite s+1 the point farthest from satellites 1..s on their
+  // accurate fields, which are the coordinates gₛ themselves (farthest-point sampling). Satellite 3 is chosen
+  // before field 2 exists — farthest from satellite 1 on g₁ and from satellite 2 in straight line — so that
+  // fields 2 and 3 are swept at once where a thread is free. Components run in parallel.
   t = Clock::now();
   const int m = params.satellites;
   // Members of each component (internal indices, ascending).
@@ -455,7 +456,8 @@ void GeodesicCoordinates::Impl::build(const NeighbourTable* table,
         const auto t0 = Clock::now();
         std::vector<std::uint32_t>& sc = sat[static_cast<std::size_t>(c)];
         const std::uint32_t* members = memberList.data() + memberOffset[static_cast<std::size_t>(c)];
-        const std::size_t size = memberOffset[static_cast<std::size_t>(c) + 1] - memberOffset[static_cast<std::size_t>(c)];
+        const std::size_t size =
+            memberOffset[static_cast<std::size_t>(c) + 1] - memberOffset[static_cast<std::size_t>(c)];
         minDist.assign(size, kInf);
         auto pickFarthest = [&](auto value) {
           std::size_t best = 0;
@@ -476,7 +478,8 @@ void GeodesicCoordinates::Impl::build(const NeighbourTable* table,
         for (int s = 0; s < m; ++s) {
           if (s == 1 && m >= 3) {
             const Eigen::Vector3f& satellite2 = pos[sc.back()];
-            sc.push_back(pickFarthest([&](std::size_t x) { return std::min(minDist[x], (pos[members[x]] - satellite2).norm()); }));
+            sc.push_back(pickFarthest(
+                [&](std::size_t x) { return std::min(minDist[x], (pos[members[x]] - satellite2).norm()); }));
             if (spareThread) {
               if (!second) second.emplace(n);
               std::thread other([&] { second->run(graph, pos, sc[2], params.fastMarching); });

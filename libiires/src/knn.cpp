@@ -137,8 +137,8 @@ std::vector<std::uint32_t> mortonOrder(const std::vector<Eigen::Vector3d>& point
                 static_cast<std::uint32_t>(i)};
   }
   // Already in Z-order (the resampler's working cloud, met again by each stage that sorts): no sort needed.
-  const bool sorted = std::is_sorted(keyed.begin(), keyed.end(),
-                                     [](const KeyedIndex& a, const KeyedIndex& b) { return a.first < b.first; });
+  const bool sorted = std::is_sorted(
+      keyed.begin(), keyed.end(), [](const KeyedIndex& a, const KeyedIndex& b) { return a.first < b.first; });
   if (!sorted) radixSort(keyed);  // stable: ties keep index order
   for (std::size_t i = 0; i < keyed.size(); ++i) order[i] = keyed[i].second;
   return order;

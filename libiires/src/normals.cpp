@@ -89,8 +89,8 @@ void orientOverGraph(const std::vector<Eigen::Vector3d>& points, std::vector<Eig
       }
     }
   };
-  // Roots in decreasing x, so each component starts at its extreme point (normal made to face +x): the largest
-  // x first; the points its tree leaves (other components) are sorted only when there are any.
+  // Roots in decreasing x, so each component starts at its extreme point (normal made to face +x): the
+  // largest x first; the points its tree leaves (other components) are sorted only when there are any.
   auto higher = [&](std::uint32_t a, std::uint32_t b) {
     return std::make_tuple(-points[a].x(), a) < std::make_tuple(-points[b].x(), b);
   };

@@ -80,10 +80,10 @@ struct Edge {
   std::uint32_t a, b;
 };
 
-/// Voxel thinning (DESIGN §3.5): cells sized by secant steps on the cell size (from @p cell) so that @p target
-/// ± 10 % are occupied; per cell the point nearest its centre, indices ascending. With normals, the normal's
-/// dominant signed axis is part of the cell key, so facing sheets of a thin part that share a cell (a gap
-/// narrower than the cell) each keep a point.
+/// Voxel thinning (DESIGN §3.5): cells sized by secant steps on the cell size (from @p cell) so that @p
+/// target ± 10 % are occupied; per cell the point nearest its centre, indices ascending. With normals, the
+/// normal's dominant signed axis is part of the cell key, so facing sheets of a thin part that share a cell
+/// (a gap narrower than the cell) each keep a point.
 std::vector<std::uint32_t> voxelThin(const std::vector<Eigen::Vector3d>& pts, const std::vector<Eigen::Vector3d>& normals,
                                      std::size_t target, double cell, std::uint64_t seed, int threads) {
   Eigen::Vector3d lo = pts[0], hi = pts[0];
@@ -138,7 +138,8 @@ std::vector<std::uint32_t> voxelThin(const std::vector<Eigen::Vector3d>& pts, co
     cell *= std::sqrt(std::clamp(ratio, 0.25, 4.0));
   }
   sortCells(cell);  // (already sorted when the loop stopped on it)
-  // Per cell the point nearest its centre (ties: the lowest index, the first of its run), returned in index order.
+  // Per cell the point nearest its centre (ties: the lowest index, the first of its run), returned in index
+  // order.
   std::vector<char> picked(n, 0);
   for (std::size_t r = 0, best = 0; r < n; ++r) {
     const std::uint32_t i = byCell[r].second;
@@ -628,9 +629,10 @@ void Resampler::eliminate(Samples& s, std::size_t count) {
     z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
     return z ^ (z >> 27);
   };
-  // The most crowded sample (largest weight) goes first. Weights only decrease, so an entry's key is at least its sample's weight:
-  // a stale entry that reaches the top is put back with the current weight, and a current one at the top is the
-  // true maximum (the same order as pushing every decrease, with a heap of the candidates' size).
+  // The most crowded sample (largest weight) goes first. Weights only decrease, so an entry's key is at least
+  // its sample's weight: a stale entry that reaches the top is put back with the current weight, and a
+  // current one at the top is the true maximum (the same order as pushing every decrease, with a heap of the
+  // candidates' size).
   using Item = std::tuple<double, std::uint64_t, std::uint32_t>;
   std::vector<Item> items;
   items.reserve(s.size());

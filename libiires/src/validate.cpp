@@ -17,7 +17,8 @@ using Eigen::Vector3d;
 
 /// Removes exact duplicate positions, keeping the first occurrence and the normals of the kept points.
 /// @return the number of points removed. O(n): points are sorted by a 32-bit hash of their coordinates (radix
-/// sort, stable), so duplicates share a run; within a run a point is a duplicate when an earlier one equals it.
+/// sort, stable), so duplicates share a run; within a run a point is a duplicate when an earlier one equals
+/// it.
 std::size_t mergeDuplicates(PointCloud& cloud, int threads) {
   const std::size_t n = cloud.size();
   std::vector<KeyedIndex> byHash(n);

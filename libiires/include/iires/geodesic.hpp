@@ -75,9 +75,9 @@ struct GeodesicReport {
 /// smaller than minComponentSize attached by their shortest k-NN link) → per component (components in
 /// parallel): satellite 1 = the point farthest (straight-line) from the component's first point, satellite
 /// s+1 = the point farthest from satellites 1..s on their accurate fields, which are the coordinates gₛ —
-/// except satellite 3, farthest from satellite 1 on g₁ and from satellite 2 in straight line, so that fields 2
-/// and 3 are swept at once when a thread is free (equal on any thread count). Points are processed internally in Z-order for cache locality; every public index is the
-/// caller's.
+/// except satellite 3, farthest from satellite 1 on g₁ and from satellite 2 in straight line, so that fields
+/// 2 and 3 are swept at once when a thread is free (equal on any thread count). Points are processed
+/// internally in Z-order for cache locality; every public index is the caller's.
 /// @note Cost O(n k log n) for the graph, O(n k + n log n) per field (satellites fields per component);
 /// memory O(n k).
 /// Deterministic: same cloud and params give the same coordinates for any thread count (ties broken by

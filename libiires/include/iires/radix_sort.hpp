@@ -16,8 +16,8 @@ using KeyedIndex = std::pair<std::uint64_t, std::uint32_t>;
 /// result equals std::sort of the pairs.
 /// @note O(n) per 11-bit digit (2048 buckets: the counts stay in L1 and the scatter in few streams, 15–30 %
 /// faster than 16-bit digits on 550k keys); digits above the keys' highest set bit, and digits equal in every
-/// key, are skipped, so keys that use few bits sort in few passes. Deterministic, single-threaded, one scratch
-/// array of n pairs.
+/// key, are skipped, so keys that use few bits sort in few passes. Deterministic, single-threaded, one
+/// scratch array of n pairs.
 inline void radixSort(std::vector<KeyedIndex>& items) {
   constexpr int kBits = 11;
   constexpr std::size_t kBuckets = std::size_t{1} << kBits;
