@@ -410,7 +410,7 @@ std::vector<Edge> Resampler::edges(const Samples& s, const Rings& r) const {
 /// kStillMove·l last time has (nearly) the same cell and centroid, and keeps them. Late in the relaxation most
 /// samples are still, so an iteration costs a fraction of the first ones.
 double Resampler::relax(Samples& s, double l, int iterations, Relaxation& state, int projectionSteps) {
-  constexpr double kStillMove = 0.0075;  // in units of l
+  constexpr double kStillMove = 0.005;  // in units of l
   constexpr int kRequeryEvery = 4;     // iterations between fresh k-d tree candidate lists
   const std::size_t n = s.size(), k = static_cast<std::size_t>(params_.neighbours);
   double cv = 0;
