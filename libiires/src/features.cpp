@@ -161,6 +161,16 @@ bool snapFit(const PointCloud& cloud, const KnnIndex& index, const Eigen::Vector
   return twoPlaneTest(cloud.points, cloud.normals, y, idx, hl, prm, c, params.snapSigma * hl);
 }
 
+/// The looser thresholds of the VCM detector's lines, for a snap fit where a chain already says a crease is:
+/// any angle over 1°, twice the residual, half the cluster share.
+FeatureParams looseParams(const FeatureParams& params) {
+  FeatureParams loose = params;
+  loose.angle = 1.0;
+  loose.maxResidual = 2.0 * params.maxResidual;
+  loose.minClusterShare = 0.5 * params.minClusterShare;
+  return loose;
+}
+
 /// The crease at @p y running along ±@p dir (within params.maxChainTurn): the snap fit, else two planes fitted
 /// on the points behind y only (an end where the crease stops ahead, or another crease crowds the ball ahead);
 /// @p oneSided says the second held. @p idx keeps the ball, @p d2 and @p behind are scratch.
@@ -1293,6 +1303,128 @@ bool refitPlanesRobust(const std::vector<Eigen::Vector3d>& points, const Eigen::
   return true;
 }
 
+/// A sheet curving along a crease, as a height field over its plane: the points x with n·(x − o) = h(u, v),
+/// (u, v) = (e1·(x − o), e2·(x − o)), e1 along the crease, h = c0 + c1 u + c2 v + c3 u². The one curvature
+/// term is the bend along the crease (a cylinder meeting a plate at its foot); terms across it would let a
+/// sheet bend onto a stray point next to the crease.
+struct CreaseSheet {
+  Eigen::Vector3d o, e1, e2, n;
+  Eigen::Vector4d c = Eigen::Vector4d::Zero();
+  /// n·(x − o) − h(u, v) (about the signed distance near the sheet) and, if @p grad, its gradient.
+  double value(const Eigen::Vector3d& x, Eigen::Vector3d* grad = nullptr) const {
+    const Eigen::Vector3d d = x - o;
+    const double u = e1.dot(d), v = e2.dot(d);
+    if (grad) *grad = n - (c(1) + 2 * c(3) * u) * e1 - c(2) * e2;
+    return n.dot(d) - (c(0) + c(1) * u + c(2) * v + c(3) * u * u);
+  }
+  /// Fitted by least squares to @p idx, idx[t] weighted rw[t]·exp(−|idx[t] − o|²/σ²); returns the weighted
+  /// RMS residual (infinity with fewer than 10 points).
+  double fit(const std::vector<Eigen::Vector3d>& points, const std::vector<std::uint32_t>& idx,
+             const std::vector<double>& rw, double sigma) {
+    if (idx.size() < 10) return std::numeric_limits<double>::infinity();
+    Eigen::Matrix4d ata = Eigen::Matrix4d::Zero();
+    Eigen::Vector4d atb = Eigen::Vector4d::Zero();
+    std::vector<double> w(idx.size());
+    for (std::size_t t = 0; t < idx.size(); ++t) {
+      const Eigen::Vector3d d = points[idx[t]] - o;
+      w[t] = rw[t] * std::exp(-d.squaredNorm() / (sigma * sigma));
+      const double u = e1.dot(d) / sigma, v = e2.dot(d) / sigma;  // in units of σ: well conditioned
+      const Eigen::Vector4d a(1, u, v, u * u);
+      ata += w[t] * a * a.transpose();
+      atb += w[t] * a * n.dot(d);
+    }
+    c = ata.ldlt().solve(atb).cwiseQuotient(Eigen::Vector4d(1, sigma, sigma, sigma * sigma));
+    if (!c.allFinite()) return std::numeric_limits<double>::infinity();
+    double r2 = 0, sum = 0;
+    for (std::size_t t = 0; t < idx.size(); ++t) r2 += w[t] * std::pow(value(points[idx[t]]), 2), sum += w[t];
+    return std::sqrt(r2 / sum);
+  }
+};
+
+constexpr std::size_t kSheetFitPoints = 40;  // the curved sheets are fitted on this many nearest points
+
+/// The crease point near @p c.point on the intersection of its two sheets fitted as CreaseSheets (over the
+/// planes of @p c, bending along c.direction): a plane fitted to a sheet that curves along the crease lies off
+/// it, and so does the planes' line. The kSheetFitPoints input points nearest c.point, Gaussian weights of
+/// width 0.6 × their radius; four rounds of: each point to the sheet it is nearer to (the planes, then the
+/// fitted sheets), left out beyond 3·maxResidual local spacings @p hl of both and weighted 1/(1 + (d/τ)²),
+/// τ = maxResidual·hl, by its distance d (a third sheet's points, stray points); then Gauss-Newton from
+/// c.point onto both sheets. Returns false where a sheet keeps under 10 points, the last round leaves out 10 %
+/// of the points or more (a third sheet: a corner) or its fits leave a residual over maxResidual·hl.
+bool curvedCreasePoint(const PointCloud& cloud, const KnnIndex& index, double hl, const FeatureParams& prm,
+                       const Crease& c, Eigen::Vector3d& x) {
+  std::vector<std::uint32_t> nbr;
+  std::vector<double> d2;
+  const Eigen::Vector3d x0 = c.point;
+  if (index.knn(x0, kSheetFitPoints, nbr, d2) < kSheetFitPoints) return false;
+  const double sigma = 0.6 * std::sqrt(d2.back());
+  CreaseSheet sheet[2];
+  const Eigen::Vector3d normal[2] = {c.normalA, c.normalB};
+  const double offset[2] = {c.offsetA, c.offsetB};
+  for (int s = 0; s < 2; ++s) {  // start: the planes
+    CreaseSheet& q = sheet[s];
+    q.o = x0, q.n = normal[s];
+    q.e1 = (c.direction - q.n * q.n.dot(c.direction)).normalized();
+    q.e2 = q.n.cross(q.e1);
+    q.c(0) = offset[s] - q.n.dot(x0);
+  }
+  std::vector<std::uint32_t> part[2];
+  std::vector<double> rw[2];
+  const double tau = prm.maxResidual * hl;
+  for (int it = 0; it < 4; ++it) {
+    for (int s = 0; s < 2; ++s) part[s].clear(), rw[s].clear();
+    for (std::uint32_t j : nbr) {
+      const double da = std::abs(sheet[0].value(cloud.points[j])), db = std::abs(sheet[1].value(cloud.points[j]));
+      const double d = std::min(da, db);
+      if (d > 3.0 * tau) continue;
+      const int s = da <= db ? 0 : 1;
+      part[s].push_back(j);
+      rw[s].push_back(1.0 / (1.0 + (d / tau) * (d / tau)));
+    }
+    if (it == 3 && 10 * (part[0].size() + part[1].size()) < 9 * nbr.size()) return false;  // a third sheet
+    for (int s = 0; s < 2; ++s) {
+      const double r = sheet[s].fit(cloud.points, part[s], rw[s], sigma);
+      if (!std::isfinite(r) || (it == 3 && r > tau)) return false;
+    }
+  }
+  x = x0;
+  for (int it = 0; it < 10; ++it) {  // the minimum-norm step onto both: x ← x − Jᵀ(JJᵀ)⁻¹f
+    Eigen::Matrix<double, 2, 3> j;
+    Eigen::Vector2d f;
+    for (int s = 0; s < 2; ++s) {
+      Eigen::Vector3d g;
+      f(s) = sheet[s].value(x, &g);
+      j.row(s) = g.transpose();
+    }
+    const Eigen::Vector3d dx = -j.transpose() * (j * j.transpose()).inverse() * f;
+    if (!dx.allFinite()) return false;
+    x += dx;
+    if (dx.norm() < 1e-9 * hl) break;
+  }
+  return true;
+}
+
+/// Step 6 of snapToCreases(): each sample where the snap fit with the loose thresholds (looseParams; a sample
+/// the tracing placed where the strict fit fails) puts the planes' line within maxLineDistance/2 local spacings
+/// of it (the planes describe the crease the sample is on, not a corner or another crease near it) moves onto
+/// the two sheets' curved crease (curvedCreasePoint), where that lies within maxLineDistance local spacings.
+/// Each sample on its own: deterministic, in parallel.
+void refineOnCurvedSheets(const PointCloud& cloud, const KnnIndex& index, double h, const FeatureParams& params,
+                          std::vector<Eigen::Vector3d>& out) {
+  const FeatureParams loose = looseParams(params);
+  parallelFor(out.size(), params.threads, [&](std::size_t i) {
+    std::vector<std::uint32_t> idx;
+    std::vector<double> d2;
+    const double hl = localSpacing(index, out[i], h);
+    Crease c;
+    Eigen::Vector3d x;
+    if (snapFit(cloud, index, out[i], hl, params, loose, c, idx, d2) &&
+        (c.point - out[i]).norm() <= 0.5 * params.maxLineDistance * hl &&
+        curvedCreasePoint(cloud, index, hl, params, c, x) && (x - out[i]).norm() <= params.maxLineDistance * hl)
+      out[i] = x;
+  });
+}
+
 /// Step 3b of snapToCreases(): tips. Two creases that share a sheet and run into one point at a small angle
 /// (8°–maxChainTurn; a step in a surface fading out, as fandisk's wedge at (0.072 0.035 −0.046), 18°) end
 /// there without a third crease. Within a few spacings of the tip both creases lie in every fit's
@@ -1515,12 +1647,8 @@ std::vector<Eigen::Vector3d> snapToCreases(const PointCloud& cloud, const std::v
     if (onCrease) return;
     // The looser thresholds of the VCM detector's lines (the chain already says a crease is here), trusted
     // only for a small correction: a sample extended past the feature would be pulled far.
-    FeatureParams loose = params;
-    loose.angle = 1.0;
-    loose.maxResidual = 2.0 * params.maxResidual;
-    loose.minClusterShare = 0.5 * params.minClusterShare;
     Crease c;
-    if (snapFit(cloud, index, samples[i], hl, params, loose, c, idx, d2) &&
+    if (snapFit(cloud, index, samples[i], hl, params, looseParams(params), c, idx, d2) &&
         (c.point - samples[i]).norm() <= 0.25 * hl) {
       moved[i] = c.point;
       creaseDir[i] = c.direction;
@@ -1629,6 +1757,7 @@ std::vector<Eigen::Vector3d> snapToCreases(const PointCloud& cloud, const std::v
   owner.insert(owner.end(), cornerOwner.begin(), cornerOwner.end());
   out.insert(out.end(), corners.begin(), corners.end());
   fillCreaseGaps(cloud, index, h, params, out, owner);
+  refineOnCurvedSheets(cloud, index, h, params, out);
   if (chainOut) *chainOut = std::move(owner);
   return out;
 }

@@ -153,6 +153,13 @@ std::vector<Eigen::Vector3d> sampleFeatureChains(const std::vector<FeatureChain>
 ///     the snap fit's crease where it runs along them and near their chord, else on the fitted crease line of
 ///     either, else on the chord where the samples on either side run on in line with it (within 20°; one side
 ///     suffices up to 4.5 spacings); a gap where none holds (two creases meeting) stays open.
+///  6. Curved sheets: a plane fitted to a sheet that curves along the crease (a plate meeting a cylinder) lies
+///     off it, and so does the planes' line. Every sample whose looser snap fit (as in 1) puts the planes'
+///     line within maxLineDistance/2 local spacings of it moves to the crease of the two sheets fitted as
+///     height fields over those planes, bending along the crease (h = c0 + c1·u + c2·v + c3·u², u along it),
+///     on the 40 nearest input points (each to the nearer sheet; points over 3·maxResidual off both left out,
+///     the others weighted down by their distance), if both fit within maxResidual, under 10 % of the points
+///     are left out (more: a third sheet, as at a corner) and the move is at most maxLineDistance local spacings.
 /// @param chainOfSample the chain index of each sample (sampleFeatureChains' output: a chain's samples are
 ///     consecutive and in order)
 /// @param spacing the input spacing h (FeatureResult::spacing)
