@@ -80,8 +80,8 @@ struct Edge {
   std::uint32_t a, b;
 };
 
-/// Voxel thinning (DESIGN §3.5): cells sized by secant steps on the cell size (from @p cell) so that @p
-/// target ± 10 % are occupied; per cell the point nearest its centre, indices ascending. With normals, the
+/// Voxel thinning (DESIGN §3.5): cells sized by secant steps on the cell size (from @p cell) so that
+/// −15 % to +20 % of @p target are occupied; per cell the point nearest its centre, indices ascending. With normals, the
 /// normal's dominant signed axis is part of the cell key, so facing sheets of a thin part that share a cell
 /// (a gap narrower than the cell) each keep a point.
 std::vector<std::uint32_t> voxelThin(const std::vector<Eigen::Vector3d>& pts, const std::vector<Eigen::Vector3d>& normals,
@@ -134,7 +134,7 @@ std::vector<std::uint32_t> voxelThin(const std::vector<Eigen::Vector3d>& pts, co
   // Occupied cells scale like cell⁻² on a surface.
   for (int step = 0; step < 8; ++step) {
     const double ratio = static_cast<double>(occupied(cell)) / static_cast<double>(target);
-    if (ratio > 0.9 && ratio < 1.1) break;
+    if (ratio > 0.85 && ratio < 1.2) break;
     cell *= std::sqrt(std::clamp(ratio, 0.25, 4.0));
   }
   sortCells(cell);  // (already sorted when the loop stopped on it)
