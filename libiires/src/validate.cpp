@@ -31,7 +31,7 @@ std::size_t mergeDuplicates(PointCloud& cloud, int threads) {
       h = (h ^ bits) * 0xbf58476d1ce4e5b9ull;
       h ^= h >> 31;
     }
-    byHash[i] = {h >> 32, static_cast<std::uint32_t>(i)};  // 32 bits: two radix passes; runs check equality
+    byHash[i] = {h >> 32, static_cast<std::uint32_t>(i)};  // 32 bits: three radix passes; runs check equality
   });
   radixSort(byHash);
   std::vector<bool> keep(n, true);
