@@ -77,4 +77,24 @@ TEST(NeighbourTable, PrefixesAreTheTreesAnswers) {
   EXPECT_EQ(d2, (std::vector<double>{0, 4, 9}));
 }
 
+TEST(NeighbourTable, TruncatedRowsKeepTheirPrefixes) {
+  const auto pts = randomPoints(2000, 10);
+  const iires::KnnIndex index(pts);
+  const iires::NeighbourTable full(index, pts, 25, 2);
+  iires::NeighbourTable cut(index, pts, 25, 2);
+  cut.truncate(17);
+  EXPECT_EQ(cut.k(), 17u);
+  std::vector<std::uint32_t> idx, want;
+  std::vector<double> d2, wantD2;
+  for (std::size_t i = 0; i < pts.size(); i += 3)
+    for (std::size_t k : {1, 9, 17}) {
+      ASSERT_EQ(cut.get(i, k, idx, d2), k);
+      full.get(i, k, want, wantD2);
+      EXPECT_EQ(idx, want) << "point " << i << ", k " << k;
+      EXPECT_EQ(d2, wantD2);
+    }
+  cut.truncate(30);  // wider than the table: no effect
+  EXPECT_EQ(cut.k(), 17u);
+}
+
 }  // namespace

@@ -109,6 +109,17 @@ std::size_t NeighbourTable::get(std::size_t i, std::size_t k, std::vector<std::u
   return f;
 }
 
+void NeighbourTable::truncate(std::size_t k) {
+  if (k >= k_) return;
+  for (std::size_t i = 0; i < found_.size(); ++i) {
+    std::copy_n(rows_.begin() + static_cast<long>(i * k_), k, rows_.begin() + static_cast<long>(i * k));
+    found_[i] = static_cast<std::uint8_t>(std::min<std::size_t>(found_[i], k));
+  }
+  k_ = k;
+  rows_.resize(found_.size() * k);
+  rows_.shrink_to_fit();
+}
+
 namespace {
 /// The 21 low bits of @p x spread to every third bit.
 std::uint64_t spreadBits(std::uint64_t x) {

@@ -927,6 +927,9 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
     result.preprocessing = iires::preprocess(cloud, pp, &*neighbours);
     if (result.preprocessing.positionsKept()) {
       cloud.normals = std::move(result.preprocessing.cloud.normals);
+      // What the geodesic graph and the MLS kernel widths read of it (memory: 5M points, 26 → 17 columns).
+      neighbours->truncate(std::max(params.intrinsic ? static_cast<std::size_t>(gp.k) + 1 : 0,
+                                    MlsSurface::kWidthNeighbours));
     } else {  // moved or dropped points: the table and the tree no longer match them
       neighbours.reset();
       index.reset();

@@ -57,6 +57,9 @@ class NeighbourTable {
   /// @pre k ≤ k()
   std::size_t get(std::size_t i, std::size_t k, std::vector<std::uint32_t>& indices,
                   std::vector<double>& sqDists) const;
+  /// @brief Keeps the first @p k neighbours of every row and frees the rest, for readers that need no more
+  /// (get() with up to @p k gives what it gave). No effect when k ≥ k().
+  void truncate(std::size_t k);
 
  private:
   const std::vector<Eigen::Vector3d>& points_;
