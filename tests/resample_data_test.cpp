@@ -1,6 +1,8 @@
 // End-to-end acceptance of the isotropic resampler on CGAL's real models (issue: foundation).
 #include <gtest/gtest.h>
 
+#include <utility>
+
 #include "iires/features.hpp"
 #include "iires/io.hpp"
 #include "iires/knn.hpp"
@@ -165,6 +167,16 @@ TEST_P(CurvatureMode, GradesSpacingWithCurvatureWithoutJumps) {
 
 INSTANTIATE_TEST_SUITE_P(Cgal, CurvatureMode, ::testing::Values("bunny00", "armadillo"));
 
+/// The isotropic mode's and --sharp-edges' outputs of @p cloud at @p n points.
+std::pair<iires::ResampleResult, iires::ResampleResult> isotropicAndSharp(const iires::PointCloud& cloud,
+                                                                            std::size_t n) {
+  iires::ResampleParams p;
+  p.targetCount = n;
+  auto iso = iires::resample(cloud, p);
+  p.sharpEdges = true;
+  return {std::move(iso), iires::resample(cloud, p)};
+}
+
 // Sharp edges on 5× non-uniform input: exact N, samples held on the creases, and against the isotropic mode on
 // the same input: closer to the mesh (mean and max) and the reference sharp edges (dihedral > 45°) better
 // covered on average (measured: mean error 0.0012 vs 0.0032 % of the diagonal, max 0.137 vs 0.224 %, mean
@@ -172,11 +184,7 @@ INSTANTIATE_TEST_SUITE_P(Cgal, CurvatureMode, ::testing::Values("bunny00", "arma
 TEST(SharpEdges, HeldOnTheCreasesAndCloserToTheMeshThanIsotropic) {
   const auto mesh = iires::readMesh(dataPath("meshes/fandisk.off"));
   const auto cloud = denseSampling(mesh, 100000);
-  iires::ResampleParams p;
-  p.targetCount = 10000;
-  const auto iso = iires::resample(cloud, p);
-  p.sharpEdges = true;
-  const auto r = iires::resample(cloud, p);
+  const auto [iso, r] = isotropicAndSharp(cloud, 10000);
   ASSERT_EQ(r.cloud.size(), 10000u);
   EXPECT_GT(r.featurePoints, 1000u);
   EXPECT_GT(r.featureSamples, 1000u);
@@ -209,11 +217,7 @@ TEST(SharpEdges, ConcaveCreaseOfJointNoFartherFromTheMeshThanIsotropic) {
   sp.seed = 1;
   iires::PointCloud cloud = iires::sampleMesh(mesh, sp);
   cloud.normals.clear();
-  iires::ResampleParams p;
-  p.targetCount = 20000;
-  const auto iso = iires::resample(cloud, p);
-  p.sharpEdges = true;
-  const auto r = iires::resample(cloud, p);
+  const auto [iso, r] = isotropicAndSharp(cloud, 20000);
   ASSERT_EQ(r.cloud.size(), 20000u);
   const iires::MeshDistance distance(mesh);
   const auto err = distance.distances(r.cloud.points), isoErr = distance.distances(iso.cloud.points);
