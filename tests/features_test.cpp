@@ -42,6 +42,20 @@ iires::PointCloud sampledWithEstimatedNormals(const iires::TriangleMesh& mesh, s
   return c;
 }
 
+/// The unit cube sampled with 60,000 points and estimated normals, its sharp edges and spacing h: built once
+/// for the tests that snap samples onto its creases.
+struct SampledCube {
+  iires::TriangleMesh mesh = cubeMesh();
+  iires::PointCloud cloud = sampledWithEstimatedNormals(mesh, 60000);
+  std::vector<Segment> edges = iires::sharpMeshEdges(mesh, 45.0);
+  double h = iires::estimateSpacing(cloud.points);
+};
+
+const SampledCube& sampledCube() {
+  static const SampledCube cube;
+  return cube;
+}
+
 TEST(FeatureParams, ValidateRejectsBadValues) {
   FeatureParams p;
   EXPECT_NO_THROW(p.validate());
@@ -141,11 +155,8 @@ INSTANTIATE_TEST_SUITE_P(Detectors, CubeFeatures,
 // sample that no fit accepts between good ones goes onto their chord, and two chain ends meeting at a corner
 // get a corner sample.
 TEST(Features, SnapToCreasesOnACube) {
-  const auto mesh = cubeMesh();
-  const auto cloud = sampledWithEstimatedNormals(mesh, 60000);
-  const auto edges = iires::sharpMeshEdges(mesh, 45.0);
+  const auto& [mesh, cloud, edges, h] = sampledCube();
   FeatureParams p;
-  const double h = iires::estimateSpacing(cloud.points);
   // Chain 0 along the edge x = 1, z = 1 (y up to 1 − 3h), its samples pushed 0.4 h off the edge into the
   // cube's top face or its side alternately; then two samples past the corner y = 1, off the surface.
   // Chain 1 along the edge y = 1, z = 1 (x from 1 − 3h down): its end and chain 0's end meet at (1, 1, 1).
@@ -193,12 +204,9 @@ TEST(Features, SnapToCreasesOnACube) {
 // places the corners on the three planes' intersection and follows the corners' other creases, so the samples
 // cover the whole edge graph (12 edges, 8 corners), every one on an edge, none crowding another.
 TEST(Features, TracingFromOneChainCoversTheCubesEdges) {
-  const auto mesh = cubeMesh();
-  const auto cloud = sampledWithEstimatedNormals(mesh, 60000);
-  const auto edges = iires::sharpMeshEdges(mesh, 45.0);
+  const auto& [mesh, cloud, edges, h] = sampledCube();
   ASSERT_EQ(edges.size(), 12u);
   FeatureParams p;
-  const double h = iires::estimateSpacing(cloud.points);
   const double step = 0.04;
   std::vector<Eigen::Vector3d> samples;
   for (int t = 0; t <= 5; ++t) samples.emplace_back(1.0, 0.4 + step * t, 1.0);  // edge x = z = 1
@@ -247,8 +255,7 @@ iires::PointCloud withBlindSpot(iires::PointCloud cloud, const Eigen::Vector3d& 
 // through it; the gap between the chain's two pieces is filled on the line through them (the samples on either
 // side run in line), so the edge has no gap over 1.5 steps and every sample stays on it.
 TEST(Features, GapWhereNoFitHoldsIsFilledOnTheChainsLine) {
-  const auto mesh = cubeMesh();
-  const auto cloud = withBlindSpot(sampledWithEstimatedNormals(mesh, 60000), Eigen::Vector3d(1.0, 0.5, 1.0), 0.05);
+  const auto cloud = withBlindSpot(sampledCube().cloud, Eigen::Vector3d(1.0, 0.5, 1.0), 0.05);
   FeatureParams p;
   const double h = iires::estimateSpacing(cloud.points);
   const double step = 0.02;
@@ -260,7 +267,7 @@ TEST(Features, GapWhereNoFitHoldsIsFilledOnTheChainsLine) {
   }
   const std::vector<std::uint32_t> chain(samples.size(), 0u);
   const auto out = iires::snapToCreases(cloud, samples, chain, h, p);
-  const auto edges = iires::sharpMeshEdges(mesh, 45.0);
+  const auto& edges = sampledCube().edges;
   const Segment edge{Eigen::Vector3d(1, 0, 1), Eigen::Vector3d(1, 1, 1)};
   std::vector<double> ys;
   for (const auto& q : out) {
@@ -279,8 +286,7 @@ TEST(Features, GapWhereNoFitHoldsIsFilledOnTheChainsLine) {
 // runs in line: the corner has no neighbour in line), so the edge has no gap over 1.5 steps; every sample is on
 // the edges up to the fits' noise (0.4 h, as for traced samples).
 TEST(Features, GapBeforeACornerIsFilledFromTheChainSide) {
-  const auto mesh = cubeMesh();
-  const auto cloud = withBlindSpot(sampledWithEstimatedNormals(mesh, 60000), Eigen::Vector3d(1.0, 0.9, 1.0), 0.06);
+  const auto cloud = withBlindSpot(sampledCube().cloud, Eigen::Vector3d(1.0, 0.9, 1.0), 0.06);
   FeatureParams p;
   const double h = iires::estimateSpacing(cloud.points);
   const double step = 0.02;
@@ -289,7 +295,7 @@ TEST(Features, GapBeforeACornerIsFilledFromTheChainSide) {
   for (int t = 0; t <= 20; ++t) samples.emplace_back(1.0, 0.4 + step * t, 1.0), chain.push_back(0);  // up to y = 0.8
   for (int t = 0; t <= 20; ++t) samples.emplace_back(0.4 + step * t, 1.0, 1.0), chain.push_back(1);  // up to x = 0.8
   const auto out = iires::snapToCreases(cloud, samples, chain, h, p);
-  const auto edges = iires::sharpMeshEdges(mesh, 45.0);
+  const auto& edges = sampledCube().edges;
   const Segment edge{Eigen::Vector3d(1, 0, 1), Eigen::Vector3d(1, 1, 1)};
   std::vector<double> ys;
   for (const auto& q : out) {
@@ -307,11 +313,8 @@ TEST(Features, GapBeforeACornerIsFilledFromTheChainSide) {
 // is dropped (before: snapped and held, half a step from chain 0's samples). A lone sample with no other
 // chain near it (chain 2, on the edge x = 0, z = 1) is traced both ways and stays.
 TEST(Features, StrayLoneSampleBesideAChainIsDropped) {
-  const auto mesh = cubeMesh();
-  const auto cloud = sampledWithEstimatedNormals(mesh, 60000);
-  const auto edges = iires::sharpMeshEdges(mesh, 45.0);
+  const auto& [mesh, cloud, edges, h] = sampledCube();
   FeatureParams p;
-  const double h = iires::estimateSpacing(cloud.points);
   const double step = 0.02;
   std::vector<Eigen::Vector3d> samples;
   std::vector<std::uint32_t> chain;
