@@ -706,6 +706,18 @@ void partitionByPlanes(const std::vector<Eigen::Vector3d>& points, const std::ve
   }
 }
 
+/// [first, last] of each run of consecutive samples with the same @p owner (one chain's samples), in order.
+std::vector<std::pair<std::size_t, std::size_t>> ownerRuns(const std::vector<std::uint32_t>& owner) {
+  std::vector<std::pair<std::size_t, std::size_t>> runs;
+  for (std::size_t a = 0; a < owner.size();) {
+    std::size_t b = a;
+    while (b + 1 < owner.size() && owner[b + 1] == owner[a]) ++b;
+    runs.emplace_back(a, b);
+    a = b + 1;
+  }
+  return runs;
+}
+
 /// Continue every open run of chain samples (@p out, consecutive samples of one chain in @p owner) along its
 /// crease: from the end sample, step forward by the run's end spacing, fit the two sheets' local planes there
 /// (the snap fit) and put the next sample on their intersection, while the fit passes the detector's thresholds,
@@ -727,9 +739,7 @@ void traceChainEnds(const PointCloud& cloud, const KnnIndex& index, double h, co
   };
   std::vector<Run> runs;
   std::uint32_t nextChain = 0;
-  for (std::size_t a = 0; a < out.size();) {
-    std::size_t b = a;
-    while (b + 1 < out.size() && owner[b + 1] == owner[a]) ++b;
+  for (const auto& [a, b] : ownerRuns(owner)) {
     nextChain = std::max(nextChain, owner[a] + 1);
     // A chain's run is split where samples were dropped (a gap over 1.6 × its median spacing): the pieces'
     // ends are traced like the chain's, so the gap is filled from both sides.
@@ -747,7 +757,6 @@ void traceChainEnds(const PointCloud& cloud, const KnnIndex& index, double h, co
         runs.push_back({owner[a], {}, std::vector<Eigen::Vector3d>(out.begin() + static_cast<long>(first), out.begin() + static_cast<long>(t + 1))});
         first = t + 1;
       }
-    a = b + 1;
   }
   struct Job {
     std::size_t run;
@@ -1450,13 +1459,7 @@ void placeCreaseTips(const PointCloud& cloud, const KnnIndex& index, double h, c
     double step, hl;
     Crease crease;
   };
-  std::vector<std::pair<std::size_t, std::size_t>> runs;  // [first, last] of each run of one chain's samples
-  for (std::size_t a = 0; a < out.size();) {
-    std::size_t b = a;
-    while (b + 1 < out.size() && owner[b + 1] == owner[a]) ++b;
-    runs.emplace_back(a, b);
-    a = b + 1;
-  }
+  const auto runs = ownerRuns(owner);
   const double cosTurn = std::cos(params.maxChainTurn * kDeg);
   std::vector<TipEnd> ends;
   std::vector<std::uint32_t> idx, behind;
@@ -1698,15 +1701,11 @@ std::vector<Eigen::Vector3d> snapToCreases(const PointCloud& cloud, const std::v
     bool filled;                       // already linked to a corner
   };
   std::vector<End> ends;
-  for (std::size_t a = 0; a < out.size();) {
-    std::size_t b = a;
-    while (b + 1 < out.size() && owner[b + 1] == owner[a]) ++b;
+  for (const auto& [a, b] : ownerRuns(owner))
     if (b > a) {
       ends.push_back({out[a], (out[a] - out[a + 1]).normalized(), (out[a] - out[a + 1]).norm(), owner[a], false});
       ends.push_back({out[b], (out[b] - out[b - 1]).normalized(), (out[b] - out[b - 1]).norm(), owner[a], false});
     }
-    a = b + 1;
-  }
   const double reach = 3.0 * params.radius * h;
   std::vector<Eigen::Vector3d> corners, cornerPoints;  // all added samples; the corners alone
   std::vector<std::uint32_t> cornerOwner;
