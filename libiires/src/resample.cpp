@@ -917,9 +917,10 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
   // graph, the MLS kernel widths) while pre-processing keeps the positions; one k-d tree for it and the MLS.
   t = clock.begin("neighbours");
   std::optional<KnnIndex> index(std::in_place, cloud.points);
-  const std::size_t tableK =
-      std::max({preprocessing ? preprocessNeighbours(pp) : std::size_t{0},
-                params.intrinsic ? static_cast<std::size_t>(gp.k) + 1 : 0, MlsSurface::kWidthNeighbours});
+  // Columns read after pre-processing (the geodesic graph, the MLS kernel widths); pre-processing reads more.
+  const std::size_t laterK =
+      std::max(params.intrinsic ? static_cast<std::size_t>(gp.k) + 1 : 0, MlsSurface::kWidthNeighbours);
+  const std::size_t tableK = std::max(preprocessing ? preprocessNeighbours(pp) : std::size_t{0}, laterK);
   std::optional<NeighbourTable> neighbours(std::in_place, *index, cloud.points, tableK, params.threads);
   clock.end("neighbours", t);
   if (preprocessing) {
@@ -927,9 +928,7 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
     result.preprocessing = iires::preprocess(cloud, pp, &*neighbours);
     if (result.preprocessing.positionsKept()) {
       cloud.normals = std::move(result.preprocessing.cloud.normals);
-      // What the geodesic graph and the MLS kernel widths read of it (memory: 5M points, 26 → 17 columns).
-      neighbours->truncate(std::max(params.intrinsic ? static_cast<std::size_t>(gp.k) + 1 : 0,
-                                    MlsSurface::kWidthNeighbours));
+      neighbours->truncate(laterK);  // memory (5M points: 26 → 17 columns)
     } else {  // moved or dropped points: the table and the tree no longer match them
       neighbours.reset();
       index.reset();
