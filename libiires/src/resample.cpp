@@ -937,6 +937,10 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
     result.preprocessing.cloud = {};
     clock.end("preprocess", t);
   }
+  // The geodesic graph builds a k-d tree of these (Z-ordered) points as well and hands it to the surface: one
+  // tree, not two (memory at 5M).
+  const bool geodesicRule = !params.neighbourRule && params.intrinsic;
+  if (geodesicRule) index.reset();
 
   t = clock.begin("normals");
   if (!cloud.hasNormals()) {
@@ -967,7 +971,7 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
   };
 
   std::shared_ptr<NeighbourRule> rule = params.neighbourRule;
-  if (!rule && params.intrinsic) {
+  if (geodesicRule) {
     t = clock.begin("geodesic");  // includes the independent stages where they ran during its sweeps
     IntrinsicParams ip = params.intrinsicRule;
     ip.threads = params.threads;
