@@ -952,9 +952,9 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
   }
   clock.end("normals", t);
 
-  // What does not need the geodesic coordinates: the MLS surface (on the geodesic graph's k-d tree when
-  // pre-processing moved the points) and the initial candidates. It runs where the geodesic satellite sweeps
-  // (serial per component) leave threads idle.
+  // What does not need the geodesic coordinates: the MLS surface (on the geodesic graph's k-d tree with the
+  // geodesic rule) and the initial candidates. It runs where the geodesic satellite sweeps (serial per
+  // component) leave threads idle.
   std::optional<MlsSurface> surface;
   std::vector<std::uint32_t> candidates;
   auto independent = [&](int threads, const KnnIndex* pointIndex) {
