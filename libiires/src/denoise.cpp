@@ -164,7 +164,7 @@ DenoiseResult denoise(const PointCloud& input, const DenoiseParams& params, cons
 
   // Work in Morton order: neighbours in space are neighbours in memory (k-NN queries and sweeps stay in
   // cache). in[a] is the caller's point order[a]; the output is put back in the caller's order.
-  const std::vector<std::uint32_t> order = mortonOrder(input.points);
+  const std::vector<std::uint32_t> order = mortonOrder(input.points, params.threads);
   std::vector<Eigen::Vector3d> in(n), normals(n, Eigen::Vector3d::Zero());
   for (std::size_t a = 0; a < n; ++a) {
     in[a] = input.points[order[a]];
@@ -263,7 +263,8 @@ DenoiseResult denoise(const PointCloud& input, const DenoiseParams& params, cons
   const auto orientStart = Clock::now();
   result.sweepSeconds = std::chrono::duration<double>(orientStart - sweepStart).count();
   if (!given && params.orientNormals)
-    orientNormals(cur, normals, nbr, K, std::min<std::size_t>(K, static_cast<std::size_t>(params.orientNeighbours) + 1));
+    orientNormals(cur, normals, nbr, K, std::min<std::size_t>(K, static_cast<std::size_t>(params.orientNeighbours) + 1),
+                  params.threads);
   result.orientSeconds = std::chrono::duration<double>(Clock::now() - orientStart).count();
 
   result.cloud.points.resize(n);

@@ -2,46 +2,18 @@
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
+#include <array>
 #include <cstdint>
-#include <limits>
-#include <queue>
+#include <cstring>
 #include <tuple>
 
+#include "iires/disjoint_sets.hpp"
 #include "iires/knn.hpp"
 #include "iires/parallel.hpp"
+#include "iires/radix_sort.hpp"
 
 namespace iires {
 namespace {
-
-/// Symmetric adjacency (CSR) of the k-NN graph: j ∈ adj(i) when j is among i's k nearest or vice versa.
-struct Graph {
-  std::vector<std::uint32_t> offsets, targets;
-};
-
-/// Point i's neighbours are nbr[i·stride, i·stride + k); entries equal to i (itself, or padding) are skipped.
-Graph symmetricKnnGraph(const std::vector<std::uint32_t>& nbr, std::size_t n, std::size_t stride, std::size_t k) {
-  std::vector<std::uint32_t> degree(n, 0);
-  for (std::size_t i = 0; i < n; ++i)
-    for (std::size_t a = 0; a < k; ++a) {
-      const std::uint32_t j = nbr[i * stride + a];
-      if (j == i) continue;
-      ++degree[i];
-      ++degree[j];
-    }
-  Graph g;
-  g.offsets.assign(n + 1, 0);
-  for (std::size_t i = 0; i < n; ++i) g.offsets[i + 1] = g.offsets[i] + degree[i];
-  g.targets.resize(g.offsets[n]);
-  std::vector<std::uint32_t> fill(g.offsets.begin(), g.offsets.end() - 1);
-  for (std::size_t i = 0; i < n; ++i)
-    for (std::size_t a = 0; a < k; ++a) {
-      const std::uint32_t j = nbr[i * stride + a];
-      if (j == i) continue;
-      g.targets[fill[i]++] = j;
-      g.targets[fill[j]++] = static_cast<std::uint32_t>(i);
-    }
-  return g;
-}
 
 /// The k + 1 nearest of each point (itself normally first), flat with stride k + 1; missing entries = i.
 std::vector<std::uint32_t> knnLists(const std::vector<Eigen::Vector3d>& points, std::size_t k, int threads) {
@@ -58,52 +30,92 @@ std::vector<std::uint32_t> knnLists(const std::vector<Eigen::Vector3d>& points, 
   return lists;
 }
 
-/// Prim's minimum spanning tree on the weights 1 − |nᵢ·nⱼ|, flipping each normal to agree with its tree
-/// parent. A point is pushed again only when its best known weight drops (lazy decrease-key).
+/// Orientation over a minimum spanning tree of the symmetric k-NN graph (j among i's first @p k neighbours
+/// nbr[i·stride, i·stride + k), or i among j's; entries equal to i — itself, padding — skipped) on the weights
+/// 1 − |nᵢ·nⱼ|, each normal flipped to agree with its tree parent. Kruskal: the edges (each once) sorted by
+/// weight, ties by their order in the lists, so the tree is unique; then per component a walk from its root.
 void orientOverGraph(const std::vector<Eigen::Vector3d>& points, std::vector<Eigen::Vector3d>& normals,
-                     const Graph& g) {
+                     const std::vector<std::uint32_t>& nbr, std::size_t stride, std::size_t k, int threads) {
   const std::size_t n = points.size();
+  if (n == 0) return;
+  auto listed = [&](std::uint32_t i, std::uint32_t j) {  // j among i's first k
+    const std::uint32_t* row = nbr.data() + static_cast<std::size_t>(i) * stride;
+    return std::find(row, row + k, j) != row + k;
+  };
+  // Each undirected edge once: from the lower end, or from the higher one when the lower does not list it.
+  auto kept = [&](std::uint32_t i, std::uint32_t j) { return j != i && (i < j || !listed(j, i)); };
+  std::vector<std::uint32_t> offset(n + 1, 0);
+  parallelFor(n, threads, [&](std::size_t i) {
+    for (std::size_t a = 0; a < k; ++a) offset[i + 1] += kept(static_cast<std::uint32_t>(i), nbr[i * stride + a]);
+  });
+  for (std::size_t i = 0; i < n; ++i) offset[i + 1] += offset[i];
+  std::vector<std::array<std::uint32_t, 2>> edges(offset[n]);
+  std::vector<KeyedIndex> byWeight(offset[n]);
+  parallelFor(n, threads, [&](std::size_t i) {
+    std::uint32_t e = offset[i];
+    for (std::size_t a = 0; a < k; ++a) {
+      const std::uint32_t j = nbr[i * stride + a];
+      if (!kept(static_cast<std::uint32_t>(i), j)) continue;
+      // Non-negative floats order like their bit patterns.
+      const float w = std::max(0.0f, static_cast<float>(1.0 - std::abs(normals[i].dot(normals[j]))));
+      std::uint32_t bits;
+      std::memcpy(&bits, &w, sizeof bits);
+      edges[e] = {static_cast<std::uint32_t>(i), j};
+      byWeight[e] = {bits, e};
+      ++e;
+    }
+  });
+  radixSort(byWeight, threads);
+  // The tree's adjacency (CSR): each point has at most n − 1 tree edges in all.
+  DisjointSets sets(n);
+  std::vector<std::array<std::uint32_t, 2>> tree;
+  tree.reserve(n - 1);
+  for (const auto& [key, e] : byWeight) {
+    const auto [a, b] = edges[e];
+    const std::uint32_t ra = sets.find(a), rb = sets.find(b);
+    if (ra == rb) continue;
+    sets.parent[std::max(ra, rb)] = std::min(ra, rb);
+    tree.push_back({a, b});
+    if (tree.size() + 1 == n) break;
+  }
+  std::vector<std::uint32_t> start(n + 1, 0), adjacent(2 * tree.size());
+  for (const auto& [a, b] : tree) ++start[a + 1], ++start[b + 1];
+  for (std::size_t i = 0; i < n; ++i) start[i + 1] += start[i];
+  std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
+  for (const auto& [a, b] : tree) adjacent[fill[a]++] = b, adjacent[fill[b]++] = a;
   std::vector<char> done(n, 0);
-  std::vector<float> best(n, std::numeric_limits<float>::infinity());
-  using Item = std::tuple<float, std::uint32_t, std::uint32_t>;  // weight, to, from
-  std::vector<Item> storage;
-  storage.reserve(n);
-  std::priority_queue<Item, std::vector<Item>, std::greater<Item>> heap(std::greater<Item>(), std::move(storage));
-  auto grow = [&](std::uint32_t root) {  // the tree of root's component
+  std::vector<std::uint32_t> queue;
+  queue.reserve(n);
+  auto walk = [&](std::uint32_t root) {  // root's component, its normal made to face +x
     if (normals[root].x() < 0) normals[root] = -normals[root];
-    heap.emplace(0.0f, root, root);
-    while (!heap.empty()) {
-      const auto [w, v, from] = heap.top();
-      heap.pop();
-      if (done[v]) continue;
-      done[v] = 1;
-      if (v != from && normals[v].dot(normals[from]) < 0) normals[v] = -normals[v];
-      for (std::uint32_t e = g.offsets[v]; e < g.offsets[v + 1]; ++e) {
-        const std::uint32_t t = g.targets[e];
+    done[root] = 1;
+    queue.assign(1, root);
+    for (std::size_t q = 0; q < queue.size(); ++q) {
+      const std::uint32_t v = queue[q];
+      for (std::uint32_t e = start[v]; e < start[v + 1]; ++e) {
+        const std::uint32_t t = adjacent[e];
         if (done[t]) continue;
-        const auto wt = static_cast<float>(1.0 - std::abs(normals[v].dot(normals[t])));
-        if (wt < best[t]) {
-          best[t] = wt;
-          heap.emplace(wt, t, v);
-        }
+        done[t] = 1;
+        if (normals[t].dot(normals[v]) < 0) normals[t] = -normals[t];
+        queue.push_back(t);
       }
     }
   };
-  // Roots in decreasing x, so each component starts at its extreme point (normal made to face +x): the
-  // largest x first; the points its tree leaves (other components) are sorted only when there are any.
+  // Roots in decreasing x, so each component starts at its extreme point: the largest x first; the points its
+  // tree leaves (other components) are sorted only when there are any.
   auto higher = [&](std::uint32_t a, std::uint32_t b) {
     return std::make_tuple(-points[a].x(), a) < std::make_tuple(-points[b].x(), b);
   };
   std::uint32_t first = 0;
   for (std::uint32_t i = 1; i < n; ++i)
     if (higher(i, first)) first = i;
-  if (n > 0) grow(first);
+  walk(first);
   std::vector<std::uint32_t> rest;
   for (std::uint32_t i = 0; i < n; ++i)
     if (!done[i]) rest.push_back(i);
   std::sort(rest.begin(), rest.end(), higher);
   for (std::uint32_t root : rest)
-    if (!done[root]) grow(root);
+    if (!done[root]) walk(root);
 }
 
 }  // namespace
@@ -127,18 +139,18 @@ std::vector<Eigen::Vector3d> estimateNormals(const std::vector<Eigen::Vector3d>&
     Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
     normals[i] = eig.eigenvectors().col(0).normalized();
   });
-  if (params.orient) orientOverGraph(points, normals, symmetricKnnGraph(lists, n, stride, stride));
+  if (params.orient) orientOverGraph(points, normals, lists, stride, stride, params.threads);
   return normals;
 }
 
 void orientNormals(const std::vector<Eigen::Vector3d>& points, std::vector<Eigen::Vector3d>& normals, int k) {
   const std::size_t stride = static_cast<std::size_t>(k) + 1;
-  orientOverGraph(points, normals, symmetricKnnGraph(knnLists(points, stride - 1, 0), points.size(), stride, stride));
+  orientOverGraph(points, normals, knnLists(points, stride - 1, 0), stride, stride, 0);
 }
 
 void orientNormals(const std::vector<Eigen::Vector3d>& points, std::vector<Eigen::Vector3d>& normals,
-                   const std::vector<std::uint32_t>& neighbours, std::size_t stride, std::size_t k) {
-  orientOverGraph(points, normals, symmetricKnnGraph(neighbours, points.size(), stride, std::min(k, stride)));
+                   const std::vector<std::uint32_t>& neighbours, std::size_t stride, std::size_t k, int threads) {
+  orientOverGraph(points, normals, neighbours, stride, std::min(k, stride), threads);
 }
 
 }  // namespace iires

@@ -29,8 +29,11 @@ void orientNormals(const std::vector<Eigen::Vector3d>& points, std::vector<Eigen
 /// @brief Orient normals consistently over a k-NN graph the caller already has (no search of its own).
 /// @param neighbours point i's neighbours are neighbours[i·stride + 0 … i·stride + k − 1] (the point itself
 /// may be among them and is skipped); the graph is made symmetric.
-/// @note O(n k log n) (Prim's minimum spanning tree on 1 − |nᵢ·nⱼ|, roots as estimateNormals). Deterministic.
+/// @param threads for the edge weights (0 = all cores); the result does not depend on it
+/// @note O(n k) (Kruskal's minimum spanning tree on 1 − |nᵢ·nⱼ| after a radix sort of the weights, roots as
+/// estimateNormals). Deterministic.
 void orientNormals(const std::vector<Eigen::Vector3d>& points, std::vector<Eigen::Vector3d>& normals,
-                   const std::vector<std::uint32_t>& neighbours, std::size_t stride, std::size_t k);
+                   const std::vector<std::uint32_t>& neighbours, std::size_t stride, std::size_t k,
+                   int threads = 0);
 
 }  // namespace iires
