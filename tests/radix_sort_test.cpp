@@ -16,11 +16,14 @@ std::vector<KeyedIndex> keyed(const std::vector<std::uint64_t>& keys) {
 }
 
 void expectLikeStableSort(const std::vector<std::uint64_t>& keys) {
-  std::vector<KeyedIndex> items = keyed(keys), expected = items;
+  std::vector<KeyedIndex> expected = keyed(keys);
   std::stable_sort(expected.begin(), expected.end(),
                    [](const KeyedIndex& a, const KeyedIndex& b) { return a.first < b.first; });
-  radixSort(items);
-  EXPECT_EQ(items, expected);
+  for (int threads : {1, 2, 3}) {
+    std::vector<KeyedIndex> items = keyed(keys);
+    radixSort(items, threads);
+    EXPECT_EQ(items, expected) << threads << " threads";
+  }
 }
 
 TEST(RadixSort, MatchesStableSortOnFullWidthKeys) {
@@ -34,6 +37,14 @@ TEST(RadixSort, EqualKeysKeepTheirInputOrder) {
   std::mt19937_64 rng(5);
   std::vector<std::uint64_t> keys(20000);
   for (auto& k : keys) k = (rng() % 37) << 40 | (rng() % 3);  // many ties, digits 1 and 3 constant
+  expectLikeStableSort(keys);
+}
+
+TEST(RadixSort, BlocksPerThreadGiveTheStableOrder) {
+  // Large enough for one block per thread (2^16 items each): ties across block boundaries keep input order.
+  std::mt19937_64 rng(7);
+  std::vector<std::uint64_t> keys(300001);
+  for (auto& k : keys) k = (rng() % 5000) << 20 | (rng() % 2);
   expectLikeStableSort(keys);
 }
 

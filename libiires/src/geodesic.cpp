@@ -234,7 +234,7 @@ void GeodesicCoordinates::Impl::build(const NeighbourTable* table,
 
   // --- 1. k-NN lists, local spacing, normals -------------------------------------------------------------
   auto t = Clock::now();
-  order = mortonOrder(points);
+  order = mortonOrder(points, threads);
   rank.assign(n, 0);
   bool identity = true;
   for (std::size_t i = 0; i < n && identity; ++i) identity = order[i] == i;

@@ -133,7 +133,7 @@ std::uint64_t spreadBits(std::uint64_t x) {
 }
 }  // namespace
 
-std::vector<std::uint32_t> mortonOrder(const std::vector<Eigen::Vector3d>& points) {
+std::vector<std::uint32_t> mortonOrder(const std::vector<Eigen::Vector3d>& points, int threads) {
   std::vector<std::uint32_t> order(points.size());
   if (points.empty()) return order;
   Eigen::Vector3d lo = points[0], hi = points[0];
@@ -141,16 +141,16 @@ std::vector<std::uint32_t> mortonOrder(const std::vector<Eigen::Vector3d>& point
   const double extent = (hi - lo).maxCoeff();
   const double scale = extent > 0 ? 2097151.0 / extent : 0.0;
   std::vector<KeyedIndex> keyed(points.size());
-  for (std::size_t i = 0; i < points.size(); ++i) {
+  parallelFor(points.size(), threads, [&](std::size_t i) {
     const Eigen::Vector3d q = (points[i] - lo) * scale;
     keyed[i] = {spreadBits(static_cast<std::uint64_t>(q.x())) | spreadBits(static_cast<std::uint64_t>(q.y())) << 1 |
                     spreadBits(static_cast<std::uint64_t>(q.z())) << 2,
                 static_cast<std::uint32_t>(i)};
-  }
+  });
   // Already in Z-order (the resampler's working cloud, met again by each stage that sorts): no sort needed.
   const bool sorted = std::is_sorted(
       keyed.begin(), keyed.end(), [](const KeyedIndex& a, const KeyedIndex& b) { return a.first < b.first; });
-  if (!sorted) radixSort(keyed);  // stable: ties keep index order
+  if (!sorted) radixSort(keyed, threads);  // stable: ties keep index order
   for (std::size_t i = 0; i < keyed.size(); ++i) order[i] = keyed[i].second;
   return order;
 }

@@ -102,7 +102,7 @@ OutlierResult processOutliers(const PointCloud& input, const OutlierParams& para
 
   // Every per-point loop visits the points in Morton order (neighbours in space are visited together, which
   // keeps the k-d tree and the neighbour rows in cache); each iteration writes only its own point's slot.
-  const std::vector<std::uint32_t> order = mortonOrder(P);
+  const std::vector<std::uint32_t> order = mortonOrder(P, params.threads);
   auto forEachPoint = [&](auto&& fn) { parallelFor(n, params.threads, [&](std::size_t a) { fn(order[a]); }); };
   std::vector<std::uint32_t> nbr(n * K);
   std::vector<std::uint32_t> count(n);

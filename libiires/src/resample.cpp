@@ -123,7 +123,7 @@ std::vector<std::uint32_t> voxelThin(const std::vector<Eigen::Vector3d>& pts, co
       byCell[i] = {cellKey * 8 + normalClass(i), static_cast<std::uint32_t>(i)};
       toCentre[i] = (q - Eigen::Vector3d(ix + 0.5, iy + 0.5, iz + 0.5)).squaredNorm();
     });
-    radixSort(byCell);
+    radixSort(byCell, threads);
   };
   auto occupied = [&](double size) {
     sortCells(size);
@@ -166,8 +166,8 @@ PointCloud select(const PointCloud& cloud, const std::vector<std::uint32_t>& ind
 
 /// The samples of @p s not marked in @p removed, in Morton order (loops over samples and their k-NN queries then
 /// stay in cache).
-Samples spatiallySorted(Samples& s, const std::vector<char>& removed) {
-  std::vector<std::uint32_t> order = mortonOrder(s.pos);
+Samples spatiallySorted(Samples& s, const std::vector<char>& removed, int threads) {
+  std::vector<std::uint32_t> order = mortonOrder(s.pos, threads);
   Samples out;
   for (std::uint32_t i : order)
     if (!removed[i]) out.add(s.pos[i], s.nrm[i], s.fixed[i], std::move(s.cache[i]));
@@ -653,7 +653,7 @@ void Resampler::eliminate(Samples& s, std::size_t count) {
     for (const auto& [j, wj] : nb[i])
       if (!removed[j]) weight[j] -= wj;
   }
-  s = spatiallySorted(s, removed);
+  s = spatiallySorted(s, removed, params_.threads);
 }
 
 /// Last resort when the edge operations cannot reach N (a handful of points with degenerate 1-rings): drop the
@@ -905,7 +905,7 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
   }
   result.thinnedPoints = cloud.size();
   // Every stage below loops over the points querying their neighbours: in Morton order those stay in cache.
-  cloud = select(cloud, mortonOrder(cloud.points));
+  cloud = select(cloud, mortonOrder(cloud.points, params.threads));
 
   constexpr std::size_t kPreprocessMinPoints = 25;
   const bool preprocessing = params.preprocess && cloud.size() >= kPreprocessMinPoints;

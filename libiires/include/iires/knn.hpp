@@ -70,7 +70,8 @@ class NeighbourTable {
 
 /// @brief A permutation that puts points in Morton (Z-curve) order: points close in space end up close in
 /// memory, so loops over them and k-d tree queries from them stay in cache. Ties keep index order.
+/// @param threads 0 = all cores; the order does not depend on it
 /// @note O(n) (radix sort of the 63-bit codes); deterministic.
-std::vector<std::uint32_t> mortonOrder(const std::vector<Eigen::Vector3d>& points);
+std::vector<std::uint32_t> mortonOrder(const std::vector<Eigen::Vector3d>& points, int threads = 0);
 
 }  // namespace iires
