@@ -48,15 +48,17 @@ bool projectOntoQuadric(const Eigen::Vector3d& p, const std::vector<Eigen::Vecto
   if (count < 6) return false;
   const Eigen::Vector3d& n = plane.normal;
   const Eigen::Vector3d u = n.unitOrthogonal(), v = n.cross(u);
-  Eigen::Matrix<double, 6, 6> ata = Eigen::Matrix<double, 6, 6>::Zero();
-  Eigen::Matrix<double, 6, 1> atb = Eigen::Matrix<double, 6, 1>::Zero();
+  double qu[kMaxNeighbours], qv[kMaxNeighbours], qz[kMaxNeighbours];
   double wsum = 0;
+  const double invH = 1.0 / h;  // scaled, for conditioning
   for (std::size_t j = 0; j < count; ++j) {
-    const double w = weights[j];
-    const Eigen::Vector3d d = (points[nbr[j]] - plane.centre) / h;  // scaled, for conditioning
-    addQuadricSample(ata, atb, w, d.dot(u), d.dot(v), d.dot(n));
-    wsum += w;
+    const Eigen::Vector3d d = (points[nbr[j]] - plane.centre) * invH;
+    qu[j] = d.dot(u), qv[j] = d.dot(v), qz[j] = d.dot(n);
+    wsum += weights[j];
   }
+  Eigen::Matrix<double, 6, 6> ata;
+  Eigen::Matrix<double, 6, 1> atb;
+  quadricNormalEquations(weights, qu, qv, qz, count, ata, atb);
   for (int r = 3; r < 6; ++r) ata(r, r) += 1e-2 * wsum;  // ridge on the curvature terms: flat if unsure
   // Positive definite with the ridge: Cholesky, with the pivoting LDLT as fallback (as in MlsSurface).
   const Eigen::LLT<Eigen::Matrix<double, 6, 6>> llt(ata);

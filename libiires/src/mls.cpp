@@ -165,12 +165,16 @@ Eigen::Vector3d MlsSurface::project(const Eigen::Vector3d& x0, Eigen::Vector3d* 
     if (params_.degree >= 2 && found >= 8) {
       // Quadric height field over the tangent plane: f(u,v) = c0 + c1 u + c2 v + c3 u² + c4 uv + c5 v².
       const Eigen::Vector3d u = normal.unitOrthogonal(), v = normal.cross(u);
-      Eigen::Matrix<double, 6, 6> ata = Eigen::Matrix<double, 6, 6>::Zero();
-      Eigen::Matrix<double, 6, 1> atb = Eigen::Matrix<double, 6, 1>::Zero();
+      const double invH = 1.0 / h;
+      thread_local std::vector<double> qu, qv, qz;
+      qu.resize(found), qv.resize(found), qz.resize(found);
       for (std::size_t j = 0; j < found; ++j) {
-        const Eigen::Vector3d d = (points_[idx[j]] - a) / h;
-        addQuadricSample(ata, atb, w[j], d.dot(u), d.dot(v), d.dot(normal));
+        const Eigen::Vector3d d = (points_[idx[j]] - a) * invH;
+        qu[j] = d.dot(u), qv[j] = d.dot(v), qz[j] = d.dot(normal);
       }
+      Eigen::Matrix<double, 6, 6> ata;
+      Eigen::Matrix<double, 6, 1> atb;
+      quadricNormalEquations(w.data(), qu.data(), qv.data(), qz.data(), found, ata, atb);
       for (int r = 3; r < 6; ++r) ata(r, r) += 1e-3 * wsum;  // mild ridge: flat when under-determined
       // The ridge makes the system positive definite: Cholesky (unrolled at this fixed size) is several times
       // cheaper than a pivoting LDLT, which remains the fallback when the plane part is degenerate.
