@@ -198,6 +198,7 @@ StripOutcome resampleStrip(const PointCloud& dense, std::shared_ptr<NeighbourRul
   ResampleParams params;
   params.targetCount = 1000;
   params.neighbourRule = std::move(rule);
+  params.ringEdges = true;
   const ResampleResult r = resample(dense, params);
   StripOutcome o;
   const auto& pts = r.cloud.points;

@@ -29,6 +29,7 @@ TEST(Resample, ExactCountOnSphereForManyN) {
     EXPECT_EQ(r.cloud.size(), n);
     EXPECT_EQ(r.cloud.normals.size(), n);
     EXPECT_LT(maxRadiusError(r.cloud), 1e-3) << "N = " << n;
+    EXPECT_TRUE(r.ringEdges.empty()) << "only filled when asked for";
   }
 }
 
@@ -100,9 +101,12 @@ TEST(Resample, TwoNearlyTouchingSpheresSplitByArea) {
   const auto small = iires::test::sphereCloud(9800, 0.35, 32, smallCentre);
   cloud.points.insert(cloud.points.end(), small.points.begin(), small.points.end());
   cloud.normals.insert(cloud.normals.end(), small.normals.begin(), small.normals.end());
-  const auto r = iires::resample(cloud, paramsFor(2000));
+  auto params = paramsFor(2000);
+  params.ringEdges = true;
+  const auto r = iires::resample(cloud, params);
   ASSERT_EQ(r.cloud.size(), 2000u);
   EXPECT_EQ(r.components, 2u);
+  EXPECT_GT(r.ringEdges.size(), 5000u);
   auto onSmall = [&](std::uint32_t i) { return (r.cloud.points[i] - smallCentre).norm() < 0.355; };
   std::size_t count = 0;
   for (std::uint32_t i = 0; i < 2000; ++i) count += onSmall(i);

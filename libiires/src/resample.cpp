@@ -819,7 +819,8 @@ void Resampler::run(Samples& s, ResampleResult& result) {
     best = std::min(best, cv);
   }
   result.targetLength = l;
-  for (const Edge& e : edges(s, computeRings(s, l))) result.ringEdges.push_back({e.a, e.b});
+  if (params_.ringEdges)
+    for (const Edge& e : edges(s, computeRings(s, l))) result.ringEdges.push_back({e.a, e.b});
 }
 
 std::string jsonNumber(double x) {

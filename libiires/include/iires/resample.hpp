@@ -65,6 +65,8 @@ struct ResampleParams {
   IntrinsicParams intrinsicRule;    ///< tolerances of the intrinsic neighbour test
   /// A custom neighbour rule for 1-rings; overrides `intrinsic` when set. See neighbourhood.hpp.
   std::shared_ptr<NeighbourRule> neighbourRule;
+  /// Fill ResampleResult::ringEdges (the output's 1-rings cost one more pass over the samples: ~2 % of a run).
+  bool ringEdges = false;
   /// Samples that are kept exactly as given (never moved or removed) and count towards N (DESIGN §9).
   std::vector<Eigen::Vector3d> fixedSamples;
   /// Optional progress report: called with a stage name ("validate", "preprocess", "normals", "surface",
@@ -116,7 +118,8 @@ struct ResampleResult {
   std::size_t splits = 0, collapses = 0;  ///< edge operations applied
   double targetLength = 0;           ///< final target edge length l
   SpacingStats spacing;              ///< nearest-neighbour spacing of the output
-  /// Edges present in both endpoints' tangent-plane Delaunay 1-rings of the output (indices into cloud, a < b).
+  /// Edges present in both endpoints' tangent-plane Delaunay 1-rings of the output (indices into cloud, a < b);
+  /// empty unless ResampleParams::ringEdges.
   std::vector<std::array<std::uint32_t, 2>> ringEdges;
   /// What pre-processing did (its cloud left empty: the cleaned input is not kept); all zero when skipped.
   PreprocessResult preprocessing;
