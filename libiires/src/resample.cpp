@@ -4,6 +4,7 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <numeric>
 #include <optional>
 #include <queue>
@@ -388,18 +389,28 @@ Rings Resampler::computeRings(const Samples& s, double cellRadius, const Relaxat
   return r;
 }
 
-/// Edges present in both endpoints' 1-rings, each once (a < b), in a deterministic order.
+/// Edges present in both endpoints' 1-rings, each once (a < b), ordered by (a, b).
 std::vector<Edge> Resampler::edges(const Samples& s, const Rings& r) const {
-  std::vector<Edge> out;
-  const std::size_t k = static_cast<std::size_t>(r.stride);
-  for (std::size_t a = 0; a < s.size(); ++a)
-    for (std::size_t x = 0; x < k; ++x) {
-      const std::uint32_t b = r.ring[a * k + x];
-      if (b == kNone || b <= a) continue;
-      const auto* rb = &r.ring[b * k];
-      if (std::find(rb, rb + k, static_cast<std::uint32_t>(a)) == rb + k) continue;
-      out.push_back({(s.pos[a] - s.pos[b]).norm() / (0.5 * (r.size[a] + r.size[b])), static_cast<std::uint32_t>(a), b});
-    }
+  const std::size_t n = s.size(), k = static_cast<std::size_t>(r.stride);
+  auto mutual = [&](std::size_t a, std::uint32_t b) {  // the edge a–b, from its lower end
+    if (b == kNone || b <= a) return false;
+    const auto* rb = &r.ring[b * k];
+    return std::find(rb, rb + k, static_cast<std::uint32_t>(a)) != rb + k;
+  };
+  std::vector<std::uint32_t> offset(n + 1, 0);
+  parallelFor(n, params_.threads, [&](std::size_t a) {
+    for (std::size_t x = 0; x < k; ++x) offset[a + 1] += mutual(a, r.ring[a * k + x]);
+  });
+  for (std::size_t a = 0; a < n; ++a) offset[a + 1] += offset[a];
+  std::vector<Edge> out(offset[n]);
+  parallelFor(n, params_.threads, [&](std::size_t a) {
+    const auto first = out.begin() + offset[a];
+    auto at = first;
+    for (std::size_t x = 0; x < k; ++x)
+      if (const std::uint32_t b = r.ring[a * k + x]; mutual(a, b))
+        *at++ = {(s.pos[a] - s.pos[b]).norm() / (0.5 * (r.size[a] + r.size[b])), static_cast<std::uint32_t>(a), b};
+    std::sort(first, at, [](const Edge& x, const Edge& y) { return x.b < y.b; });
+  });
   return out;
 }
 
@@ -733,12 +744,20 @@ Samples Resampler::initialise(const std::vector<std::uint32_t>& chosen, Resample
 void Resampler::run(Samples& s, ResampleResult& result) {
   const std::size_t n = params_.targetCount;
   const double countD = static_cast<double>(n);
+  // By (length, a, b): a stable radix sort on the lengths' bits (non-negative doubles order like them) of
+  // edges in (a, b) order.
   auto sortedEdges = [&](const Rings& r) {
-    std::vector<Edge> e = edges(s, r);
-    std::sort(e.begin(), e.end(), [](const Edge& a, const Edge& b) {
-      return std::tie(a.length, a.a, a.b) < std::tie(b.length, b.a, b.b);
-    });
-    return e;
+    const std::vector<Edge> e = edges(s, r);
+    std::vector<KeyedIndex> byLength(e.size());
+    for (std::size_t x = 0; x < e.size(); ++x) {
+      std::uint64_t bits;
+      std::memcpy(&bits, &e[x].length, sizeof bits);
+      byLength[x] = {bits, static_cast<std::uint32_t>(x)};
+    }
+    radixSort(byLength, params_.threads);
+    std::vector<Edge> out(e.size());
+    for (std::size_t x = 0; x < e.size(); ++x) out[x] = e[byLength[x].second];
+    return out;
   };
   // Count control: l = mean 1-ring edge · √(|S|/N), the length at which N samples would cover the surface.
   auto targetLength = [&](const std::vector<Edge>& e) {
