@@ -188,7 +188,7 @@ class Resampler {
   void run(Samples& s, ResampleResult& result);
 
  private:
-  Rings computeRings(const Samples& s, double cellRadius, const Relaxation* relaxation = nullptr,
+  Rings computeRings(const Samples& s, double cellRadius, Relaxation* relaxation = nullptr,
                      bool requery = true) const;
   std::vector<Edge> edges(const Samples& s, const Rings& r) const;
   /// @p projectionSteps: MLS projection steps per move (0 = MlsParams::iterations).
@@ -246,11 +246,10 @@ std::optional<Eigen::Vector2d> gapBisector(const Eigen::Vector2d& from, const Ei
 /// @param relaxation with the rings of the previous iteration on the same samples: samples it marks inactive
 /// keep their ring and cell, and unless @p requery the others re-sort their previous candidate lists by the
 /// current distances instead of querying a new k-d tree (samples moved by a fraction of a spacing, so the few
-/// neighbours that shape a cell stay among the nearest of a step ago). Without it every ring is computed from
-/// scratch.
-Rings Resampler::computeRings(const Samples& s, double cellRadius, const Relaxation* relaxation,
-                              bool requery) const {
-  const Rings* previous = relaxation && relaxation->rings ? &*relaxation->rings : nullptr;
+/// neighbours that shape a cell stay among the nearest of a step ago). Its rings are moved into the result (the
+/// caller replaces them with it). Without it every ring is computed from scratch.
+Rings Resampler::computeRings(const Samples& s, double cellRadius, Relaxation* relaxation, bool requery) const {
+  const bool previous = relaxation && relaxation->rings;
   if (!previous) requery = true;
   auto active = [&](std::size_t i) { return !previous || relaxation->active[i]; };
   const std::vector<char>* stale = relaxation && !relaxation->stale.empty() ? &relaxation->stale : nullptr;
@@ -258,7 +257,7 @@ Rings Resampler::computeRings(const Samples& s, double cellRadius, const Relaxat
   const std::size_t stride = static_cast<std::size_t>(k) + 1;
   Rings r;
   if (previous) {  // inactive samples keep everything; the rest is overwritten below
-    r = *previous;
+    r = std::move(*relaxation->rings);
   } else {
     r.stride = k;
     r.ring.assign(s.size() * static_cast<std::size_t>(k), kNone);
