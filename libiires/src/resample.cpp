@@ -424,13 +424,15 @@ double Resampler::relax(Samples& s, double l, int iterations, Relaxation& state,
   constexpr int kRequeryEvery = 4;     // iterations between fresh k-d tree candidate lists
   const std::size_t n = s.size(), k = static_cast<std::size_t>(params_.neighbours);
   double cv = 0;
+  std::vector<Eigen::Vector3d> pos, nrm;  // the moved samples; swapped with s's, so both keep their memory
   for (int it = 0; it < iterations; ++it) {
     const bool requery = !state.rings || state.sinceQuery >= kRequeryEvery;
     Rings r = computeRings(s, l, &state, requery);
     state.sinceQuery = requery ? 1 : state.sinceQuery + 1;
     state.stale.clear();
     if (!state.rings) state.active.assign(n, 1);
-    std::vector<Eigen::Vector3d> pos(s.pos), nrm(s.nrm);
+    pos = s.pos;
+    nrm = s.nrm;
     parallelFor(n, params_.threads, [&](std::size_t i) {
       if (s.fixed[i] || !state.active[i]) return;
       Eigen::Vector3d step = params_.overRelaxation * (r.centroid[i] - s.pos[i]);
