@@ -85,6 +85,20 @@ TEST(DenseArmadillo, ExactCountAndUniformAtEveryN) {
   }
 }
 
+// Given normals (the mesh's face normals) and no thinning (input below 6·N): a sample that drifts far during
+// the relaxation is judged by the neighbour rule where it is, not where it was, so two samples that meet on
+// the same sheet repel each other instead of piling up (without: the closest pair 0.09 mean spacings apart).
+TEST(DenseArmadillo, NoTwoPointsPileUpAtOneHundredThousand) {
+  const auto mesh = iires::readMesh(dataPath("meshes/armadillo.off"));
+  iires::MeshSamplingParams sp;
+  sp.count = 500000;
+  sp.densityRatio = 5.0;
+  const auto r = resampleTo(iires::sampleMesh(mesh, sp), 100000);
+  ASSERT_EQ(r.cloud.size(), 100000u);
+  EXPECT_GE(r.spacing.min, 0.25 * r.spacing.mean);
+  EXPECT_LE(r.spacing.cv, 0.08);
+}
+
 // The tool writes exactly N points and a report with the promised fields.
 TEST(ResampleTool, WritesCloudAndReport) {
   const std::string dir = iires::test::tempDir();

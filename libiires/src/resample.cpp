@@ -198,7 +198,9 @@ class Resampler {
   void carry(Relaxation& state, const EditMap& edits, std::size_t count) const;
   Rings edgeRings(const Samples& s, double l, const Relaxation& state) const;
   void eliminate(Samples& s, std::size_t count);
-  void forceCount(Samples& s, Relaxation& relaxation) const;
+  void forceCount(Samples& s, Relaxation& relaxation);
+  /// The neighbour rule's update after a change of the sample set (or a drift, see relax()).
+  void updateRule(const Samples& s);
 
   const std::vector<Eigen::Vector3d>& pts_;
   const std::vector<Eigen::Vector3d>& normals_;
@@ -206,6 +208,7 @@ class Resampler {
   const ResampleParams& params_;
   NeighbourRule& rule_;
   const std::vector<double>* size_;
+  std::vector<Eigen::Vector3d> rulePos_;  // the samples' positions at the rule's last update
 };
 
 /// x⁸ by three squarings (std::pow with a real exponent costs a log and an exp).
@@ -422,6 +425,7 @@ std::vector<Edge> Resampler::edges(const Samples& s, const Rings& r) const {
 double Resampler::relax(Samples& s, double l, int iterations, Relaxation& state, int projectionSteps) {
   constexpr double kStillMove = 0.005;  // in units of l
   constexpr int kRequeryEvery = 4;     // iterations between fresh k-d tree candidate lists
+  constexpr double kRuleDrift = 0.5;   // in units of l: a drift from the rule's last positions that updates it
   const std::size_t n = s.size(), k = static_cast<std::size_t>(params_.neighbours);
   double cv = 0;
   std::vector<Eigen::Vector3d> pos, nrm;  // the moved samples; swapped with s's, so both keep their memory
@@ -468,6 +472,14 @@ double Resampler::relax(Samples& s, double l, int iterations, Relaxation& state,
     for (std::size_t i = 0; i < n; ++i) next[i] |= moved[i];
     s.pos.swap(pos);
     s.nrm.swap(nrm);
+    // The rule judges pairs at the positions of its last update. A sample that drifted far from there (into
+    // a hole, over several iterations) would be judged where it was: two samples that met on the same sheet
+    // can then be refused as neighbours — where the geodesic coordinates are a few tens of per cent off over
+    // that distance — and their cells overlap, so they pile up. Such a drift updates the rule.
+    const double drift2 = kRuleDrift * kRuleDrift * l * l;
+    bool drifted = false;
+    for (std::size_t i = 0; i < n && !drifted; ++i) drifted = (s.pos[i] - rulePos_[i]).squaredNorm() > drift2;
+    if (drifted) updateRule(s);
     double sum = 0, sq = 0;
     for (double d : r.nearest) sum += d, sq += d * d;
     const double mean = sum / static_cast<double>(n);
@@ -535,7 +547,7 @@ EditMap Resampler::splitAndCollapse(Samples& s, const std::vector<Edge>& sorted,
   for (std::size_t c = 0; c < newPos.size(); ++c) kept.add(newPos[c], newNrm[c], false);
   s = std::move(kept);
   map.added = newPos.size();
-  rule_.update(s.pos, s.nrm);
+  updateRule(s);
   result.splits += newPos.size();
   result.collapses += collapsed;
   return map;
@@ -670,7 +682,12 @@ void Resampler::eliminate(Samples& s, std::size_t count) {
 
 /// Last resort when the edge operations cannot reach N (a handful of points with degenerate 1-rings): drop the
 /// free samples closest to another sample, or add the input points farthest from the samples, one at a time.
-void Resampler::forceCount(Samples& s, Relaxation& relaxation) const {
+void Resampler::updateRule(const Samples& s) {
+  rule_.update(s.pos, s.nrm);
+  rulePos_ = s.pos;
+}
+
+void Resampler::forceCount(Samples& s, Relaxation& relaxation) {
   const std::size_t n = params_.targetCount;
   std::vector<char> removed(s.size(), 0);
   std::vector<std::uint32_t> idx;
@@ -704,7 +721,7 @@ void Resampler::forceCount(Samples& s, Relaxation& relaxation) const {
     }
   }
   s = std::move(kept);
-  rule_.update(s.pos, s.nrm);
+  updateRule(s);
   relaxation = {};
 }
 
@@ -737,7 +754,7 @@ Samples Resampler::initialise(const std::vector<std::uint32_t>& chosen, Resample
   parallelFor(s.size(), params_.threads, [&](std::size_t i) {
     if (!s.fixed[i]) s.pos[i] = surface_.project(s.pos[i], &s.nrm[i], nullptr, &s.nrm[i], &s.cache[i]);
   });
-  rule_.update(s.pos, s.nrm);
+  updateRule(s);
   result.initialSamples = s.size();
   return s;
 }
