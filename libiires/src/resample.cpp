@@ -653,28 +653,50 @@ void Resampler::eliminate(Samples& s, std::size_t count) {
     z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
     return z ^ (z >> 27);
   };
-  // The most crowded sample (largest weight) goes first. Weights only decrease, so an entry's key is at least
-  // its sample's weight: a stale entry that reaches the top is put back with the current weight, and a
-  // current one at the top is the true maximum (the same order as pushing every decrease, with a heap of the
-  // candidates' size).
-  using Item = std::tuple<double, std::uint64_t, std::uint32_t>;
-  std::vector<Item> items;
-  items.reserve(s.size());
+  // The most crowded sample (largest weight) goes first, ties by (hash, index). Weights only decrease, so an
+  // entry's key is at least its sample's weight: a stale entry that reaches the top is sifted down again with
+  // the current weight, and a current one at the top is the true maximum (the same order as a heap keeping
+  // every weight current). A binary max-heap of (weight, index), the hash computed only on equal weights.
+  struct Item {
+    double weight;
+    std::uint32_t i;
+  };
+  auto before = [&](const Item& a, const Item& b) {  // a below b in the heap: b goes first
+    if (a.weight != b.weight) return a.weight < b.weight;
+    const std::uint64_t ta = tie(a.i), tb = tie(b.i);
+    return ta != tb ? ta < tb : a.i < b.i;
+  };
+  std::vector<Item> heap;
+  heap.reserve(s.size());
   for (std::uint32_t i = 0; i < s.size(); ++i)
-    if (!s.fixed[i]) items.emplace_back(weight[i], tie(i), i);
-  std::priority_queue<Item> heap(std::less<Item>(), std::move(items));
+    if (!s.fixed[i]) heap.push_back({weight[i], i});
+  std::make_heap(heap.begin(), heap.end(), before);
+  auto siftDownTop = [&] {  // restores the heap after heap[0] decreased
+    const std::size_t size = heap.size();
+    const Item x = heap[0];
+    std::size_t at = 0;
+    for (std::size_t child; (child = 2 * at + 1) < size; at = child) {
+      if (child + 1 < size && before(heap[child], heap[child + 1])) ++child;
+      if (!before(x, heap[child])) break;
+      heap[at] = heap[child];
+    }
+    heap[at] = x;
+  };
   std::vector<char> removed(s.size(), 0);
   std::size_t alive = s.size();
   while (alive > count && !heap.empty()) {
-    const auto [w, t, i] = heap.top();
-    heap.pop();
-    if (w != weight[i]) {
-      heap.emplace(weight[i], t, i);
+    const Item top = heap[0];
+    if (top.weight != weight[top.i]) {
+      heap[0].weight = weight[top.i];
+      siftDownTop();
       continue;
     }
-    removed[i] = 1;
+    heap[0] = heap.back();
+    heap.pop_back();
+    if (!heap.empty()) siftDownTop();
+    removed[top.i] = 1;
     --alive;
-    for (const auto& [j, wj] : nb[i])
+    for (const auto& [j, wj] : nb[top.i])
       if (!removed[j]) weight[j] -= wj;
   }
   s = spatiallySorted(s, removed, params_.threads);
