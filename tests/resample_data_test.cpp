@@ -99,6 +99,15 @@ TEST(DenseArmadillo, NoTwoPointsPileUpAtOneHundredThousand) {
   EXPECT_LE(r.spacing.cv, 0.08);
 }
 
+// CGAL's sphere_20k: 21,000 points with noise of about two spacings. A split there landed exactly on a sample
+// its edge's ends did not see; the two shared a cell and moved together to the end (the closest pair 0 apart).
+// Samples at one position now take opposite halves of their cell.
+TEST(NoisySphere, NoTwoOutputPointsCoincide) {
+  const auto r = resampleTo(iires::readPointCloud(dataPath("points_3/sphere_20k.xyz")), 15000);
+  ASSERT_EQ(r.cloud.size(), 15000u);
+  EXPECT_GE(r.spacing.min, 0.05 * r.spacing.mean);
+}
+
 // The tool writes exactly N points and a report with the promised fields.
 TEST(ResampleTool, WritesCloudAndReport) {
   const std::string dir = iires::test::tempDir();

@@ -354,6 +354,12 @@ Rings Resampler::computeRings(const Samples& s, double cellRadius, Relaxation* r
       clipByBisector(poly, lab, q, r.size[i] / (r.size[i] + r.size[j]), j, tmpV, tmpL);
       if (poly.size() < 3) break;
     }
+    // Samples at one position (e.g. a split onto a sample its edge's ends did not see) would share a cell and
+    // move together for good: of each such pair the lower index keeps the −u side of the cell, the higher +u.
+    for (std::uint32_t j : coincident) {
+      if (poly.size() < 3) break;
+      clipByBisector(poly, lab, Eigen::Vector2d(j > i ? 1e-6 * radius : -1e-6 * radius, 0.0), 0.5, j, tmpV, tmpL);
+    }
     const Eigen::Vector2d c2 = poly.size() >= 3 ? polygonCentroid(poly) : Eigen::Vector2d::Zero();
     r.centroid[i] = s.pos[i] + c2.x() * u + c2.y() * v;
     r.nearest[i] = nearest;
@@ -366,11 +372,13 @@ Rings Resampler::computeRings(const Samples& s, double cellRadius, Relaxation* r
       if (j == kNone || w >= k) continue;
       r.ring[i * static_cast<std::size_t>(k) + static_cast<std::size_t>(w++)] = j;
       const auto it = std::find_if(nb.begin(), nb.end(), [&](const auto& x) { return x.first == j; });
+      if (it == nb.end()) continue;  // a coincident sample: no direction
       const Eigen::Vector2d d = it->second.normalized();
       dirs.emplace_back(pseudoAngle(d), d);
     }
-    for (std::uint32_t j : coincident)
-      if (w < k) r.ring[i * static_cast<std::size_t>(k) + static_cast<std::size_t>(w++)] = j;
+    const auto ringBegin = r.ring.begin() + static_cast<long>(i * static_cast<std::size_t>(k));
+    for (std::uint32_t j : coincident)  // a ring edge of length 0, collapsed first (once, if clipping put it there)
+      if (w < k && std::find(ringBegin, ringBegin + w, j) == ringBegin + w) ringBegin[w++] = j;
     // Open boundary: the 1-ring leaves an angular gap wider than 135° and the surface does not continue into
     // it (a probe half a cell into the gap leaves the cloud, or the input's extent: when upsampling, half a cell
     // is a fraction of the input spacing and stays near the last input points); the gap's bisector then points
