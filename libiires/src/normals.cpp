@@ -66,18 +66,17 @@ void orientOverGraph(const std::vector<Eigen::Vector3d>& points, std::vector<Eig
     }
   });
   radixSort(byWeight, threads);
-  // The tree's adjacency (CSR): each point has at most n − 1 tree edges in all.
   DisjointSets sets(n);
-  std::vector<std::array<std::uint32_t, 2>> tree;
+  std::vector<std::array<std::uint32_t, 2>> tree;  // at most n − 1 edges
   tree.reserve(n - 1);
   for (const auto& [key, e] : byWeight) {
     const auto [a, b] = edges[e];
-    const std::uint32_t ra = sets.find(a), rb = sets.find(b);
-    if (ra == rb) continue;
-    sets.parent[std::max(ra, rb)] = std::min(ra, rb);
+    if (sets.find(a) == sets.find(b)) continue;
+    sets.unite(a, b);
     tree.push_back({a, b});
     if (tree.size() + 1 == n) break;
   }
+  // The tree's adjacency (CSR).
   std::vector<std::uint32_t> start(n + 1, 0), adjacent(2 * tree.size());
   for (const auto& [a, b] : tree) ++start[a + 1], ++start[b + 1];
   for (std::size_t i = 0; i < n; ++i) start[i + 1] += start[i];
