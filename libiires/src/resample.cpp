@@ -710,13 +710,13 @@ void Resampler::eliminate(Samples& s, std::size_t count) {
   s = spatiallySorted(s, removed, params_.threads);
 }
 
-/// Last resort when the edge operations cannot reach N (a handful of points with degenerate 1-rings): drop the
-/// free samples closest to another sample, or add the input points farthest from the samples, one at a time.
 void Resampler::updateRule(const Samples& s) {
   rule_.update(s.pos, s.nrm);
   rulePos_ = s.pos;
 }
 
+/// Last resort when the edge operations cannot reach N (a handful of points with degenerate 1-rings): drop the
+/// free samples closest to another sample, or add the input points farthest from the samples, one at a time.
 void Resampler::forceCount(Samples& s, Relaxation& relaxation) {
   const std::size_t n = params_.targetCount;
   std::vector<char> removed(s.size(), 0);
