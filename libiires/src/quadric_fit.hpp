@@ -9,9 +9,9 @@ namespace iires {
 
 /// @brief ata = Σ w·m·mᵀ, atb = Σ w·z·m with m = (1, u, v, u², uv, v²), over the samples (w[j], u[j], v[j], z[j]),
 /// j < @p count (full symmetric matrix).
-/// @note ata holds only 15 distinct moments Σ w uᵃ vᵇ (a + b ≤ 4), atb 6 more: they are summed over two samples
-/// at a time in 2-lanes of packed registers (structure-of-arrays input), several times cheaper than adding
-/// w·m·mᵀ per sample (the hottest loop of the resampler).
+/// @note ata holds only 15 distinct moments Σ w uᵃ vᵇ (a + b ≤ 4), atb 6 more: they are summed two samples at
+/// a time in packed 2-lanes (structure-of-arrays input). Adding w·m·mᵀ per sample built m element by element
+/// through the stack and stalled on store forwarding (19 % of MlsSurface::project's samples on that line).
 inline void quadricNormalEquations(const double* w, const double* u, const double* v, const double* z,
                                    std::size_t count, Eigen::Matrix<double, 6, 6>& ata,
                                    Eigen::Matrix<double, 6, 1>& atb) {

@@ -7,11 +7,9 @@
 #include <cstring>
 #include <numeric>
 #include <optional>
-#include <queue>
 #include <sstream>
 #include <stdexcept>
 #include <tuple>
-#include <unordered_map>
 
 #include <Eigen/Geometry>
 
@@ -635,7 +633,7 @@ void Resampler::eliminate(Samples& s, std::size_t count) {
     parallelFor(s.size(), params_.threads, [&](std::size_t i) { sz[i] = (*size_)[surface_.index().nearest(s.pos[i])]; });
   const double maxSize = *std::max_element(sz.begin(), sz.end());
   KnnIndex index(s.pos);
-  rule_.update(s.pos, s.nrm);  // only neighbours by the rule crowd each other (not across a thin gap)
+  updateRule(s);  // only neighbours by the rule crowd each other (not across a thin gap)
   // float: 8 bytes a pair, and each row allocated once at its size (memory at 5M)
   std::vector<std::vector<std::pair<std::uint32_t, float>>> nb(s.size());
   parallelFor(s.size(), params_.threads, [&](std::size_t i) {
