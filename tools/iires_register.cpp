@@ -44,8 +44,8 @@ int main(int argc, char** argv) {
     params.samples = static_cast<std::size_t>(samples);
     params.grid = iires::reg::parseRotationGridType(grid);
     params.estimateScale = !noScale;
-    for (const std::string& out : {alignedPath, transformPath, reportPath})
-      iires::tools::checkOutputPath(out, {sourcePath, targetPath});
+    iires::tools::checkOutputPaths(app, {{"--output", alignedPath}, {"--transform", transformPath}, {"--report", reportPath}},
+                                   {sourcePath, targetPath});
     if (!alignedPath.empty() && iires::extensionOf(alignedPath) != ".ply" && iires::extensionOf(alignedPath) != ".xyz" &&
         iires::extensionOf(alignedPath) != ".xyzn")
       throw iires::InputError("cannot write " + alignedPath + ": unknown extension (use .ply, .xyz or .xyzn)");
@@ -67,9 +67,11 @@ int main(int argc, char** argv) {
       throw iires::InputError(msg);
     }
     progress.update("write", 0.0);
-    if (!alignedPath.empty()) iires::writePointCloud(alignedPath, iires::reg::transformCloud(source, result.T_target_source));
-    if (!transformPath.empty()) iires::writeTextFile(transformPath, iires::reg::formatTransform(result.T_target_source));
-    if (!reportPath.empty()) iires::writeTextFile(reportPath, result.toJson());
+    iires::OutputBatch outputs;  // all given files or none
+    if (!alignedPath.empty()) outputs.pointCloud(alignedPath, iires::reg::transformCloud(source, result.T_target_source));
+    if (!transformPath.empty()) outputs.text(transformPath, iires::reg::formatTransform(result.T_target_source));
+    if (!reportPath.empty()) outputs.text(reportPath, result.toJson());
+    outputs.commit();
     progress.finish();
     if (!quiet) {
       std::cout << iires::reg::formatTransform(result.T_target_source);
