@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -16,7 +17,10 @@
 
 #include "iires/io.hpp"
 #include "iires/knn.hpp"
+#include "iires/metrics.hpp"
+#include "iires/outliers.hpp"
 #include "iires/reconstruct/reconstruct.hpp"
+#include "iires/register/registration.hpp"
 #include "iires/resample.hpp"
 #include "shapes.hpp"
 #include "test_util.hpp"
@@ -92,6 +96,22 @@ TEST_P(FarOutliers, ReconstructedMeshStaysOnTheSurface) {
     const ReconstructResult result = reconstruct(withFarPoints(clean, GetParam().farPoints, 11), params);
     ASSERT_FALSE(result.mesh.triangles.empty());
     EXPECT_LE(farthestFrom(result.mesh.vertices, clean), 2 * result.resampling.spacing.mean) << name;
+  }
+}
+
+// The aligned source (-o): the source without its outliers, mapped onto the target: every point on the target's
+// surface (the target is the clean cloud rotated 40° about z, scaled 2× and moved).
+TEST_P(FarOutliers, AlignedSourceStaysOnTheTargetSurface) {
+  const Eigen::Matrix3d R = Eigen::AngleAxisd(40 * M_PI / 180, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  for (const auto& [name, clean] : clouds()) {
+    PointCloud target;
+    for (const auto& p : clean.points) target.points.push_back(2.0 * R * p + Eigen::Vector3d(1, 2, 3));
+    reg::RegistrationParams params;
+    params.outliers.mode = GetParam().mode;
+    const PointCloud source = withFarPoints(clean, GetParam().farPoints, 13);
+    const reg::RegistrationResult result = reg::registerClouds(source, target, params);
+    const PointCloud aligned = reg::transformCloud(cleanOutliers(source, params.outliers), result.T_target_source);
+    EXPECT_LE(farthestFrom(aligned.points, target), 2 * meanNeighbourSpacing(target.points, 1)) << name;
   }
 }
 

@@ -300,4 +300,11 @@ OutlierResult processOutliers(const PointCloud& input, const OutlierParams& para
   return result;
 }
 
+PointCloud cleanOutliers(const PointCloud& cloud, const OutlierParams& params, std::size_t* found) {
+  if (params.mode == OutlierMode::kKeep || cloud.size() <= outlierNeighbours(params)) return cloud;
+  OutlierResult cleaned = processOutliers(cloud, params);
+  if (found) *found += cleaned.found;
+  return std::move(cleaned.cloud);
+}
+
 }  // namespace iires

@@ -92,4 +92,8 @@ std::size_t outlierNeighbours(const OutlierParams& params);
 OutlierResult processOutliers(const PointCloud& input, const OutlierParams& params = {},
                               const NeighbourTable* table = nullptr);
 
+/// @brief @p cloud with its outliers pulled back or removed as params.mode says: the cloud itself for kKeep or
+/// when it has too few points for the test (outlierNeighbours()). @p found, when given, adds the outliers found.
+PointCloud cleanOutliers(const PointCloud& cloud, const OutlierParams& params, std::size_t* found = nullptr);
+
 }  // namespace iires
