@@ -5,7 +5,9 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 mode=${1:-quick}
-command -v gnuplot >/dev/null || { sudo=$([ "$(id -u)" = 0 ] || echo sudo); $sudo apt-get update -qq && $sudo apt-get install -y -qq gnuplot-nox; }
+# The benchmarks' own set-up: the libraries' packages, Open3D (the baselines) and gnuplot (the grid's plot).
+bash scripts/setup.sh --install-only
+bash scripts/install_packages.sh libopen3d-dev gnuplot-nox
 bash datasets/fetch.sh >/dev/null
 cmake -S . -B build-bench -DCMAKE_BUILD_TYPE=Release -DIIRES_BUILD_TESTS=OFF -DIIRES_BUILD_BENCH=ON >/dev/null
 cmake --build build-bench -j"$(nproc)" >/dev/null

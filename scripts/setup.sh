@@ -1,22 +1,14 @@
 #!/usr/bin/env bash
-# Install the Debian packages iires needs (only those missing), then configure and build into build/.
+# Install the Debian packages iires needs (only those missing), then configure and build into build/ with the
+# Python module (-DIIRES_PYTHON=ON, built for Debian's /usr/bin/python3, which has the python3-* packages).
 # Usage: bash scripts/setup.sh [extra cmake -D options]
+#        bash scripts/setup.sh --install-only     (the packages, no build)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-packages=(build-essential cmake libeigen3-dev libnanoflann-dev libcgal-dev libopen3d-dev libcli11-dev
-          libgtest-dev libtbb-dev)
-missing=()
-for p in "${packages[@]}"; do
-  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
-done
-if [ ${#missing[@]} -gt 0 ]; then
-  echo "setup: installing ${missing[*]}"
-  sudo=""
-  [ "$(id -u)" -ne 0 ] && sudo="sudo"
-  $sudo apt-get update -q
-  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -q --no-install-recommends "${missing[@]}"
-fi
+bash scripts/install_packages.sh build-essential cmake libeigen3-dev libnanoflann-dev libcgal-dev libcli11-dev \
+  libgtest-dev python3-dev pybind11-dev python3-numpy python3-pytest
+[ "${1:-}" = --install-only ] && exit 0
 
-cmake -S . -B build -DCMAKE_BUILD_TYPE=Release "$@"
+cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DIIRES_PYTHON=ON -DPython3_EXECUTABLE=/usr/bin/python3 "$@"
 cmake --build build -j"$(nproc)"

@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
-# Set everything up, fetch the real test data, build the tests and run the whole suite.
+# Set everything up, fetch the real test data, build the tests and run the whole suite (with iires-render's
+# tests, which need matplotlib).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh -DIIRES_BUILD_TESTS=ON
+bash scripts/install_packages.sh python3-matplotlib
 bash datasets/fetch.sh
 ctest --test-dir build --output-on-failure --timeout 900

@@ -115,7 +115,8 @@ class IoTest : public ::testing::Test {
 
   static TriangleMesh sampleMesh() {
     return {{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1.0 / 3.0}},
-            {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}}};
+            {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}},
+            {}};
   }
 
   std::string dir_ = test::tempDir();

@@ -27,6 +27,7 @@ int main(int argc, char** argv) {
     long long count = 10000;
     bool noResample = false, noHoles = false, quiet = false, showProgress = false;
     iires::ReconstructParams params;
+    std::vector<std::string> columns;
     app.add_option("INPUT", input, "input cloud (.ply .pcd .xyz .xyzn .pts, or mesh vertices .obj .off .stl)")
         ->required();
     app.add_option("OUTPUT_MESH", output, "output mesh (.ply .obj .off by extension)");
@@ -42,6 +43,9 @@ int main(int argc, char** argv) {
         ->check(CLI::Range(0.0, 1.0));
     app.add_option("--quality-only", qualityOnly,
                    "report on this existing mesh (INPUT is the reference cloud); no OUTPUT_MESH");
+    app.add_option("--columns", columns,
+                   "names of a .xyz file's columns, e.g. x,y,z,red,green,blue,intensity,label:int (attributes carried to the mesh's .ply vertices)")
+        ->delimiter(',');
     app.add_option("--report", reportPath, "write the report as JSON to this file");
     app.add_option("--threads", params.threads, "threads (0 = all cores); the output does not depend on it");
     app.add_option("--seed", params.seed, "seed; same seed -> same mesh");
@@ -92,7 +96,7 @@ int main(int argc, char** argv) {
     params.method = iires::parseReconstructMethod(method);
 
     progress.update("read", 0.0);
-    const iires::PointCloud cloud = iires::readPointCloud(input);
+    const iires::PointCloud cloud = iires::readPointCloud(input, columns);
     if (noResample) iires::tools::checkCount("the input's point count", static_cast<long long>(cloud.size()),
                                              kBytesPerVertex);
     iires::ReconstructResult result;

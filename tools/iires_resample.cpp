@@ -29,6 +29,7 @@ int main(int argc, char** argv) {
     bool quiet = false, noIntrinsic = false, noDenoise = false, denoiseOnly = false, showProgress = false;
     std::string outlierMode = "pull";
     std::string geodesicPath;
+    std::vector<std::string> columns;
     app.add_option("INPUT", input, "input cloud (.ply .pcd .xyz .xyzn .pts, or mesh vertices .obj .off .stl)")
         ->required();
     app.add_option("OUTPUT", output, "output cloud (.ply binary with normals, .xyz, .xyzn)")->required();
@@ -45,6 +46,9 @@ int main(int argc, char** argv) {
     app.add_option("--report", reportPath, "write the report as JSON to this file");
     app.add_flag("--no-intrinsic", noIntrinsic,
                  "Euclidean neighbours only (default: intrinsic control, never across thin gaps or objects)");
+    app.add_option("--columns", columns,
+                   "names of a .xyz file's columns, e.g. x,y,z,red,green,blue,intensity,label:int (attributes carried to the output .ply)")
+        ->delimiter(',');
     app.add_option("--export-geodesic", geodesicPath,
                    "write the input with geodesic coordinates g1 g2 g3 and component id (.ply)");
     std::string mode = "isotropic";
@@ -75,7 +79,7 @@ int main(int argc, char** argv) {
     params.preprocessing.runDenoise = !noDenoise;
     if (denoiseOnly) {
       progress.update("read", 0.0);
-      const iires::PointCloud cloud = iires::readPointCloud(input);
+      const iires::PointCloud cloud = iires::readPointCloud(input, columns);
       iires::PreprocessResult cleaned;
       try {
         params.preprocessing.threads = params.threads;
@@ -111,7 +115,7 @@ int main(int argc, char** argv) {
       throw iires::InputError(geodesicPath + ": --export-geodesic writes .ply only");
     params.validate();  // every range before the input is read
     progress.update("read", 0.0);
-    iires::PointCloud cloud = iires::readPointCloud(input);
+    iires::PointCloud cloud = iires::readPointCloud(input, columns);
     iires::ResampleResult result;
     try {
       result = iires::resample(std::move(cloud), params);

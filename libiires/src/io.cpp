@@ -54,17 +54,19 @@ std::string quoteToken(std::string_view token) {
   return out + (token.size() > 32 ? "...\"" : "\"");
 }
 
-/// What a reader found: vertices, normals (empty or one per vertex) and the faces, fan-triangulated.
 std::string lowerCase(std::string_view text) {
   std::string lower(text);
   for (char& c : lower) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   return lower;
 }
 
+/// What a reader found: vertices, normals (empty or one per vertex), the faces, fan-triangulated, and the
+/// vertices' other properties (attributes, each with one value per vertex).
 struct Geometry {
   std::vector<Vector3d> points;
   std::vector<Vector3d> normals;
   std::vector<Vector3i> triangles;
+  std::vector<PointAttribute> attributes;
 };
 
 void addPolygon(Geometry& geometry, const std::vector<int>& polygon) {
@@ -456,6 +458,67 @@ Geometry parseStl(const std::string& path, std::string_view data) {
 }
 
 // ---------------------------------------------------------------------------------------------------------
+// Per-point attributes: every vertex property that is not a position or a normal (PLY properties, PCD fields,
+// named XYZ columns) is kept, with the type it was stored as.
+
+/// The PLY name of a scalar type: how attributes of that type are written back.
+std::string plyTypeName(ScalarType type) {
+  static const char* const kNames[] = {"char", "uchar", "short", "ushort", "int", "uint", "float", "double"};
+  return kNames[static_cast<int>(type)];
+}
+
+/// Colour channels are averaged, other integer properties are labels (majority), the rest scalars (averaged).
+AttributeKind attributeKind(std::string_view name, ScalarType type) {
+  static const std::string_view kColourNames[] = {"red",           "green",          "blue",
+                                                  "alpha",         "r",              "g",
+                                                  "b",             "a",              "diffuse_red",
+                                                  "diffuse_green", "diffuse_blue",   "diffuse_alpha"};
+  if (std::find(std::begin(kColourNames), std::end(kColourNames), name) != std::end(kColourNames))
+    return AttributeKind::kColor;
+  return type == ScalarType::kFloat32 || type == ScalarType::kFloat64 ? AttributeKind::kScalar
+                                                                      : AttributeKind::kLabel;
+}
+
+PointAttribute makeAttribute(std::string_view name, ScalarType type) {
+  PointAttribute attribute;
+  attribute.name = std::string(name);
+  attribute.kind = attributeKind(name, type);
+  attribute.type = plyTypeName(type);
+  return attribute;
+}
+
+/// Which of an element's values become attributes: slot[p] = the attribute that property p fills, or -1.
+struct AttributeSlots {
+  std::vector<int> slot;
+  std::vector<PointAttribute> attributes;
+
+  /// Appends one vertex's values (all of its properties, in header order) to the attributes.
+  void append(const std::vector<double>& values) {
+    for (std::size_t p = 0; p < slot.size(); ++p)
+      if (slot[p] >= 0) attributes[static_cast<std::size_t>(slot[p])].values.push_back(values[p]);
+  }
+};
+
+/// PCL's packed colour (field rgb or rgba: a float or uint whose bytes are b, g, r, a) as red, green, blue.
+void unpackPcdColour(std::vector<PointAttribute>& attributes, const std::vector<double>& packed,
+                     ScalarType packedType) {
+  std::array<PointAttribute, 3> rgb = {makeAttribute("red", ScalarType::kUint8),
+                                       makeAttribute("green", ScalarType::kUint8),
+                                       makeAttribute("blue", ScalarType::kUint8)};
+  for (const double value : packed) {
+    std::uint32_t bits = 0;
+    if (packedType == ScalarType::kFloat32) {
+      const auto f = static_cast<float>(value);
+      std::memcpy(&bits, &f, sizeof bits);
+    } else {
+      bits = static_cast<std::uint32_t>(value);
+    }
+    for (int c = 0; c < 3; ++c) rgb[static_cast<std::size_t>(c)].values.push_back((bits >> (16 - 8 * c)) & 0xffu);
+  }
+  for (PointAttribute& channel : rgb) attributes.push_back(std::move(channel));
+}
+
+// ---------------------------------------------------------------------------------------------------------
 // PLY
 
 std::optional<ScalarType> plyScalarType(std::string_view name) {
@@ -566,6 +629,18 @@ int findProperty(const PlyElement& element, std::initializer_list<std::string_vi
   return -1;
 }
 
+/// The attributes of a PLY vertex element: its scalar properties except x y z nx ny nz.
+AttributeSlots plyVertexAttributes(const PlyElement& vertex) {
+  AttributeSlots slots;
+  for (const PlyProperty& property : vertex.properties) {
+    const std::string& name = property.name;
+    const bool geometric = name == "x" || name == "y" || name == "z" || name == "nx" || name == "ny" || name == "nz";
+    slots.slot.push_back(property.list || geometric ? -1 : static_cast<int>(slots.attributes.size()));
+    if (slots.slot.back() >= 0) slots.attributes.push_back(makeAttribute(name, property.type));
+  }
+  return slots;
+}
+
 template <class Source>
 Geometry readPlyBody(const std::string& path, const std::vector<PlyElement>& elements, Source& source) {
   const auto vertex =
@@ -582,6 +657,7 @@ Geometry readPlyBody(const std::string& path, const std::vector<PlyElement>& ele
   const bool hasNormals = std::min({nxyz[0], nxyz[1], nxyz[2]}) >= 0;
 
   Geometry geometry;
+  AttributeSlots attributes = plyVertexAttributes(*vertex);
   std::vector<int> polygon;
   for (const PlyElement& element : elements) {
     const bool isVertex = &element == &*vertex;
@@ -619,9 +695,11 @@ Geometry readPlyBody(const std::string& path, const std::vector<PlyElement>& ele
       if (!isVertex) continue;
       geometry.points.emplace_back(values[xyz[0]], values[xyz[1]], values[xyz[2]]);
       if (hasNormals) geometry.normals.emplace_back(values[nxyz[0]], values[nxyz[1]], values[nxyz[2]]);
+      attributes.append(values);
     }
   }
   source.finish();
+  geometry.attributes = std::move(attributes.attributes);
   return geometry;
 }
 
@@ -681,6 +759,63 @@ Geometry parsePly(const std::string& path, std::string_view data) {
 }
 
 // ---------------------------------------------------------------------------------------------------------
+// XYZ with named columns (attributes)
+
+/// One value per named column on every line (names as in readPointCloud's @p columns: x y z required, nx ny nz
+/// together or not at all, any other name an attribute, "name:type" to give its type).
+Geometry parseXyzNamedColumns(const std::string& path, std::string_view text, const std::vector<std::string>& columns) {
+  std::vector<int> role(columns.size(), -1);  // 0–2 position, 3–5 normal, -1 attribute
+  std::vector<std::optional<ScalarType>> typed(columns.size());
+  std::vector<std::string> names(columns.size());
+  static const char* const kGeometric[] = {"x", "y", "z", "nx", "ny", "nz"};
+  for (std::size_t c = 0; c < columns.size(); ++c) {
+    const std::size_t colon = columns[c].find(':');
+    names[c] = columns[c].substr(0, colon);
+    if (colon != std::string::npos && !(typed[c] = plyScalarType(columns[c].substr(colon + 1))))
+      fail(path, "column " + quoteToken(columns[c]) + ": unknown type (use a PLY type: uchar int float ...)");
+    for (int g = 0; g < 6; ++g)
+      if (names[c] == kGeometric[g]) role[c] = g;
+    if (names[c].empty() || std::count(names.begin(), names.begin() + static_cast<long>(c), names[c]))
+      fail(path, "column names must be distinct and non-empty (got " + quoteToken(columns[c]) + ")");
+  }
+  const auto has = [&](int g) { return std::find(role.begin(), role.end(), g) != role.end(); };
+  if (!has(0) || !has(1) || !has(2)) fail(path, "the columns must name x, y and z");
+  const bool normals = has(3) || has(4) || has(5);
+  if (normals && !(has(3) && has(4) && has(5))) fail(path, "the columns name some of nx, ny, nz but not all three");
+
+  Geometry geometry;
+  std::vector<std::vector<double>> values(columns.size());
+  LineReader lines(text, true);
+  Vector3d p, n;
+  while (lines.next()) {
+    if (lines.size() != columns.size())
+      failAt(path, lines.line(),
+             "expected " + std::to_string(columns.size()) + " values (the columns), found " + std::to_string(lines.size()));
+    for (std::size_t c = 0; c < columns.size(); ++c) {
+      const double v = number(path, lines, c);
+      if (role[c] >= 3) n[role[c] - 3] = v;
+      else if (role[c] >= 0) p[role[c]] = v;
+      else values[c].push_back(v);
+    }
+    geometry.points.push_back(p);
+    if (normals) geometry.normals.push_back(n);
+  }
+  for (std::size_t c = 0; c < columns.size(); ++c) {
+    if (role[c] >= 0) continue;
+    // Untyped colours: bytes when every value is a whole number in [0, 255], else float; other names float.
+    const bool bytes = std::all_of(values[c].begin(), values[c].end(),
+                                   [](double v) { return v >= 0 && v <= 255 && v == std::floor(v); });
+    const ScalarType type = typed[c] ? *typed[c]
+                            : attributeKind(names[c], ScalarType::kFloat32) == AttributeKind::kColor && bytes
+                                ? ScalarType::kUint8
+                                : ScalarType::kFloat32;
+    geometry.attributes.push_back(makeAttribute(names[c], type));
+    geometry.attributes.back().values = std::move(values[c]);
+  }
+  return geometry;
+}
+
+// ---------------------------------------------------------------------------------------------------------
 // PCD (ascii, binary, binary_compressed)
 
 struct PcdField {
@@ -689,6 +824,41 @@ struct PcdField {
   std::size_t column = 0;  ///< first value of the field in an ascii line
   std::size_t offset = 0;  ///< first byte of the field in a binary record
   std::size_t bytes = 0;   ///< bytes of the field in a binary record
+};
+
+/// The attributes of a PCD file: its one-value fields except x y z normal_* (and curvature, which PCL writes
+/// next to its normals); a packed rgb/rgba field becomes red, green, blue.
+struct PcdAttributes {
+  std::vector<const PcdField*> fields;
+  std::vector<PointAttribute> attributes;
+
+  explicit PcdAttributes(const std::vector<PcdField>& all) {
+    static const std::string_view kSkipped[] = {"x", "y", "z", "normal_x", "normal_y", "normal_z", "curvature", "_"};
+    for (const PcdField& f : all) {
+      if (f.bytes != sizeOf(f.type) || std::find(std::begin(kSkipped), std::end(kSkipped), f.name) != std::end(kSkipped))
+        continue;
+      fields.push_back(&f);
+      attributes.push_back(makeAttribute(f.name, f.type));
+    }
+  }
+
+  /// Appends the current point's values: value(field).
+  template <class Value>
+  void append(Value&& value) {
+    for (std::size_t a = 0; a < fields.size(); ++a) attributes[a].values.push_back(value(*fields[a]));
+  }
+
+  /// The attributes, with a packed colour unpacked.
+  std::vector<PointAttribute> finish() {
+    std::vector<PointAttribute> out;
+    for (std::size_t a = 0; a < fields.size(); ++a) {
+      if (fields[a]->name == "rgb" || fields[a]->name == "rgba")
+        unpackPcdColour(out, attributes[a].values, fields[a]->type);
+      else
+        out.push_back(std::move(attributes[a]));
+    }
+    return out;
+  }
 };
 
 std::optional<ScalarType> pcdScalarType(std::string_view type, std::string_view size) {
@@ -811,9 +981,11 @@ Geometry parsePcd(const std::string& path, std::string_view data) {
   const auto count = static_cast<std::size_t>(points);
   Geometry geometry;
   geometry.points.reserve(std::min(count, body.size()));
+  PcdAttributes attributes(fields);
   const auto add = [&](auto&& value) {  // value(field) of the current point
     geometry.points.emplace_back(value(*used[0]), value(*used[1]), value(*used[2]));
     if (hasNormals) geometry.normals.emplace_back(value(*used[3]), value(*used[4]), value(*used[5]));
+    attributes.append(value);
   };
   if (encoding == "ascii") {
     LineReader bodyLines(body, false, lines.line() + 1);
@@ -845,6 +1017,7 @@ Geometry parsePcd(const std::string& path, std::string_view data) {
   } else {
     fail(path, "corrupted header: unknown DATA " + quoteToken(encoding));
   }
+  geometry.attributes = attributes.finish();
   return geometry;
 }
 
@@ -996,11 +1169,61 @@ void checkTriangles(const std::string& path, const TriangleMesh& mesh) {
                           std::to_string(count) + " vertices)");
 }
 
-void writePlyHeader(Writer& w, bool ascii, std::size_t vertices, bool normals, std::size_t faces) {
+/// Every attribute must hold one value per vertex.
+void checkAttributes(const std::string& path, const std::vector<PointAttribute>& attributes, std::size_t vertices) {
+  for (const PointAttribute& a : attributes) {
+    if (a.values.size() != vertices)
+      failWrite(path, "attribute " + quoteToken(a.name) + " has " + std::to_string(a.values.size()) +
+                          " values for " + std::to_string(vertices) + " points");
+    if (!plyScalarType(a.type)) failWrite(path, "attribute " + quoteToken(a.name) + " has unknown type " + quoteToken(a.type));
+  }
+}
+
+/// @p value in the attribute's storage type: integers rounded and clamped to the type's range.
+template <class T>
+T stored(double value) {
+  if constexpr (std::is_floating_point_v<T>) {
+    return static_cast<T>(value);
+  } else {
+    if (!(value == value)) return T{0};
+    const double clamped = std::clamp(std::round(value), static_cast<double>(std::numeric_limits<T>::lowest()),
+                                      static_cast<double>(std::numeric_limits<T>::max()));
+    return static_cast<T>(clamped);
+  }
+}
+
+/// Vertex @p i's attribute values: binary in their storage types, or ascii separated by spaces.
+void writeAttributeValues(Writer& w, const std::vector<PointAttribute>& attributes, std::size_t i, bool ascii) {
+  for (const PointAttribute& a : attributes) {
+    const double v = a.values[i];
+    const auto put = [&](auto typed) {
+      if (!ascii) return w.binary(typed);
+      if (&a != &attributes.front()) w.text(" ");
+      if constexpr (std::is_floating_point_v<decltype(typed)>)
+        w.number(typed);
+      else
+        w.number(static_cast<long long>(typed));  // chars as numbers
+    };
+    switch (*plyScalarType(a.type)) {
+      case ScalarType::kInt8: put(stored<std::int8_t>(v)); break;
+      case ScalarType::kUint8: put(stored<std::uint8_t>(v)); break;
+      case ScalarType::kInt16: put(stored<std::int16_t>(v)); break;
+      case ScalarType::kUint16: put(stored<std::uint16_t>(v)); break;
+      case ScalarType::kInt32: put(stored<std::int32_t>(v)); break;
+      case ScalarType::kUint32: put(stored<std::uint32_t>(v)); break;
+      case ScalarType::kFloat32: put(stored<float>(v)); break;
+      case ScalarType::kFloat64: put(v); break;
+    }
+  }
+}
+
+void writePlyHeader(Writer& w, bool ascii, std::size_t vertices, bool normals, std::size_t faces,
+                    const std::vector<PointAttribute>& attributes = {}) {
   w.text(std::string("ply\nformat ") + (ascii ? "ascii" : "binary_little_endian") +
          " 1.0\ncomment written by iires\nelement vertex " + std::to_string(vertices) +
          "\nproperty double x\nproperty double y\nproperty double z\n");
   if (normals) w.text("property double nx\nproperty double ny\nproperty double nz\n");
+  for (const PointAttribute& a : attributes) w.text("property " + a.type + " " + a.name + "\n");
   if (faces > 0)
     w.text("element face " + std::to_string(faces) + "\nproperty list uchar int vertex_indices\n");
   w.text("end_header\n");
@@ -1008,11 +1231,22 @@ void writePlyHeader(Writer& w, bool ascii, std::size_t vertices, bool normals, s
 
 }  // namespace
 
-PointCloud readPointCloud(const std::string& path) {
-  Geometry geometry = load(path, false);
+PointCloud readPointCloud(const std::string& path) { return readPointCloud(path, {}); }
+
+PointCloud readPointCloud(const std::string& path, const std::vector<std::string>& columns) {
+  Geometry geometry;
+  if (columns.empty()) {
+    geometry = load(path, false);
+  } else {
+    checkRegularFile(path);
+    if (extensionOf(path) != ".xyz") fail(path, "column names apply to .xyz files only");
+    geometry = parseXyzNamedColumns(path, readFile(path, Signature::kText), columns);
+    if (geometry.points.empty()) fail(path, "the file holds no points");
+  }
   PointCloud cloud;
   cloud.points = std::move(geometry.points);
   cloud.normals = std::move(geometry.normals);
+  cloud.attributes = std::move(geometry.attributes);
   if (cloud.normals.empty() && !geometry.triangles.empty()) {
     // Mesh vertices: area-weighted face normals, oriented by the winding (exact where PCA would guess).
     std::vector<Vector3d> normals(cloud.size(), Vector3d::Zero());
@@ -1035,7 +1269,7 @@ PointCloud readPointCloud(const std::string& path) {
 TriangleMesh readMesh(const std::string& path) {
   Geometry geometry = load(path, true);
   if (geometry.triangles.empty()) fail(path, "the file holds no triangles");
-  return {std::move(geometry.points), std::move(geometry.triangles)};
+  return {std::move(geometry.points), std::move(geometry.triangles), std::move(geometry.attributes)};
 }
 
 struct OutputBatch::Staged {
@@ -1078,16 +1312,23 @@ void OutputBatch::pointCloud(const std::string& path, const PointCloud& cloud, b
   const std::string extension = extensionOf(path);
   const bool normals = cloud.hasNormals();
   if (extension == ".ply") {
+    checkAttributes(path, cloud.attributes, cloud.size());
+    const bool attributes = !cloud.attributes.empty();
     stage(*this, path, [&](Writer& w) {
-      writePlyHeader(w, ascii, cloud.size(), normals, 0);
+      writePlyHeader(w, ascii, cloud.size(), normals, 0, cloud.attributes);
       for (std::size_t i = 0; i < cloud.size(); ++i) {
         if (ascii) {
-          w.row(cloud.points[i], !normals);
-          if (normals) w.row(cloud.normals[i]);
+          w.row(cloud.points[i], !normals && !attributes);
+          if (normals) w.row(cloud.normals[i], !attributes);
+          if (attributes) {
+            writeAttributeValues(w, cloud.attributes, i, true);
+            w.text("\n");
+          }
           continue;
         }
         for (int k = 0; k < 3; ++k) w.binary(cloud.points[i][k]);
         for (int k = 0; normals && k < 3; ++k) w.binary(cloud.normals[i][k]);
+        writeAttributeValues(w, cloud.attributes, i, false);
       }
     });
   } else if (extension == ".xyz") {
@@ -1113,11 +1354,14 @@ void OutputBatch::mesh(const std::string& path, const TriangleMesh& mesh) {
   if (extension != ".ply" && extension != ".obj" && extension != ".off")
     failWrite(path, "unknown mesh extension " + quoteToken(extension) + " (supported: .ply .obj .off)");
   checkTriangles(path, mesh);
+  if (extension == ".ply") checkAttributes(path, mesh.vertexAttributes, mesh.vertices.size());
   stage(*this, path, [&](Writer& w) {
     if (extension == ".ply") {
-      writePlyHeader(w, false, mesh.vertices.size(), false, mesh.triangles.size());
-      for (const Vector3d& v : mesh.vertices)
-        for (int k = 0; k < 3; ++k) w.binary(v[k]);
+      writePlyHeader(w, false, mesh.vertices.size(), false, mesh.triangles.size(), mesh.vertexAttributes);
+      for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
+        for (int k = 0; k < 3; ++k) w.binary(mesh.vertices[i][k]);
+        writeAttributeValues(w, mesh.vertexAttributes, i, false);
+      }
       for (const Vector3i& t : mesh.triangles) {
         w.binary(std::uint8_t{3});
         for (int k = 0; k < 3; ++k) w.binary(std::int32_t{t[k]});

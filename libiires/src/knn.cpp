@@ -22,13 +22,21 @@ struct Adaptor {
 using Tree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<double, Adaptor>, Adaptor, 3,
                                                  std::uint32_t>;
 
+// nanoflann 1.5 renamed the search options (SearchParams → SearchParameters, without the ignored `checks`) and
+// made the radius search fill ResultItem (fields first/second, as the std::pair it replaced) instead of pairs.
+#if NANOFLANN_VERSION >= 0x150
+using RadiusMatches = std::vector<nanoflann::ResultItem<std::uint32_t, double>>;
+nanoflann::SearchParameters sortedSearch() { return nanoflann::SearchParameters(0.0f, true); }
+#else
+using RadiusMatches = std::vector<std::pair<std::uint32_t, double>>;
+nanoflann::SearchParams sortedSearch() { return nanoflann::SearchParams(32, 0.0f, true); }
+#endif
+
 }  // namespace
 
 struct KnnIndex::Impl {
   explicit Impl(const std::vector<Eigen::Vector3d>& p)
-      : adaptor{p}, tree(3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16)) {
-    if (!p.empty()) tree.buildIndex();
-  }
+      : adaptor{p}, tree(3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16)) {}  // the constructor builds
   Adaptor adaptor;
   Tree tree;
 };
@@ -57,15 +65,13 @@ std::size_t KnnIndex::radius(const Eigen::Vector3d& query, double radius, std::v
   indices.clear();
   sqDists.clear();
   if (size() == 0) return 0;
-  std::vector<std::pair<std::uint32_t, double>> matches;
-  nanoflann::SearchParams params;
-  params.sorted = true;
-  impl_->tree.radiusSearch(query.data(), radius * radius, matches, params);
+  RadiusMatches matches;
+  impl_->tree.radiusSearch(query.data(), radius * radius, matches, sortedSearch());
   indices.reserve(matches.size());
   sqDists.reserve(matches.size());
-  for (const auto& [i, d] : matches) {
-    indices.push_back(i);
-    sqDists.push_back(d);
+  for (const auto& m : matches) {
+    indices.push_back(m.first);
+    sqDists.push_back(m.second);
   }
   return matches.size();
 }

@@ -1,5 +1,7 @@
 #include "iires/resample.hpp"
 
+#include "iires/attributes.hpp"
+
 #include <algorithm>
 #include <array>
 #include <chrono>
@@ -889,6 +891,19 @@ void Resampler::run(Samples& s, ResampleResult& result) {
     for (const Edge& e : edges(s, computeRings(s, l))) result.ringEdges.push_back({e.a, e.b});
 }
 
+/// The input's attributes at the output points, from input neighbours on the same sheet (near the output point's
+/// tangent plane, and accepted by the intrinsic rule when the run used it).
+std::vector<PointAttribute> carryAttributes(const PointCloud& input, const std::vector<Eigen::Vector3d>& output,
+                                            const std::vector<Eigen::Vector3d>& normals, const NeighbourRule* rule,
+                                            int threads) {
+  SameSheet sameSheet;
+  if (const auto* intrinsic = dynamic_cast<const IntrinsicRule*>(rule))
+    sameSheet = [intrinsic](const Eigen::Vector3d& a, const Eigen::Vector3d& b) { return intrinsic->acceptPoints(a, b); };
+  AttributeParams ap;
+  ap.threads = threads;
+  return interpolateAttributes(input, output, normals, sameSheet, ap);
+}
+
 std::string jsonNumber(double x) {
   if (!std::isfinite(x)) return "null";
   std::ostringstream os;
@@ -982,6 +997,14 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
   result.requestedPoints = params.targetCount;
   result.inputPoints = cloud.size();
   const StageClock clock(result.timings, params.progress);
+  // The input's attributes are interpolated onto the output at the end, from the input as given (the stages
+  // below merge, thin, move and drop points).
+  PointCloud attributeSource;
+  if (!cloud.attributes.empty()) {
+    attributeSource.points = cloud.points;
+    attributeSource.attributes = std::move(cloud.attributes);
+    cloud.attributes.clear();
+  }
 
   auto t = clock.begin("validate");
   const ValidationReport report = validateCloud(cloud, 4, "input", params.threads);
@@ -1145,6 +1168,12 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
       if (result.pointsPerLevel[q]) result.spacingPerLevel[q] /= static_cast<double>(result.pointsPerLevel[q]);
   }
   clock.end("report", t);
+  if (!attributeSource.attributes.empty()) {
+    t = clock.begin("attributes");
+    result.cloud.attributes =
+        carryAttributes(attributeSource, result.cloud.points, result.cloud.normals, rule.get(), params.threads);
+    clock.end("attributes", t);
+  }
   clock.end("total", start);
   return result;
 }

@@ -1,11 +1,14 @@
 #include "iires/reconstruct/reconstruct.hpp"
 
+#include <Eigen/Geometry>
+
 #include <chrono>
 #include <cmath>
 #include <iomanip>
 #include <sstream>
 #include <stdexcept>
 
+#include "iires/attributes.hpp"
 #include "iires/intrinsic.hpp"
 #include "iires/normals.hpp"
 #include "iires/validate.hpp"
@@ -104,6 +107,21 @@ std::string ReconstructResult::toJson() const {
   return os.str();
 }
 
+namespace {
+/// Area-weighted unit vertex normals of an oriented mesh (zero for vertices without faces).
+std::vector<Eigen::Vector3d> vertexNormals(const TriangleMesh& mesh) {
+  std::vector<Eigen::Vector3d> n(mesh.vertices.size(), Eigen::Vector3d::Zero());
+  for (const Eigen::Vector3i& t : mesh.triangles) {
+    const Eigen::Vector3d& a = mesh.vertices[t[0]];
+    const Eigen::Vector3d f = (mesh.vertices[t[1]] - a).cross(mesh.vertices[t[2]] - a);
+    for (int k = 0; k < 3; ++k) n[t[k]] += f;
+  }
+  for (Eigen::Vector3d& v : n)
+    if (v.squaredNorm() > 0) v.normalize();
+  return n;
+}
+}  // namespace
+
 ReconstructResult reconstruct(const PointCloud& input, const ReconstructParams& params) {
   params.validate();
   const auto start = Clock::now();
@@ -113,7 +131,9 @@ ReconstructResult reconstruct(const PointCloud& input, const ReconstructParams& 
   const StageClock clock(result.timings, params.progress);  // the resampler reports its own stages
 
   auto t = clock.begin("validate");
-  PointCloud cloud = input;
+  PointCloud cloud;  // positions and normals; the attributes are carried to the vertices at the end
+  cloud.points = input.points;
+  cloud.normals = input.normals;
   validateCloud(cloud, 4, "input");
   clock.end("validate", t);
 
@@ -204,6 +224,21 @@ ReconstructResult reconstruct(const PointCloud& input, const ReconstructParams& 
   removeUnusedVertices(result.mesh);
   result.unusedVertices = before - result.mesh.vertices.size();
   clock.end("orient", t);
+
+  if (!input.attributes.empty()) {
+    t = clock.begin("attributes");
+    SameSheet sameSheet;  // the resampler's intrinsic rule: vertices take values from input points on their sheet
+    std::shared_ptr<const IntrinsicRule> rule;
+    if (result.resampling.geodesic) {
+      rule = std::make_shared<IntrinsicRule>(result.resampling.geodesic, params.resampling.intrinsicRule);
+      sameSheet = [&rule](const Eigen::Vector3d& a, const Eigen::Vector3d& b) { return rule->acceptPoints(a, b); };
+    }
+    AttributeParams ap;
+    ap.threads = params.threads;
+    result.mesh.vertexAttributes =
+        interpolateAttributes(input, result.mesh.vertices, vertexNormals(result.mesh), sameSheet, ap);
+    clock.end("attributes", t);
+  }
 
   if (params.evaluate) {
     t = clock.begin("quality");

@@ -22,22 +22,34 @@ namespace iires {
 /// A .pts may start with a point count; columns after x y z are ignored. Readers are strict: a malformed
 /// line, a count that does not match the data, a truncated binary body or trailing data is an error.
 /// Messages read "<path>: <problem>", with "line N: " where a line is to blame.
+/// Vertex properties other than positions and normals are kept as PointCloud::attributes (PLY properties,
+/// PCD fields, a PCD packed rgb/rgba as red green blue): colour channels (red green blue alpha, r g b a,
+/// diffuse_*) averaged when resampled, other integer properties labels (majority), the rest scalars.
 PointCloud readPointCloud(const std::string& path);
+
+/// @brief Read a .xyz file whose columns are named by @p columns (e.g. {"x","y","z","red","green","blue",
+/// "intensity"}): x y z required, nx ny nz together or not at all, other names attributes; "name:type" gives
+/// an attribute's storage type (a PLY type: uchar, int, float, ...; an integer type makes it a label).
+/// Untyped colour columns are uchar when every value is a whole number in [0, 255], else float; others float.
+/// Every line must hold exactly one value per column. With @p columns empty, as readPointCloud(path).
+/// @throws InputError as readPointCloud, and for bad column names or a file that is not .xyz.
+PointCloud readPointCloud(const std::string& path, const std::vector<std::string>& columns);
 
 /// @brief Read a triangle mesh (.ply, .obj, .off, .stl).
 /// @throws InputError as readPointCloud, and when the file has no triangles or a face index is out of range.
 /// @note Polygons are fan-triangulated; STL corners at identical positions become one vertex.
 TriangleMesh readMesh(const std::string& path);
 
-/// @brief Write a point cloud: .ply (binary little-endian unless @p ascii, with normals when present),
-/// .xyz (positions) or .xyzn (positions + normals).
+/// @brief Write a point cloud: .ply (binary little-endian unless @p ascii, with normals when present and
+/// the attributes in their storage types), .xyz (positions) or .xyzn (positions + normals).
 /// @note Atomic: written to a temporary file in the same directory, then renamed over @p path; on any
 /// failure no file is left behind. @throws InputError for an unknown extension, a missing directory, or
 /// .xyzn for a cloud without normals; messages read "cannot write <path>: <problem>".
 /// @note PLY properties are doubles; text formats use the shortest decimal form that reads back exactly.
 void writePointCloud(const std::string& path, const PointCloud& cloud, bool ascii = false);
 
-/// @brief Write a triangle mesh: .ply (binary), .obj or .off, atomically as writePointCloud.
+/// @brief Write a triangle mesh: .ply (binary, with the vertex attributes), .obj or .off, atomically as
+/// writePointCloud.
 /// @throws InputError as writePointCloud, and when a triangle refers to a vertex the mesh does not have.
 void writeMesh(const std::string& path, const TriangleMesh& mesh);
 
