@@ -22,7 +22,7 @@ int main(int argc, char** argv) {
   return iires::tools::guardedMain("iires-reconstruct", [&]() -> int {
     CLI::App app{"Reconstruct a triangle mesh from a point cloud (isotropic resampling + local Delaunay) and "
                  "report its quality."};
-    std::string input, output, reportPath, qualityOnly, method = "local";
+    std::string input, output, reportPath, qualityOnly, uncoveredPath, method = "local";
     long long count = 10000;
     bool noResample = false, noHoles = false, quiet = false, showProgress = false;
     iires::ReconstructParams params;
@@ -42,6 +42,9 @@ int main(int argc, char** argv) {
     app.add_option("--quality-only", qualityOnly,
                    "report on this existing mesh (INPUT is the reference cloud); no OUTPUT_MESH");
     app.add_option("--report", reportPath, "write the report as JSON to this file");
+    app.add_option("--uncovered", uncoveredPath,
+                   "write the input points farther than 2 mesh spacings from the mesh (the parts it does not "
+                   "cover) to this point cloud file");
     app.add_option("--threads", params.threads, "threads (0 = all cores); the output does not depend on it");
     app.add_option("--seed", params.seed, "seed; same seed -> same mesh");
     app.add_flag("-q,--quiet", quiet, "print nothing on success (no report, no progress)");
@@ -53,6 +56,13 @@ int main(int argc, char** argv) {
     iires::tools::checkOutputPath(reportPath, {input, qualityOnly});
     if (!reportPath.empty() && reportPath == output)
       throw iires::InputError("OUTPUT_MESH and --report must be different files");
+    iires::tools::checkOutputPath(uncoveredPath, {input, qualityOnly});
+    if (!uncoveredPath.empty() && (uncoveredPath == output || uncoveredPath == reportPath))
+      throw iires::InputError("--uncovered must name a file of its own");
+    if (!uncoveredPath.empty() && iires::extensionOf(uncoveredPath) != ".ply" &&
+        iires::extensionOf(uncoveredPath) != ".xyz")
+      throw iires::InputError("cannot write " + uncoveredPath + ": use .ply (with normals when the input has them) "
+                              "or .xyz for --uncovered");
     iires::tools::Progress progress("iires-reconstruct", showProgress, quiet);
     params.progress = progress.callback();  // resampling and meshing stages
 
@@ -78,6 +88,7 @@ int main(int argc, char** argv) {
       const iires::MeshQuality q = iires::evaluateMesh(mesh, &reference, qp);
       progress.finish();
       if (!reportPath.empty()) iires::writeTextFile(reportPath, q.toJson());
+      if (!uncoveredPath.empty()) iires::writePointCloud(uncoveredPath, iires::uncoveredInput(reference, q));
       if (!quiet) std::cout << "quality of " << qualityOnly << " (reference " << input << ")\n" << q.toTable();
       return iires::tools::kOk;
     }
@@ -107,6 +118,7 @@ int main(int argc, char** argv) {
     iires::writeMesh(output, result.mesh);
     progress.finish();
     if (!reportPath.empty()) iires::writeTextFile(reportPath, result.toJson());
+    if (!uncoveredPath.empty()) iires::writePointCloud(uncoveredPath, result.uncoveredInput);
     if (!quiet) {
       std::cout << "mesh " << output << " (" << result.method << ", " << result.mesh.vertices.size()
                 << " vertices from " << result.inputPoints << " input points)\n"

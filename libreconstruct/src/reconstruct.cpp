@@ -211,6 +211,7 @@ ReconstructResult reconstruct(const PointCloud& input, const ReconstructParams& 
     qp.threads = params.threads;
     qp.seed = params.seed + 1;
     result.quality = evaluateMesh(result.mesh, &cloud, qp);
+    result.uncoveredInput = uncoveredInput(cloud, result.quality);
     clock.end("quality", t);
   }
   clock.end("total", start);

@@ -94,6 +94,7 @@ struct ReconstructResult {
   OrientationReport orientation;     ///< orientation diagnostics
   std::size_t unusedVertices = 0;    ///< samples no triangle uses (removed from the mesh)
   MeshQuality quality;               ///< the quality report (when params.evaluate)
+  PointCloud uncoveredInput;         ///< input points the mesh does not cover (quality.uncoveredPoints)
   std::vector<StageTime> timings;    ///< per stage, in order; the last is "total"
 
   /// @brief Seconds spent meshing after resampling (triangulation, holes, orientation).
