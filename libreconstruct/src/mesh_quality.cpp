@@ -519,7 +519,7 @@ std::string MeshQuality::toTable() const {
     row("mean distance (abs / % diag)", num(distance.mean) + " / " + fix(100.0 * distance.relativeMean(), 4) + " %");
     row("mesh -> input max (% diag)", fix(100.0 * distance.forwardMax / distance.diagonal, 3) + " %");
     row("input -> mesh max (% diag)", fix(100.0 * distance.backwardMax / distance.diagonal, 3) + " %");
-    row("uncovered input (> 2 spacings)",
+    row("uncovered input (>2 spacings)",
         std::to_string(uncovered) + " points (" + fix(100.0 * uncoveredShare, 2) + " %)");
   }
   return os.str();

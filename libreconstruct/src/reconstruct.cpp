@@ -8,6 +8,7 @@
 
 #include "iires/intrinsic.hpp"
 #include "iires/normals.hpp"
+#include "iires/reconstruct/mesh_validity.hpp"
 #include "iires/validate.hpp"
 
 namespace iires {
@@ -63,6 +64,7 @@ void ReconstructParams::validate() const {
   r.targetCount = std::max<std::size_t>(targetCount, 1);
   if (resample) r.validate();
   local.validate();
+  validity.validate();
   advancingFront.validate();
   holes.validate();
   quality.validate();
@@ -71,7 +73,7 @@ void ReconstructParams::validate() const {
 double ReconstructResult::meshingSeconds() const {
   double s = 0;
   for (const auto& t : timings)
-    if (t.name == "triangulate" || t.name == "holes" || t.name == "orient") s += t.seconds;
+    if (t.name == "triangulate" || t.name == "holes" || t.name == "validity" || t.name == "orient") s += t.seconds;
   return s;
 }
 
@@ -94,6 +96,11 @@ std::string ReconstructResult::toJson() const {
      << ",\n  \"large_holes\": {\"loops\": " << largeHoles.loops << ", \"filled\": " << largeHoles.filled
      << ", \"kept\": " << largeHoles.kept << ", \"faces_added\": " << largeHoles.facesAdded
      << ", \"vertices_added\": " << largeHoles.verticesAdded << ", \"skipped\": " << (largeHoles.skipped ? "true" : "false") << "}"
+     << ",\n  \"validity_repair\": {\"intersecting_pairs_found\": " << validity.intersectingPairs
+     << ", \"non_manifold_edges_found\": " << validity.nonManifoldEdges << ", \"rounds\": " << validity.rounds
+     << ", \"faces_removed\": " << validity.facesRemoved << ", \"faces_added\": " << validity.facesAdded
+     << ", \"vertices_added\": " << validity.verticesAdded
+     << ", \"removed_without_fill\": " << validity.removedWithoutFill << "}"
      << ",\n  \"orientation\": {\"components\": " << orientation.components
      << ", \"faces_flipped\": " << orientation.facesFlipped << ", \"conflicts\": " << orientation.conflicts << "}"
      << ",\n  \"quality\": " << nested(quality.toJson()) << ",\n  \"meshing_time_s\": " << num(meshingSeconds())
@@ -196,6 +203,17 @@ ReconstructResult reconstruct(const PointCloud& input, const ReconstructParams& 
     }
   }
   clock.end("holes", t);
+
+  if (params.repairValidity) {
+    t = clock.begin("validity");
+    ValidityParams vp = params.validity;
+    vp.holes = params.holes;
+    vp.refill = params.fillHoles && vp.refill;
+    vp.minComponentFaces = params.minComponentFaces;
+    vp.threads = params.threads;
+    result.validity = repairValidity(result.mesh, normals, vp);
+    clock.end("validity", t);
+  }
 
   t = clock.begin("orient");
   result.orientation = orientConsistently(result.mesh, normals);

@@ -5,8 +5,10 @@
 
 #include <algorithm>
 #include <array>
+#include <cstdint>
 
 #include "iires/parallel.hpp"
+#include "iires/radix_sort.hpp"
 
 namespace iires {
 namespace {
@@ -47,6 +49,66 @@ bool facesIntersect(const Eigen::Vector3i& f, const Eigen::Vector3i& g, const st
   return CGAL::do_intersect(tf, tg);
 }
 
+bool overlap(const CGAL::Bbox_3& a, const CGAL::Bbox_3& b) {
+  for (int d = 0; d < 3; ++d)
+    if (a.max(d) < b.min(d) || b.max(d) < a.min(d)) return false;
+  return true;
+}
+
+/// The pairs of overlapping (closed) boxes, each once, from a uniform grid of cells twice the median box size:
+/// every box is entered in the cells it overlaps and a pair is reported in the one cell that holds the lowest
+/// corner of the two boxes' intersection. Linear for a mesh of similar triangles (a reconstruction); returns false,
+/// leaving the work to CGAL's box intersection, when the sizes vary too much for a grid (boxes over many cells).
+bool gridCandidates(const std::vector<Box>& boxes, std::vector<std::pair<std::size_t, std::size_t>>& out) {
+  if (boxes.size() < 2) return true;
+  std::vector<double> extent(boxes.size());
+  CGAL::Bbox_3 all;
+  for (std::size_t i = 0; i < boxes.size(); ++i) {
+    const CGAL::Bbox_3& b = boxes[i].bbox();
+    extent[i] = std::max({b.xmax() - b.xmin(), b.ymax() - b.ymin(), b.zmax() - b.zmin()});
+    all += b;
+  }
+  std::nth_element(extent.begin(), extent.begin() + static_cast<std::ptrdiff_t>(extent.size() / 2), extent.end());
+  const double cell = 2.0 * extent[extent.size() / 2];
+  constexpr double kMaxCells = 1 << 20;  // per axis: cell coordinates fit 21 bits
+  if (!(cell > 0)) return false;
+  for (int d = 0; d < 3; ++d)
+    if ((all.max(d) - all.min(d)) / cell > kMaxCells) return false;
+  auto coord = [&](double x, int d) { return static_cast<std::uint32_t>((x - all.min(d)) / cell); };
+  auto key = [](std::uint64_t x, std::uint64_t y, std::uint64_t z) { return (x << 42) | (y << 21) | z; };
+  constexpr std::uint64_t kMaxCellsPerBox = 27;
+  std::vector<std::array<std::uint32_t, 3>> low(boxes.size());  // each box's lowest cell
+  std::vector<KeyedIndex> entries;                               // (cell, box), boxes in index order
+  entries.reserve(4 * boxes.size());
+  for (std::uint32_t i = 0; i < boxes.size(); ++i) {
+    const CGAL::Bbox_3& b = boxes[i].bbox();
+    std::uint32_t hi[3];
+    for (int d = 0; d < 3; ++d) low[i][d] = coord(b.min(d), d), hi[d] = coord(b.max(d), d);
+    const auto& lo = low[i];
+    if (std::uint64_t{hi[0] - lo[0] + 1} * (hi[1] - lo[1] + 1) * (hi[2] - lo[2] + 1) > kMaxCellsPerBox) return false;
+    for (std::uint64_t x = lo[0]; x <= hi[0]; ++x)
+      for (std::uint64_t y = lo[1]; y <= hi[1]; ++y)
+        for (std::uint64_t z = lo[2]; z <= hi[2]; ++z) entries.emplace_back(key(x, y, z), i);
+  }
+  radixSort(entries, 1);  // stable: boxes in index order within a cell
+  for (std::size_t r = 0; r < entries.size();) {
+    std::size_t e = r;
+    while (e < entries.size() && entries[e].first == entries[r].first) ++e;
+    for (std::size_t i = r; i < e; ++i)
+      for (std::size_t j = i + 1; j < e; ++j) {
+        const std::uint32_t bi = entries[i].second, bj = entries[j].second;
+        // The lowest corner of the two boxes' intersection lies in the cell max(low_i, low_j).
+        if (key(std::max(low[bi][0], low[bj][0]), std::max(low[bi][1], low[bj][1]),
+                std::max(low[bi][2], low[bj][2])) != entries[r].first)
+          continue;  // reported in another cell
+        if (!overlap(boxes[bi].bbox(), boxes[bj].bbox())) continue;
+        out.emplace_back(boxes[bi].info(), boxes[bj].info());  // bi < bj, and faces are in box order
+      }
+    r = e;
+  }
+  return true;
+}
+
 }  // namespace
 
 std::vector<std::pair<std::size_t, std::size_t>> selfIntersections(const TriangleMesh& mesh, int threads) {
@@ -64,14 +126,21 @@ std::vector<std::pair<std::size_t, std::size_t>> selfIntersections(const Triangl
     if (CGAL::collinear(a, b, c)) continue;  // degenerate: counted apart
     boxes.emplace_back(a.bbox() + b.bbox() + c.bbox(), f);
   }
-  std::vector<const Box*> ptr;
-  ptr.reserve(boxes.size());
-  for (const Box& b : boxes) ptr.push_back(&b);
-  // Candidates from overlapping boxes (cheap, sequential), then the exact tests in parallel.
+  // Candidates from overlapping boxes (sequential), then the exact tests in parallel.
   std::vector<std::pair<std::size_t, std::size_t>> candidates;
-  CGAL::box_self_intersection_d(ptr.begin(), ptr.end(), [&](const Box* x, const Box* y) {
-    candidates.emplace_back(std::min(x->info(), y->info()), std::max(x->info(), y->info()));
-  });
+  if (!gridCandidates(boxes, candidates)) {
+    candidates.clear();
+    std::vector<const Box*> ptr;
+    ptr.reserve(boxes.size());
+    for (const Box& b : boxes) ptr.push_back(&b);
+    constexpr std::ptrdiff_t kCutoff = 2000;  // below this many boxes a scan beats the segment tree (CGAL PMP's)
+    CGAL::box_self_intersection_d(
+        ptr.begin(), ptr.end(),
+        [&](const Box* x, const Box* y) {
+          candidates.emplace_back(std::min(x->info(), y->info()), std::max(x->info(), y->info()));
+        },
+        kCutoff);
+  }
   std::vector<char> hit(candidates.size(), 0);
   parallelFor(candidates.size(), threads, [&](std::size_t k) {
     hit[k] = facesIntersect(faces[candidates[k].first], faces[candidates[k].second], p) ? 1 : 0;
