@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <random>
 
 #include "iires/reconstruct/self_intersections.hpp"
 
@@ -91,6 +92,24 @@ TEST(SelfIntersections, DuplicateFaceAndDegenerateFace) {
   d.vertices.push_back(V(0.5, 0.5, 0));  // on edge 1–2: a collinear face takes part in no pair
   d.triangles.emplace_back(1, 2, 4);
   EXPECT_TRUE(selfIntersections(d).empty());
+}
+
+// The grid and the fan shortcut against testing every pair: a sphere whose vertices are pushed in and out at
+// random (folds, fans that overlap, faces through neighbours) and two overlapping spheres.
+TEST(SelfIntersections, MatchesBruteForceOnCrumpledMeshes) {
+  for (double noise : {0.0, 0.02, 0.08, 0.3}) {
+    TriangleMesh m = uvSphere(10, 14);
+    std::mt19937_64 rng(7);
+    std::normal_distribution<double> g(0.0, noise);
+    for (auto& v : m.vertices) v += V(g(rng), g(rng), g(rng));
+    const TriangleMesh s = uvSphere(6, 8);
+    const int off = static_cast<int>(m.vertices.size());
+    for (const auto& v : s.vertices) m.vertices.push_back(0.6 * v + V(0.7, 0.1, 0.0));
+    for (const auto& t : s.triangles) m.triangles.push_back(t + F(off, off, off));
+    const Pairs fast = selfIntersections(m), slow = selfIntersectionsBruteForce(m);
+    EXPECT_EQ(fast, slow) << "noise " << noise;
+    EXPECT_FALSE(slow.empty());
+  }
 }
 
 TEST(SelfIntersections, SameAnswerForAnyThreadCount) {

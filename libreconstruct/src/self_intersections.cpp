@@ -5,6 +5,8 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
+#include <Eigen/Geometry>
 #include <cstdint>
 
 #include "iires/parallel.hpp"
@@ -49,6 +51,88 @@ bool facesIntersect(const Eigen::Vector3i& f, const Eigen::Vector3i& g, const st
   return CGAL::do_intersect(tf, tg);
 }
 
+/// Per vertex, whether its faces provably meet each other only in their common vertex and edges: seen along the
+/// fan's mean normal n, every face leans less than 60° from n (so it projects one-to-one onto the plane ⊥ n, into
+/// the angular wedge between its two spokes) and the wedges do not overlap — two of them touch only along a common
+/// spoke. Then two faces of the fan can only meet over a common ray, i.e. in their common edge. The test is in
+/// floating point with a margin (kMargin radians) no rounding can cross; fans that fail it get the exact tests.
+std::vector<char> separatedFans(const TriangleMesh& mesh) {
+  constexpr double kMargin = 1e-9, kMinLean = 0.5;  // cos 60°
+  const std::size_t nv = mesh.vertices.size(), nf = mesh.triangles.size();
+  std::vector<std::uint32_t> start(nv + 1, 0);
+  for (const auto& t : mesh.triangles)
+    for (int c = 0; c < 3; ++c) ++start[static_cast<std::size_t>(t[c]) + 1];
+  for (std::size_t v = 0; v < nv; ++v) start[v + 1] += start[v];
+  std::vector<std::uint32_t> incident(start[nv]);
+  {
+    std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
+    for (std::uint32_t f = 0; f < nf; ++f)
+      for (int c = 0; c < 3; ++c) incident[fill[static_cast<std::size_t>(mesh.triangles[f][c])]++] = f;
+  }
+  std::vector<char> good(nv, 0);
+  struct Wedge {
+    double from, to, length;  // angles of its spokes, and the angle between them
+    int first, last;          // spoke vertices
+  };
+  std::vector<Wedge> wedges;
+  std::vector<std::array<int, 2>> spokes;
+  for (std::size_t v = 0; v < nv; ++v) {
+    if (start[v] == start[v + 1]) continue;
+    const Eigen::Vector3d& o = mesh.vertices[v];
+    Eigen::Vector3d n = Eigen::Vector3d::Zero();
+    spokes.clear();
+    bool ok = true;
+    for (std::uint32_t s = start[v]; s < start[v + 1] && ok; ++s) {
+      const auto& t = mesh.triangles[incident[s]];
+      int c = 0;
+      while (static_cast<std::size_t>(t[c]) != v) ++c;
+      const int a = t[(c + 1) % 3], b = t[(c + 2) % 3];
+      if (a == b || static_cast<std::size_t>(a) == v || static_cast<std::size_t>(b) == v) ok = false;
+      spokes.push_back({a, b});
+      n += (mesh.vertices[static_cast<std::size_t>(a)] - o).cross(mesh.vertices[static_cast<std::size_t>(b)] - o);
+    }
+    if (!ok || !(n.norm() > 0)) continue;
+    n.normalize();
+    const Eigen::Vector3d u = n.unitOrthogonal(), w = n.cross(u);
+    auto angle = [&](int x) {
+      const Eigen::Vector3d d = mesh.vertices[static_cast<std::size_t>(x)] - o;
+      return std::atan2(d.dot(w), d.dot(u));
+    };
+    wedges.clear();
+    for (const auto& [a, b] : spokes) {
+      const Eigen::Vector3d fn = (mesh.vertices[static_cast<std::size_t>(a)] - o)
+                                     .cross(mesh.vertices[static_cast<std::size_t>(b)] - o);
+      if (!(fn.dot(n) >= kMinLean * fn.norm())) {
+        ok = false;
+        break;
+      }
+      const double from = angle(a), to = angle(b);
+      double length = to - from;
+      if (length < 0) length += 2 * M_PI;
+      if (!(length > kMargin && length < M_PI - kMargin)) {
+        ok = false;
+        break;
+      }
+      wedges.push_back({from, to, length, a, b});
+    }
+    if (!ok) continue;
+    // Sorted by their first spoke, each wedge must end before the next begins (or on the same spoke), and all of
+    // them together must go round once.
+    std::sort(wedges.begin(), wedges.end(), [](const Wedge& x, const Wedge& y) { return x.from < y.from; });
+    double turn = 0;
+    for (std::size_t i = 0; i < wedges.size() && ok && wedges.size() > 1; ++i) {
+      const Wedge &x = wedges[i], &y = wedges[(i + 1) % wedges.size()];
+      double gap = y.from - x.to;  // in [0, 2π): an overlap becomes a gap near 2π, and the turn two rounds
+      if (gap < 0) gap += 2 * M_PI;
+      if (!(gap > kMargin || (x.last == y.first && y.from == x.to))) ok = false;
+      turn += x.length + gap;
+    }
+    if (wedges.size() > 1 && std::abs(turn - 2 * M_PI) > 1e-6) ok = false;
+    good[v] = ok ? 1 : 0;
+  }
+  return good;
+}
+
 bool overlap(const CGAL::Bbox_3& a, const CGAL::Bbox_3& b) {
   for (int d = 0; d < 3; ++d)
     if (a.max(d) < b.min(d) || b.max(d) < a.min(d)) return false;
@@ -59,7 +143,9 @@ bool overlap(const CGAL::Bbox_3& a, const CGAL::Bbox_3& b) {
 /// every box is entered in the cells it overlaps and a pair is reported in the one cell that holds the lowest
 /// corner of the two boxes' intersection. Linear for a mesh of similar triangles (a reconstruction); returns false,
 /// leaving the work to CGAL's box intersection, when the sizes vary too much for a grid (boxes over many cells).
-bool gridCandidates(const std::vector<Box>& boxes, std::vector<std::pair<std::size_t, std::size_t>>& out) {
+template <typename Skip>
+bool gridCandidates(const std::vector<Box>& boxes, const Skip& skip,
+                    std::vector<std::pair<std::size_t, std::size_t>>& out) {
   if (boxes.size() < 2) return true;
   std::vector<double> extent(boxes.size());
   CGAL::Bbox_3 all;
@@ -101,7 +187,7 @@ bool gridCandidates(const std::vector<Box>& boxes, std::vector<std::pair<std::si
         if (key(std::max(low[bi][0], low[bj][0]), std::max(low[bi][1], low[bj][1]),
                 std::max(low[bi][2], low[bj][2])) != entries[r].first)
           continue;  // reported in another cell
-        if (!overlap(boxes[bi].bbox(), boxes[bj].bbox())) continue;
+        if (!overlap(boxes[bi].bbox(), boxes[bj].bbox()) || skip(boxes[bi].info(), boxes[bj].info())) continue;
         out.emplace_back(boxes[bi].info(), boxes[bj].info());  // bi < bj, and faces are in box order
       }
     r = e;
@@ -127,8 +213,16 @@ std::vector<std::pair<std::size_t, std::size_t>> selfIntersections(const Triangl
     boxes.emplace_back(a.bbox() + b.bbox() + c.bbox(), f);
   }
   // Candidates from overlapping boxes (sequential), then the exact tests in parallel.
+  // Faces with a common vertex whose fan is separated (separatedFans) need no test.
+  const std::vector<char> separated = separatedFans(mesh);
+  auto skip = [&](std::size_t f, std::size_t g) {
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j)
+        if (faces[f][i] == faces[g][j] && separated[static_cast<std::size_t>(faces[f][i])]) return true;
+    return false;
+  };
   std::vector<std::pair<std::size_t, std::size_t>> candidates;
-  if (!gridCandidates(boxes, candidates)) {
+  if (!gridCandidates(boxes, skip, candidates)) {
     candidates.clear();
     std::vector<const Box*> ptr;
     ptr.reserve(boxes.size());
@@ -137,7 +231,8 @@ std::vector<std::pair<std::size_t, std::size_t>> selfIntersections(const Triangl
     CGAL::box_self_intersection_d(
         ptr.begin(), ptr.end(),
         [&](const Box* x, const Box* y) {
-          candidates.emplace_back(std::min(x->info(), y->info()), std::max(x->info(), y->info()));
+          if (!skip(x->info(), y->info()))
+            candidates.emplace_back(std::min(x->info(), y->info()), std::max(x->info(), y->info()));
         },
         kCutoff);
   }
@@ -149,6 +244,24 @@ std::vector<std::pair<std::size_t, std::size_t>> selfIntersections(const Triangl
   for (std::size_t k = 0; k < candidates.size(); ++k)
     if (hit[k]) pairs.push_back(candidates[k]);
   std::sort(pairs.begin(), pairs.end());
+  return pairs;
+}
+
+std::vector<std::pair<std::size_t, std::size_t>> selfIntersectionsBruteForce(const TriangleMesh& mesh) {
+  std::vector<Point> p;
+  for (const auto& v : mesh.vertices) p.emplace_back(v.x(), v.y(), v.z());
+  const auto& faces = mesh.triangles;
+  std::vector<char> degenerate(faces.size(), 0);
+  for (std::size_t f = 0; f < faces.size(); ++f) {
+    const auto& t = faces[f];
+    degenerate[f] = t[0] == t[1] || t[1] == t[2] || t[0] == t[2] ||
+                    CGAL::collinear(p[static_cast<std::size_t>(t[0])], p[static_cast<std::size_t>(t[1])],
+                                    p[static_cast<std::size_t>(t[2])]);
+  }
+  std::vector<std::pair<std::size_t, std::size_t>> pairs;
+  for (std::size_t f = 0; f < faces.size(); ++f)
+    for (std::size_t g = f + 1; g < faces.size(); ++g)
+      if (!degenerate[f] && !degenerate[g] && facesIntersect(faces[f], faces[g], p)) pairs.emplace_back(f, g);
   return pairs;
 }
 

@@ -18,9 +18,15 @@ namespace iires {
 /// (collinear corners, a repeated vertex index) take part in no pair: they are MeshQuality::degenerateFaces.
 /// Exact predicates (CGAL's Epick kernel), so the answer does not depend on rounding.
 /// @return the pairs sorted by (f, g).
-/// @note O(F log F + k) for k pairs of overlapping bounding boxes (CGAL's box intersection); the tests run in
-/// parallel on @p threads (0 = all cores); the result does not depend on it.
+/// @note Candidates are the pairs of overlapping bounding boxes (a uniform grid; CGAL's box intersection when the
+/// face sizes vary too much for one), less the pairs with a common vertex around which the faces provably do not
+/// overlap (seen along the fan's normal, their angular wedges are disjoint); O(F + k) for k candidates on a mesh of
+/// similar triangles. The tests run in parallel on @p threads (0 = all cores); the result does not depend on it.
 std::vector<std::pair<std::size_t, std::size_t>> selfIntersections(const TriangleMesh& mesh, int threads = 0);
+
+/// @brief The same pairs as selfIntersections() by testing every pair of faces: the oracle for small meshes.
+/// @note O(F²).
+std::vector<std::pair<std::size_t, std::size_t>> selfIntersectionsBruteForce(const TriangleMesh& mesh);
 
 /// @brief Faces of @p mesh that are in at least one pair of selfIntersections(), sorted.
 std::vector<std::size_t> selfIntersectingFaces(const TriangleMesh& mesh, int threads = 0);
