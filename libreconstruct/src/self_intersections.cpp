@@ -237,7 +237,8 @@ std::vector<std::pair<std::size_t, std::size_t>> selfIntersections(const Triangl
         kCutoff);
   }
   std::vector<char> hit(candidates.size(), 0);
-  parallelFor(candidates.size(), threads, [&](std::size_t k) {
+  constexpr std::size_t kParallelFrom = 20000;  // fewer tests take less than starting the threads
+  parallelFor(candidates.size(), candidates.size() < kParallelFrom ? 1 : threads, [&](std::size_t k) {
     hit[k] = facesIntersect(faces[candidates[k].first], faces[candidates[k].second], p) ? 1 : 0;
   });
   std::vector<std::pair<std::size_t, std::size_t>> pairs;
