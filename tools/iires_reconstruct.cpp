@@ -24,7 +24,7 @@ int main(int argc, char** argv) {
                  "report its quality."};
     std::string input, output, reportPath, qualityOnly, uncoveredPath, method = "local";
     long long count = 10000;
-    bool noResample = false, noHoles = false, quiet = false, showProgress = false;
+    bool noResample = false, noHoles = false, noValidity = false, quiet = false, showProgress = false;
     iires::ReconstructParams params;
     app.add_option("INPUT", input, "input cloud (.ply .pcd .xyz .xyzn .pts, or mesh vertices .obj .off .stl)")
         ->required();
@@ -34,6 +34,8 @@ int main(int argc, char** argv) {
     app.add_option("--method", method, "triangulation: local (default) or advancing-front")
         ->check(CLI::IsMember({"local", "advancing-front"}));
     app.add_flag("--no-hole-filling", noHoles, "leave small holes open");
+    app.add_flag("--no-validity-repair", noValidity,
+                 "keep self-intersecting faces and non-manifold edges/vertices (the report still counts them)");
     app.add_option("--max-hole-edges", params.holes.maxEdges, "close holes of at most this many edges (>= 3; up to 1.5x that when the fill is good, Q >= 0.4)");
     app.add_option("--max-hole-extent", params.holes.maxRefinedExtent,
                    "close longer holes with new vertices when their bounding box is at most this fraction of their "
@@ -102,6 +104,7 @@ int main(int argc, char** argv) {
     params.targetCount = static_cast<std::size_t>(count);
     params.resample = !noResample;
     params.fillHoles = !noHoles;
+    params.repairValidity = !noValidity;
     params.method = iires::parseReconstructMethod(method);
 
     progress.update("read", 0.0);
@@ -129,6 +132,12 @@ int main(int argc, char** argv) {
                 << " / " << result.largeHoles.kept << " (" << result.largeHoles.verticesAdded << " vertices added)\n";
       std::cout << "  " << std::left << std::setw(30) << "Q<0.4 repairs moved / removed" << result.badTriangles.moved
                 << " / " << result.badTriangles.removed << "\n";
+      const iires::ValidityReport& v = result.validity;
+      std::cout << "  " << std::left << std::setw(30) << "validity repairs" << v.intersectingPairs
+                << " self-intersecting pairs, " << v.nonManifoldEdges << " non-manifold edges found; " << v.facesRemoved
+                << " faces removed, " << v.facesAdded << " added";
+      if (v.removedWithoutFill) std::cout << " (" << v.removedWithoutFill << " removed without a fill: holes left open)";
+      std::cout << "\n";
       std::cout << "  " << std::left << std::setw(30) << "time (s)";
       for (const auto& s : result.timings) std::cout << s.name << " " << std::setprecision(3) << s.seconds << "  ";
       std::cout << "\n";
