@@ -212,6 +212,24 @@ ReconstructResult reconstruct(const PointCloud& input, const ReconstructParams& 
     vp.minComponentFaces = params.minComponentFaces;
     vp.threads = params.threads;
     result.validity = repairValidity(result.mesh, normals, vp);
+    if (result.validity.facesAdded > 0 && params.repairQuality > 0) {
+      // The fills can hold poor triangles: the same quality repairs as above, then the check again (a repair that
+      // made something intersect is undone by removal there).
+      const BadTriangleReport again = repairBadTriangles(result.mesh, normals, params.repairQuality, params.repairDeviation);
+      result.badTriangles.moved += again.moved;
+      result.badTriangles.removed += again.removed;
+      if (params.remeshBadRegions) {
+        flippedEarlier += orientConsistently(result.mesh, normals).facesFlipped;
+        result.remeshedVertices += remeshBadRegions(result.mesh, normals, params.repairQuality);
+      }
+      vp.rounds = 1;
+      const ValidityReport check = repairValidity(result.mesh, normals, vp);
+      result.validity.rounds += check.rounds;
+      result.validity.facesRemoved += check.facesRemoved;
+      result.validity.facesAdded += check.facesAdded;
+      result.validity.verticesAdded += check.verticesAdded;
+      result.validity.removedWithoutFill += check.removedWithoutFill;
+    }
     clock.end("validity", t);
   }
 
