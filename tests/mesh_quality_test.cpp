@@ -94,7 +94,8 @@ TEST(MeshQuality, OneFlippedFaceIsNotOriented) {
   const MeshQuality q = evaluateMesh(m);
   EXPECT_TRUE(q.closed);
   EXPECT_FALSE(q.oriented);
-  EXPECT_EQ(q.genus, -1);
+  EXPECT_TRUE(q.orientable);  // one face flipped: the surface is still a sphere
+  EXPECT_EQ(q.genus, 0);
 }
 
 TEST(MeshQuality, Cube) {
@@ -139,6 +140,163 @@ TEST(MeshQuality, BowtieVertexIsNonManifold) {
   EXPECT_EQ(q.nonManifoldVertices, 1u);
   EXPECT_EQ(q.components, 1u);
   EXPECT_FALSE(q.manifold);
+}
+
+/// A closed torus of n × m quads (two triangles each), outward.
+TriangleMesh torusMesh(int n, int m, double major = 1.0, double minor = 0.4) {
+  TriangleMesh t;
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < m; ++j) {
+      const double u = 2 * M_PI * i / n, v = 2 * M_PI * j / m;
+      t.vertices.emplace_back((major + minor * std::cos(v)) * std::cos(u), (major + minor * std::cos(v)) * std::sin(u),
+                              minor * std::sin(v));
+    }
+  auto at = [&](int i, int j) { return (i % n) * m + (j % m); };
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < m; ++j) {
+      t.triangles.emplace_back(at(i, j), at(i + 1, j), at(i + 1, j + 1));
+      t.triangles.emplace_back(at(i, j), at(i + 1, j + 1), at(i, j + 1));
+    }
+  return t;
+}
+
+/// An open k × k grid of the unit square in z = 0 (edge 1/k).
+TriangleMesh gridSquare(int k) {
+  TriangleMesh g;
+  for (int i = 0; i <= k; ++i)
+    for (int j = 0; j <= k; ++j) g.vertices.emplace_back(double(i) / k, double(j) / k, 0.0);
+  auto at = [&](int i, int j) { return i * (k + 1) + j; };
+  for (int i = 0; i < k; ++i)
+    for (int j = 0; j < k; ++j) {
+      g.triangles.emplace_back(at(i, j), at(i + 1, j), at(i + 1, j + 1));
+      g.triangles.emplace_back(at(i, j), at(i + 1, j + 1), at(i, j + 1));
+    }
+  return g;
+}
+
+void append(TriangleMesh& m, const TriangleMesh& other, const V& shift) {
+  const int off = static_cast<int>(m.vertices.size());
+  for (const auto& v : other.vertices) m.vertices.push_back(v + shift);
+  for (const auto& t : other.triangles) m.triangles.push_back(t + F(off, off, off));
+}
+
+// Two closed tetrahedra that share one vertex (a pinch): every edge has two faces, so the mesh is "closed",
+// but the shared vertex's link is two cycles. The component has no genus: none is printed.
+TEST(MeshQuality, PinchedVertexIsReported) {
+  TriangleMesh m = tetrahedron();
+  TriangleMesh other = tetrahedron();
+  for (auto& v : other.vertices) v = -v;  // mirrored through vertex 0, which both keep at the origin
+  const int off = static_cast<int>(m.vertices.size()) - 1;
+  for (std::size_t i = 1; i < other.vertices.size(); ++i) m.vertices.push_back(other.vertices[i]);
+  for (auto t : other.triangles) {
+    for (int c = 0; c < 3; ++c) t[c] = t[c] == 0 ? 0 : t[c] + off;
+    m.triangles.push_back(t);
+  }
+  const MeshQuality q = evaluateMesh(m);
+  EXPECT_EQ(q.nonManifoldEdges, 0u);
+  EXPECT_EQ(q.nonManifoldVertices, 1u);
+  EXPECT_EQ(q.selfIntersections, 0u);
+  EXPECT_FALSE(q.manifold);
+  EXPECT_FALSE(q.valid());
+  ASSERT_EQ(q.parts.size(), 1u);
+  EXPECT_FALSE(q.parts[0].manifold);
+  EXPECT_EQ(q.parts[0].genus, -1);
+  EXPECT_EQ(q.genus, -1);
+  EXPECT_NE(q.toJson().find("\"genus\": null"), std::string::npos);
+  EXPECT_EQ(q.toTable().find("genus -"), std::string::npos) << q.toTable();
+  EXPECT_NE(q.toTable().find("non-manifold, 8 faces"), std::string::npos) << q.toTable();
+}
+
+TEST(MeshQuality, GenusPerClosedComponent) {
+  TriangleMesh m = torusMesh(24, 12);
+  append(m, tetrahedron(), V(5, 0, 0));
+  const MeshQuality q = evaluateMesh(m);
+  ASSERT_EQ(q.parts.size(), 2u);
+  EXPECT_TRUE(q.parts[0].closed);
+  EXPECT_EQ(q.parts[0].genus, 1);  // the torus, most faces first
+  EXPECT_EQ(q.parts[0].faces, 576u);
+  EXPECT_EQ(q.parts[1].genus, 0);
+  EXPECT_EQ(q.closedComponents, 2u);
+  EXPECT_EQ(q.genus, 1);
+  EXPECT_TRUE(q.valid());
+  EXPECT_NE(q.toTable().find("closed, genus 1, 576 faces"), std::string::npos) << q.toTable();
+  EXPECT_NE(q.toTable().find("closed, genus 0, 4 faces"), std::string::npos) << q.toTable();
+}
+
+// An open component: its boundary loops, and the genus of a surface with boundary (χ = 2 − 2g − b), never −1.
+TEST(MeshQuality, OpenComponentsPrintBoundaryLoops) {
+  TriangleMesh m = gridSquare(4);
+  TriangleMesh annulus = torusMesh(24, 12);  // a torus cut open along two meridians: a cylinder, b = 2
+  annulus.triangles.erase(annulus.triangles.begin(), annulus.triangles.begin() + 24);
+  append(m, annulus, V(5, 0, 0));
+  const MeshQuality q = evaluateMesh(m);
+  ASSERT_EQ(q.parts.size(), 2u);
+  EXPECT_EQ(q.parts[0].boundaryLoops, 2u);
+  EXPECT_EQ(q.parts[0].genus, 0);
+  EXPECT_EQ(q.parts[1].boundaryLoops, 1u);
+  EXPECT_EQ(q.parts[1].genus, 0);
+  EXPECT_EQ(q.closedComponents, 0u);
+  EXPECT_EQ(q.genus, 0);
+  EXPECT_NE(q.toTable().find("open, 2 boundary loops, genus 0"), std::string::npos) << q.toTable();
+  EXPECT_NE(q.toTable().find("open, 1 boundary loop, genus 0, 32 faces"), std::string::npos) << q.toTable();
+}
+
+TEST(MeshQuality, MoebiusStripIsNotOrientable) {
+  // A strip of 12 quads whose ends are glued with a half twist.
+  TriangleMesh m;
+  const int n = 12;
+  for (int i = 0; i < n; ++i)
+    for (int s : {-1, 1}) {
+      const double u = 2 * M_PI * i / n, w = 0.3 * s;
+      m.vertices.emplace_back((1 + w * std::cos(u / 2)) * std::cos(u), (1 + w * std::cos(u / 2)) * std::sin(u),
+                              w * std::sin(u / 2));
+    }
+  for (int i = 0; i < n; ++i) {
+    const int a = 2 * i, b = 2 * i + 1;
+    const int c = i + 1 < n ? 2 * (i + 1) : 1, d = i + 1 < n ? 2 * (i + 1) + 1 : 0;  // the twist swaps the sides
+    m.triangles.emplace_back(a, c, d);
+    m.triangles.emplace_back(a, d, b);
+  }
+  const MeshQuality q = evaluateMesh(m);
+  EXPECT_TRUE(q.manifold);
+  EXPECT_FALSE(q.orientable);
+  EXPECT_FALSE(q.oriented);
+  EXPECT_EQ(q.boundaryLoops, 1u);
+  EXPECT_EQ(q.genus, -1);
+  EXPECT_NE(q.toTable().find("not orientable"), std::string::npos) << q.toTable();
+}
+
+TEST(MeshQuality, SelfIntersectionsAreCounted) {
+  TriangleMesh m = tetrahedron();
+  m.vertices.insert(m.vertices.end(), {V(0.2, 0.2, -0.5), V(0.3, 0.2, -0.5), V(0.25, 0.25, 0.1)});
+  m.triangles.emplace_back(4, 5, 6);
+  const MeshQuality q = evaluateMesh(m);
+  EXPECT_EQ(q.selfIntersections, 1u);
+  EXPECT_FALSE(q.valid());
+  EXPECT_NE(q.toJson().find("\"self_intersecting_face_pairs\": 1"), std::string::npos);
+  EXPECT_EQ(evaluateMesh(torusMesh(24, 12)).selfIntersections, 0u);
+}
+
+// Reference points farther than two output spacings (2 × mean edge length) from the mesh are uncovered.
+TEST(MeshQuality, UncoveredReferencePoints) {
+  const TriangleMesh m = gridSquare(10);
+  PointCloud cloud;
+  for (int i = 0; i <= 20; ++i)
+    for (int j = 0; j <= 20; ++j) cloud.points.emplace_back(i / 20.0, j / 20.0, 0.0);
+  cloud.points.emplace_back(0.5, 0.5, 0.3);   // 0.3 above: farther than 2 × 0.113
+  cloud.points.emplace_back(0.5, 0.5, 0.15);  // 0.15 above: within two spacings
+  cloud.points.emplace_back(3.0, 0.5, 0.0);   // a part the mesh misses
+  MeshQualityParams p;
+  p.meshSamples = 2000;
+  const MeshQuality q = evaluateMesh(m, &cloud, p);
+  EXPECT_NEAR(q.uncoveredDistance, 2.0 * q.meanEdgeLength, 1e-12);
+  EXPECT_EQ(q.uncoveredPoints, (std::vector<std::size_t>{441, 443}));
+  EXPECT_EQ(q.uncovered, 2u);
+  EXPECT_NEAR(q.uncoveredShare, 2.0 / 444.0, 1e-12);
+  const PointCloud out = uncoveredInput(cloud, q);
+  ASSERT_EQ(out.size(), 2u);
+  EXPECT_EQ(out.points[1], V(3.0, 0.5, 0.0));
+  EXPECT_NE(q.toTable().find("2 points (0.45 %)"), std::string::npos) << q.toTable();
 }
 
 TEST(MeshQuality, IsolatedVerticesAndComponents) {

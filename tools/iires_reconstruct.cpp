@@ -23,9 +23,9 @@ int main(int argc, char** argv) {
   return iires::tools::guardedMain("iires-reconstruct", [&]() -> int {
     CLI::App app{"Reconstruct a triangle mesh from a point cloud (isotropic resampling + local Delaunay) and "
                  "report its quality."};
-    std::string input, output, reportPath, qualityOnly, method = "local";
+    std::string input, output, reportPath, qualityOnly, uncoveredPath, method = "local";
     long long count = 10000;
-    bool noResample = false, noHoles = false, quiet = false, showProgress = false;
+    bool noResample = false, noHoles = false, noValidity = false, quiet = false, showProgress = false;
     iires::ReconstructParams params;
     std::vector<std::string> columns;
     app.add_option("INPUT", input, "input cloud (.ply .pcd .xyz .xyzn .pts, or mesh vertices .obj .off .stl)")
@@ -36,6 +36,8 @@ int main(int argc, char** argv) {
     app.add_option("--method", method, "triangulation: local (default) or advancing-front")
         ->check(CLI::IsMember({"local", "advancing-front"}));
     app.add_flag("--no-hole-filling", noHoles, "leave small holes open");
+    app.add_flag("--no-validity-repair", noValidity,
+                 "keep self-intersecting faces and non-manifold edges/vertices (the report still counts them)");
     app.add_option("--max-hole-edges", params.holes.maxEdges, "close holes of at most this many edges (>= 3; up to 1.5x that when the fill is good, Q >= 0.4)");
     app.add_option("--max-hole-extent", params.holes.maxRefinedExtent,
                    "close longer holes with new vertices when their bounding box is at most this fraction of their "
@@ -47,6 +49,9 @@ int main(int argc, char** argv) {
                    "names of a .xyz file's columns, e.g. x,y,z,red,green,blue,intensity,label:int (attributes carried to the mesh's .ply vertices)")
         ->delimiter(',');
     app.add_option("--report", reportPath, "write the report as JSON to this file");
+    app.add_option("--uncovered", uncoveredPath,
+                   "write the input points farther than 2 mesh spacings from the mesh (the parts it does not "
+                   "cover) to this point cloud file");
     app.add_option("--threads", params.threads, "threads (0 = all cores); the output does not depend on it");
     app.add_option("--seed", params.seed, "seed; same seed -> same mesh");
     app.add_flag("-q,--quiet", quiet, "print nothing on success (no report, no progress)");
@@ -54,7 +59,12 @@ int main(int argc, char** argv) {
     app.set_version_flag("--version", iires::tools::versionString());
     if (const int code = iires::tools::parseArgs(app, argc, argv); code != iires::tools::kContinue) return code;
     // Everything that can be checked before the work is checked here: no output is written on failure.
-    iires::tools::checkOutputPaths(app, {{"OUTPUT_MESH", output}, {"--report", reportPath}}, {input, qualityOnly});
+    iires::tools::checkOutputPaths(app, {{"OUTPUT_MESH", output}, {"--report", reportPath}, {"--uncovered", uncoveredPath}},
+                                   {input, qualityOnly});
+    if (!uncoveredPath.empty() && iires::extensionOf(uncoveredPath) != ".ply" &&
+        iires::extensionOf(uncoveredPath) != ".xyz")
+      throw iires::InputError("cannot write " + uncoveredPath + ": use .ply (with normals when the input has them) "
+                              "or .xyz for --uncovered");
     iires::tools::Progress progress("iires-reconstruct", showProgress, quiet);
     params.progress = progress.callback();  // resampling and meshing stages
 
@@ -79,7 +89,10 @@ int main(int argc, char** argv) {
       qp.seed = params.seed + 1;
       const iires::MeshQuality q = iires::evaluateMesh(mesh, &reference, qp);
       progress.finish();
-      if (!reportPath.empty()) iires::writeTextFile(reportPath, q.toJson());
+      iires::OutputBatch outputs;
+      if (!reportPath.empty()) outputs.text(reportPath, q.toJson());
+      if (!uncoveredPath.empty()) outputs.pointCloud(uncoveredPath, iires::uncoveredInput(reference, q));
+      outputs.commit();
       if (!quiet) std::cout << "quality of " << qualityOnly << " (reference " << input << ")\n" << q.toTable();
       return iires::tools::kOk;
     }
@@ -93,6 +106,7 @@ int main(int argc, char** argv) {
     params.targetCount = static_cast<std::size_t>(count);
     params.resample = !noResample;
     params.fillHoles = !noHoles;
+    params.repairValidity = !noValidity;
     params.method = iires::parseReconstructMethod(method);
 
     progress.update("read", 0.0);
@@ -109,9 +123,10 @@ int main(int argc, char** argv) {
     if (result.mesh.triangles.empty())
       throw std::runtime_error(input + ": the reconstruction produced no triangles (" +
                                std::to_string(result.mesh.vertices.size()) + " vertices); nothing was written");
-    iires::OutputBatch outputs;  // the mesh and the report, or neither
+    iires::OutputBatch outputs;  // the mesh, the report and the uncovered points, or none of them
     outputs.mesh(output, result.mesh);
     if (!reportPath.empty()) outputs.text(reportPath, result.toJson());
+    if (!uncoveredPath.empty()) outputs.pointCloud(uncoveredPath, result.uncoveredInput);
     outputs.commit();
     progress.finish();
     if (!quiet) {
@@ -124,6 +139,12 @@ int main(int argc, char** argv) {
                 << " / " << result.largeHoles.kept << " (" << result.largeHoles.verticesAdded << " vertices added)\n";
       std::cout << "  " << std::left << std::setw(30) << "Q<0.4 repairs moved / removed" << result.badTriangles.moved
                 << " / " << result.badTriangles.removed << "\n";
+      const iires::ValidityReport& v = result.validity;
+      std::cout << "  " << std::left << std::setw(30) << "validity repairs" << v.intersectingPairs
+                << " self-intersecting pairs, " << v.nonManifoldEdges << " non-manifold edges found; " << v.facesRemoved
+                << " faces removed, " << v.facesAdded << " added";
+      if (v.removedWithoutFill) std::cout << " (" << v.removedWithoutFill << " removed without a fill: holes left open)";
+      std::cout << "\n";
       std::cout << "  " << std::left << std::setw(30) << "time (s)";
       for (const auto& s : result.timings) std::cout << s.name << " " << std::setprecision(3) << s.seconds << "  ";
       std::cout << "\n";

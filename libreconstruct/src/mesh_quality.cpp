@@ -13,6 +13,7 @@
 #include "iires/knn.hpp"
 #include "iires/metrics.hpp"
 #include "iires/parallel.hpp"
+#include "iires/reconstruct/self_intersections.hpp"
 #include "iires/sampling.hpp"
 
 namespace iires {
@@ -98,12 +99,16 @@ void shapeStats(const TriangleMesh& mesh, MeshQuality& q, int threads) {
   q.shareBelow30 = static_cast<double>(bad) / static_cast<double>(nf);
 }
 
-void topologyStats(const TriangleMesh& mesh, MeshQuality& q) {
-  const std::size_t nv = mesh.vertices.size(), nf = mesh.triangles.size();
-  q.faces = nf;
+/// The undirected edges of a mesh from its sorted half-edges: per edge its vertices and its run in `he`.
+struct EdgeRun {
+  std::uint32_t a, b;          // a < b
+  std::size_t begin, end;      // he[begin, end) are its half-edges
+};
+
+std::vector<HalfEdge> sortedHalfEdges(const TriangleMesh& mesh) {
   std::vector<HalfEdge> he;
-  he.reserve(3 * nf);
-  for (std::uint32_t f = 0; f < nf; ++f)
+  he.reserve(3 * mesh.triangles.size());
+  for (std::uint32_t f = 0; f < mesh.triangles.size(); ++f)
     for (int c = 0; c < 3; ++c) {
       const auto a = static_cast<std::uint32_t>(mesh.triangles[f][c]);
       const auto b = static_cast<std::uint32_t>(mesh.triangles[f][(c + 1) % 3]);
@@ -113,9 +118,14 @@ void topologyStats(const TriangleMesh& mesh, MeshQuality& q) {
   std::sort(he.begin(), he.end(), [](const HalfEdge& x, const HalfEdge& y) {
     return x.key != y.key ? x.key < y.key : x.face < y.face;
   });
+  return he;
+}
+
+/// Edge counts, boundary, orientation and mean edge length; the boundary-edge graph's union-find in @p boundary.
+std::vector<EdgeRun> edgeStats(const TriangleMesh& mesh, const std::vector<HalfEdge>& he, DisjointSets& boundary,
+                               std::vector<char>& onBoundary, MeshQuality& q) {
+  std::vector<EdgeRun> edges;
   q.oriented = true;
-  DisjointSets boundary(nv);
-  std::vector<char> onBoundary(nv, 0);
   double edgeLength = 0;
   for (std::size_t i = 0; i < he.size();) {
     std::size_t j = i;
@@ -123,7 +133,7 @@ void topologyStats(const TriangleMesh& mesh, MeshQuality& q) {
     while (j < he.size() && he[j].key == he[i].key) forward += he[j++].forward ? 1 : 0;
     const std::size_t count = j - i, backward = count - forward;
     const auto a = static_cast<std::uint32_t>(he[i].key >> 32), b = static_cast<std::uint32_t>(he[i].key);
-    ++q.edges;
+    edges.push_back({a, b, i, j});
     edgeLength += (mesh.vertices[a] - mesh.vertices[b]).norm();
     if (count == 1) {
       ++q.boundaryEdges;
@@ -135,9 +145,175 @@ void topologyStats(const TriangleMesh& mesh, MeshQuality& q) {
     if (forward > 1 || backward > 1) q.oriented = false;
     i = j;
   }
+  q.edges = edges.size();
   if (q.edges) q.meanEdgeLength = edgeLength / static_cast<double>(q.edges);
-  for (std::uint32_t v = 0; v < nv; ++v)
+  for (std::uint32_t v = 0; v < mesh.vertices.size(); ++v)
     if (onBoundary[v] && boundary.find(v) == v) ++q.boundaryLoops;
+  return edges;
+}
+
+/// Whether vertex v (its faces incident[begin, end)) is manifold: its link (the opposite edges of its faces) is
+/// one path or one cycle, and none of its faces is degenerate at it.
+bool manifoldVertex(const TriangleMesh& mesh, std::uint32_t v, const std::uint32_t* begin, const std::uint32_t* end) {
+  std::vector<std::uint32_t> linkVerts;
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> linkEdges;
+  for (const std::uint32_t* s = begin; s != end; ++s) {
+    const auto& t = mesh.triangles[*s];
+    int c = 0;
+    while (static_cast<std::uint32_t>(t[c]) != v) ++c;
+    const auto x = static_cast<std::uint32_t>(t[(c + 1) % 3]), y = static_cast<std::uint32_t>(t[(c + 2) % 3]);
+    if (x == v || y == v || x == y) return false;
+    linkEdges.emplace_back(x, y);
+    linkVerts.push_back(x);
+    linkVerts.push_back(y);
+  }
+  std::sort(linkVerts.begin(), linkVerts.end());
+  linkVerts.erase(std::unique(linkVerts.begin(), linkVerts.end()), linkVerts.end());
+  auto local = [&](std::uint32_t x) {
+    return static_cast<std::uint32_t>(std::lower_bound(linkVerts.begin(), linkVerts.end(), x) - linkVerts.begin());
+  };
+  DisjointSets link(linkVerts.size());
+  std::vector<int> degree(linkVerts.size(), 0);
+  for (const auto& [x, y] : linkEdges) {
+    const std::uint32_t lx = local(x), ly = local(y);
+    ++degree[lx];
+    ++degree[ly];
+    link.unite(lx, ly);
+  }
+  std::size_t parts = 0;
+  for (std::uint32_t i = 0; i < linkVerts.size(); ++i) {
+    if (link.find(i) == i) ++parts;
+    if (degree[i] > 2) return false;
+  }
+  return parts == 1;
+}
+
+/// Per face, whether it can be oriented consistently with its neighbours across manifold edges: 2-colouring
+/// of the face graph where a neighbour sharing an edge in the same direction must be flipped. Returns, per face
+/// component root (through vertices, @p comp), whether a conflict was found.
+std::vector<char> orientationConflicts(const TriangleMesh& mesh, const std::vector<HalfEdge>& he,
+                                       const std::vector<EdgeRun>& edges, DisjointSets& comp) {
+  const std::size_t nf = mesh.triangles.size();
+  std::vector<std::uint32_t> start(nf + 1, 0);
+  for (const EdgeRun& e : edges)
+    if (e.end - e.begin == 2) ++start[he[e.begin].face + 1], ++start[he[e.begin + 1].face + 1];
+  for (std::size_t f = 0; f < nf; ++f) start[f + 1] += start[f];
+  std::vector<std::pair<std::uint32_t, char>> adj(start[nf]);  // neighbour, must differ in flip
+  {
+    std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
+    for (const EdgeRun& e : edges) {
+      if (e.end - e.begin != 2) continue;
+      const HalfEdge &x = he[e.begin], &y = he[e.begin + 1];
+      const char flip = x.forward == y.forward ? 1 : 0;  // same direction: one of them must be reversed
+      adj[fill[x.face]++] = {y.face, flip};
+      adj[fill[y.face]++] = {x.face, flip};
+    }
+  }
+  std::vector<char> conflict(mesh.vertices.size(), 0);
+  std::vector<signed char> side(nf, -1);
+  std::vector<std::uint32_t> queue;
+  for (std::uint32_t f0 = 0; f0 < nf; ++f0) {
+    if (side[f0] >= 0) continue;
+    side[f0] = 0;
+    queue.assign(1, f0);
+    for (std::size_t qi = 0; qi < queue.size(); ++qi) {
+      const std::uint32_t f = queue[qi];
+      for (std::uint32_t s = start[f]; s < start[f + 1]; ++s) {
+        const auto [g, flip] = adj[s];
+        const signed char want = static_cast<signed char>(side[f] ^ flip);
+        if (side[g] < 0) {
+          side[g] = want;
+          queue.push_back(g);
+        } else if (side[g] != want) {
+          conflict[comp.find(static_cast<std::uint32_t>(mesh.triangles[f][0]))] = 1;
+        }
+      }
+    }
+  }
+  return conflict;
+}
+
+/// The per-component topology (q.parts) and the summary built from it (genus, closed components, orientable).
+void componentStats(const TriangleMesh& mesh, const std::vector<HalfEdge>& he, const std::vector<EdgeRun>& edges,
+                    DisjointSets& comp, DisjointSets& boundary, const std::vector<char>& onBoundary,
+                    const std::vector<char>& badVertex, const std::vector<char>& referenced, MeshQuality& q) {
+  const std::size_t nv = mesh.vertices.size();
+  std::vector<std::size_t> index(nv, 0);  // component root → position in parts (roots in ascending order)
+  std::vector<std::uint32_t> roots;
+  for (std::uint32_t v = 0; v < nv; ++v)
+    if (referenced[v] && comp.find(v) == v) index[v] = roots.size(), roots.push_back(v);
+  std::vector<ComponentTopology> parts(roots.size());
+  for (auto& p : parts) p.manifold = true;
+  auto of = [&](std::uint32_t v) -> ComponentTopology& { return parts[index[comp.find(v)]]; };
+  for (std::uint32_t v = 0; v < nv; ++v) {
+    if (!referenced[v]) continue;
+    ComponentTopology& p = of(v);
+    ++p.vertices;
+    if (badVertex[v]) p.manifold = false;
+    if (onBoundary[v] && boundary.find(v) == v) ++p.boundaryLoops;
+  }
+  for (const auto& t : mesh.triangles) ++of(static_cast<std::uint32_t>(t[0])).faces;
+  for (const EdgeRun& e : edges) {
+    ComponentTopology& p = of(e.a);
+    ++p.edges;
+    if (e.end - e.begin > 2) p.manifold = false;
+  }
+  const std::vector<char> conflict = orientationConflicts(mesh, he, edges, comp);
+  q.orientable = true;
+  long long genusSum = 0;
+  bool allGenus = true;
+  for (std::size_t i = 0; i < parts.size(); ++i) {
+    ComponentTopology& p = parts[i];
+    p.euler = static_cast<long long>(p.vertices) - static_cast<long long>(p.edges) + static_cast<long long>(p.faces);
+    p.orientable = p.manifold && !conflict[roots[i]];
+    p.closed = p.manifold && p.boundaryLoops == 0;
+    const long long twiceGenus = 2 - p.euler - static_cast<long long>(p.boundaryLoops);
+    if (p.orientable && twiceGenus >= 0 && twiceGenus % 2 == 0) p.genus = twiceGenus / 2;
+    if (p.closed) ++q.closedComponents;
+    if (!p.orientable) q.orientable = false;
+    if (p.genus < 0) allGenus = false;
+    genusSum += std::max(p.genus, 0LL);
+  }
+  q.genus = allGenus && !parts.empty() ? genusSum : -1;
+  std::vector<std::size_t> order(parts.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t x, std::size_t y) { return parts[x].faces > parts[y].faces; });
+  q.parts.clear();
+  for (std::size_t i : order) q.parts.push_back(parts[i]);
+}
+
+/// One component in words: "closed, genus 1, 5000 faces" / "open, 2 boundary loops, genus 0, 120 faces".
+std::string describePart(const ComponentTopology& p) {
+  std::string s;
+  if (!p.manifold) {
+    s = "non-manifold";
+  } else {
+    s = p.closed ? "closed" : "open, " + std::to_string(p.boundaryLoops) + " boundary loop" + (p.boundaryLoops == 1 ? "" : "s");
+    s += p.genus >= 0 ? ", genus " + std::to_string(p.genus) : ", not orientable";
+  }
+  return s + ", " + std::to_string(p.faces) + " faces";
+}
+
+std::string partsJson(const std::vector<ComponentTopology>& parts) {
+  std::ostringstream os;
+  for (std::size_t i = 0; i < parts.size(); ++i) {
+    const ComponentTopology& p = parts[i];
+    os << (i ? ", " : "") << "{\"faces\": " << p.faces << ", \"vertices\": " << p.vertices << ", \"euler\": " << p.euler
+       << ", \"boundary_loops\": " << p.boundaryLoops << ", \"closed\": " << (p.closed ? "true" : "false")
+       << ", \"manifold\": " << (p.manifold ? "true" : "false")
+       << ", \"orientable\": " << (p.orientable ? "true" : "false")
+       << ", \"genus\": " << (p.genus >= 0 ? std::to_string(p.genus) : "null") << "}";
+  }
+  return os.str();
+}
+
+void topologyStats(const TriangleMesh& mesh, MeshQuality& q) {
+  const std::size_t nv = mesh.vertices.size(), nf = mesh.triangles.size();
+  q.faces = nf;
+  const std::vector<HalfEdge> he = sortedHalfEdges(mesh);
+  DisjointSets boundary(nv);
+  std::vector<char> onBoundary(nv, 0);
+  const std::vector<EdgeRun> edges = edgeStats(mesh, he, boundary, onBoundary, q);
 
   // Vertex → faces (CSR), referenced vertices, components.
   std::vector<std::uint32_t> start(nv + 1, 0);
@@ -155,58 +331,24 @@ void topologyStats(const TriangleMesh& mesh, MeshQuality& q) {
     comp.unite(static_cast<std::uint32_t>(t[0]), static_cast<std::uint32_t>(t[1]));
     comp.unite(static_cast<std::uint32_t>(t[0]), static_cast<std::uint32_t>(t[2]));
   }
-  // A vertex is manifold when its link (the opposite edges of its faces) is one path or one cycle.
-  std::vector<std::uint32_t> linkVerts;
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> linkEdges;
+  std::vector<char> referenced(nv, 0), badVertex(nv, 0);
   for (std::uint32_t v = 0; v < nv; ++v) {
     if (start[v] == start[v + 1]) {
       ++q.isolatedVertices;
       continue;
     }
+    referenced[v] = 1;
     ++q.vertices;
     if (comp.find(v) == v) ++q.components;
-    linkVerts.clear();
-    linkEdges.clear();
-    bool degenerate = false;
-    for (std::uint32_t s = start[v]; s < start[v + 1]; ++s) {
-      const auto& t = mesh.triangles[incident[s]];
-      int c = 0;
-      while (static_cast<std::uint32_t>(t[c]) != v) ++c;
-      const auto x = static_cast<std::uint32_t>(t[(c + 1) % 3]), y = static_cast<std::uint32_t>(t[(c + 2) % 3]);
-      if (x == v || y == v || x == y) degenerate = true;
-      linkEdges.emplace_back(x, y);
-      linkVerts.push_back(x);
-      linkVerts.push_back(y);
-    }
-    if (degenerate) {
+    if (!manifoldVertex(mesh, v, incident.data() + start[v], incident.data() + start[v + 1])) {
+      badVertex[v] = 1;
       ++q.nonManifoldVertices;
-      continue;
     }
-    std::sort(linkVerts.begin(), linkVerts.end());
-    linkVerts.erase(std::unique(linkVerts.begin(), linkVerts.end()), linkVerts.end());
-    auto local = [&](std::uint32_t x) {
-      return static_cast<std::uint32_t>(std::lower_bound(linkVerts.begin(), linkVerts.end(), x) - linkVerts.begin());
-    };
-    DisjointSets link(linkVerts.size());
-    std::vector<int> degree(linkVerts.size(), 0);
-    for (const auto& [x, y] : linkEdges) {
-      const std::uint32_t lx = local(x), ly = local(y);
-      ++degree[lx];
-      ++degree[ly];
-      link.unite(lx, ly);
-    }
-    std::size_t parts = 0;
-    bool branch = false;
-    for (std::uint32_t i = 0; i < linkVerts.size(); ++i) {
-      if (link.find(i) == i) ++parts;
-      if (degree[i] > 2) branch = true;
-    }
-    if (parts != 1 || branch) ++q.nonManifoldVertices;
   }
   q.euler = static_cast<long long>(q.vertices) - static_cast<long long>(q.edges) + static_cast<long long>(nf);
   q.closed = nf > 0 && q.boundaryEdges == 0 && q.nonManifoldEdges == 0;
   q.manifold = q.nonManifoldEdges == 0 && q.nonManifoldVertices == 0;
-  if (q.closed && q.manifold && q.oriented) q.genus = (2 * static_cast<long long>(q.components) - q.euler) / 2;
+  componentStats(mesh, he, edges, comp, boundary, onBoundary, badVertex, referenced, q);
 }
 
 }  // namespace
@@ -239,14 +381,25 @@ MeshQuality evaluateMesh(const TriangleMesh& mesh, const PointCloud* reference, 
   MeshQuality q;
   shapeStats(mesh, q, params.threads);
   topologyStats(mesh, q);
+  q.selfIntersections = selfIntersections(mesh, params.threads).size();
   if (reference && !reference->empty() && !mesh.triangles.empty()) {
     SurfaceDistance& d = q.distance;
     d.computed = true;
     d.diagonal = bboxDiagonal(reference->points);
     const MeshDistance toMesh(mesh);
-    const DistanceStats back = toMesh.distances(reference->points, params.threads);
-    d.backwardMax = back.max;
-    d.backwardMean = back.mean;
+    const std::size_t nr = reference->size();
+    std::vector<double> back(nr);
+    parallelFor(nr, params.threads, [&](std::size_t i) { back[i] = toMesh.distance(reference->points[i]); });
+    q.uncoveredDistance = 2.0 * q.meanEdgeLength;
+    double backSum = 0;
+    for (std::size_t i = 0; i < nr; ++i) {  // fixed order: independent of the thread count
+      backSum += back[i];
+      d.backwardMax = std::max(d.backwardMax, back[i]);
+      if (back[i] > q.uncoveredDistance) q.uncoveredPoints.push_back(i);
+    }
+    d.backwardMean = backSum / static_cast<double>(nr);
+    q.uncovered = q.uncoveredPoints.size();
+    q.uncoveredShare = static_cast<double>(q.uncovered) / static_cast<double>(nr);
     const std::vector<Eigen::Vector3d> samples = meshSamplePoints(mesh, params.meshSamples, params.seed);
     const KnnIndex index(reference->points);
     std::vector<double> dist(samples.size());
@@ -262,6 +415,16 @@ MeshQuality evaluateMesh(const TriangleMesh& mesh, const PointCloud* reference, 
     d.mean = 0.5 * (d.forwardMean + d.backwardMean);
   }
   return q;
+}
+
+PointCloud uncoveredInput(const PointCloud& reference, const MeshQuality& quality) {
+  PointCloud out;
+  for (std::size_t i : quality.uncoveredPoints) {
+    if (i >= reference.size()) throw std::invalid_argument("uncoveredInput: not the cloud the report measured");
+    out.points.push_back(reference.points[i]);
+    if (reference.hasNormals()) out.normals.push_back(reference.normals[i]);
+  }
+  return out;
 }
 
 SurfaceDistance surfaceDistance(const TriangleMesh& mesh, const TriangleMesh& referenceMesh,
@@ -297,11 +460,16 @@ std::string MeshQuality::toJson() const {
      << "  \"boundary_edges\": " << boundaryEdges << ",\n  \"boundary_loops\": " << boundaryLoops << ",\n"
      << "  \"non_manifold_edges\": " << nonManifoldEdges << ",\n"
      << "  \"non_manifold_vertices\": " << nonManifoldVertices << ",\n"
-     << "  \"components\": " << components << ",\n  \"euler\": " << euler << ",\n"
-     << "  \"genus\": " << genus << ",\n"
+     << "  \"self_intersecting_face_pairs\": " << selfIntersections << ",\n"
+     << "  \"components\": " << components << ",\n  \"closed_components\": " << closedComponents << ",\n"
+     << "  \"euler\": " << euler << ",\n"
+     << "  \"genus\": " << (genus >= 0 ? std::to_string(genus) : "null") << ",\n"
+     << "  \"parts\": [" << partsJson(parts) << "],\n"
      << "  \"closed\": " << (closed ? "true" : "false") << ",\n"
      << "  \"manifold\": " << (manifold ? "true" : "false") << ",\n"
+     << "  \"orientable\": " << (orientable ? "true" : "false") << ",\n"
      << "  \"oriented\": " << (oriented ? "true" : "false") << ",\n"
+     << "  \"valid\": " << (valid() ? "true" : "false") << ",\n"
      << "  \"mean_edge_length\": " << num(meanEdgeLength) << ",\n  \"area\": " << num(area);
   if (distance.computed) {
     os << ",\n  \"distance\": {\"hausdorff\": " << num(distance.hausdorff) << ", \"mean\": " << num(distance.mean)
@@ -310,6 +478,8 @@ std::string MeshQuality::toJson() const {
        << num(distance.forwardMax) << ", \"mesh_to_reference_mean\": " << num(distance.forwardMean)
        << ", \"reference_to_mesh_max\": " << num(distance.backwardMax) << ", \"reference_to_mesh_mean\": "
        << num(distance.backwardMean) << ", \"diagonal\": " << num(distance.diagonal) << "}";
+    os << ",\n  \"uncovered\": {\"count\": " << uncovered << ", \"share\": " << num(uncoveredShare)
+       << ", \"distance\": " << num(uncoveredDistance) << "}";
   }
   os << "\n}\n";
   return os.str();
@@ -333,8 +503,13 @@ std::string MeshQuality::toTable() const {
   row("boundary edges / loops", std::to_string(boundaryEdges) + " / " + std::to_string(boundaryLoops));
   row("non-manifold edges / vertices",
       std::to_string(nonManifoldEdges) + " / " + std::to_string(nonManifoldVertices));
-  row("components", std::to_string(components));
-  row("Euler characteristic", std::to_string(euler) + (genus >= 0 ? " (genus " + std::to_string(genus) + ")" : ""));
+  row("self-intersecting face pairs", std::to_string(selfIntersections));
+  row("components", std::to_string(components) + " (" + std::to_string(closedComponents) + " closed)");
+  constexpr std::size_t kListed = 8;  // the largest components, one line each
+  for (std::size_t i = 0; i < parts.size() && i < kListed; ++i)
+    row(i == 0 ? "  by size" : "", describePart(parts[i]));
+  if (parts.size() > kListed) row("", "... " + std::to_string(parts.size() - kListed) + " smaller components");
+  row("Euler characteristic", std::to_string(euler));
   row("closed / manifold / oriented", std::string(closed ? "yes" : "no") + " / " + (manifold ? "yes" : "no") +
                                           " / " + (oriented ? "yes" : "no"));
   if (degenerateFaces) row("degenerate faces", std::to_string(degenerateFaces));
@@ -342,6 +517,10 @@ std::string MeshQuality::toTable() const {
     row("Hausdorff (abs / % diag)",
         num(distance.hausdorff) + " / " + fix(100.0 * distance.relativeHausdorff(), 3) + " %");
     row("mean distance (abs / % diag)", num(distance.mean) + " / " + fix(100.0 * distance.relativeMean(), 4) + " %");
+    row("mesh -> input max (% diag)", fix(100.0 * distance.forwardMax / distance.diagonal, 3) + " %");
+    row("input -> mesh max (% diag)", fix(100.0 * distance.backwardMax / distance.diagonal, 3) + " %");
+    row("uncovered input (>2 spacings)",
+        std::to_string(uncovered) + " points (" + fix(100.0 * uncoveredShare, 2) + " %)");
   }
   return os.str();
 }

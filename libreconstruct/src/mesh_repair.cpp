@@ -508,16 +508,25 @@ BadTriangleReport repairBadTriangles(TriangleMesh& mesh, const std::vector<Eigen
 std::size_t removeExtraFans(TriangleMesh& mesh) {
   auto& T = mesh.triangles;
   const std::size_t nv = mesh.vertices.size();
-  std::vector<std::vector<std::uint32_t>> incident(nv);
-  for (std::uint32_t f = 0; f < T.size(); ++f)
-    for (int c = 0; c < 3; ++c) incident[vtx(T[f], c)].push_back(f);
+  // Vertex → faces (CSR).
+  std::vector<std::uint32_t> start(nv + 1, 0);
+  for (const auto& t : T)
+    for (int c = 0; c < 3; ++c) ++start[vtx(t, c) + 1];
+  for (std::size_t v = 0; v < nv; ++v) start[v + 1] += start[v];
+  std::vector<std::uint32_t> incident(start[nv]);
+  {
+    std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
+    for (std::uint32_t f = 0; f < T.size(); ++f)
+      for (int c = 0; c < 3; ++c) incident[fill[vtx(T[f], c)]++] = f;
+  }
   std::vector<char> removed(T.size(), 0);
   std::size_t count = 0;
-  std::vector<std::uint32_t> faces, parent;
+  std::vector<std::uint32_t> faces, parent, size;
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> spokes;  // (other vertex, local face)
   for (std::uint32_t v = 0; v < nv; ++v) {
     faces.clear();
-    for (std::uint32_t f : incident[v])
-      if (!removed[f]) faces.push_back(f);
+    for (std::uint32_t s = start[v]; s < start[v + 1]; ++s)
+      if (!removed[incident[s]]) faces.push_back(incident[s]);
     if (faces.size() < 2) continue;
     // Fans: faces around v joined through a shared edge (v, x).
     parent.resize(faces.size());
@@ -526,7 +535,7 @@ std::size_t removeExtraFans(TriangleMesh& mesh) {
       while (parent[x] != x) x = parent[x] = parent[parent[x]];
       return x;
     };
-    std::vector<std::pair<std::uint32_t, std::uint32_t>> spokes;  // (other vertex, local face)
+    spokes.clear();
     for (std::uint32_t i = 0; i < faces.size(); ++i)
       for (int c = 0; c < 3; ++c) {
         const std::uint32_t x = vtx(T[faces[i]], c);
@@ -538,7 +547,7 @@ std::size_t removeExtraFans(TriangleMesh& mesh) {
         const std::uint32_t a = find(spokes[s].second), b = find(spokes[s - 1].second);
         if (a != b) parent[std::max(a, b)] = std::min(a, b);
       }
-    std::vector<std::uint32_t> size(faces.size(), 0);
+    size.assign(faces.size(), 0);
     for (std::uint32_t i = 0; i < faces.size(); ++i) ++size[find(i)];
     std::uint32_t best = 0;
     for (std::uint32_t i = 1; i < faces.size(); ++i)

@@ -11,6 +11,7 @@
 #include "iires/attributes.hpp"
 #include "iires/intrinsic.hpp"
 #include "iires/normals.hpp"
+#include "iires/reconstruct/mesh_validity.hpp"
 #include "iires/validate.hpp"
 
 namespace iires {
@@ -66,6 +67,7 @@ void ReconstructParams::validate() const {
   r.targetCount = std::max<std::size_t>(targetCount, 1);
   if (resample) r.validate();
   local.validate();
+  validity.validate();
   advancingFront.validate();
   holes.validate();
   quality.validate();
@@ -74,7 +76,7 @@ void ReconstructParams::validate() const {
 double ReconstructResult::meshingSeconds() const {
   double s = 0;
   for (const auto& t : timings)
-    if (t.name == "triangulate" || t.name == "holes" || t.name == "orient") s += t.seconds;
+    if (t.name == "triangulate" || t.name == "holes" || t.name == "validity" || t.name == "orient") s += t.seconds;
   return s;
 }
 
@@ -97,6 +99,11 @@ std::string ReconstructResult::toJson() const {
      << ",\n  \"large_holes\": {\"loops\": " << largeHoles.loops << ", \"filled\": " << largeHoles.filled
      << ", \"kept\": " << largeHoles.kept << ", \"faces_added\": " << largeHoles.facesAdded
      << ", \"vertices_added\": " << largeHoles.verticesAdded << ", \"skipped\": " << (largeHoles.skipped ? "true" : "false") << "}"
+     << ",\n  \"validity_repair\": {\"intersecting_pairs_found\": " << validity.intersectingPairs
+     << ", \"non_manifold_edges_found\": " << validity.nonManifoldEdges << ", \"rounds\": " << validity.rounds
+     << ", \"faces_removed\": " << validity.facesRemoved << ", \"faces_added\": " << validity.facesAdded
+     << ", \"vertices_added\": " << validity.verticesAdded
+     << ", \"removed_without_fill\": " << validity.removedWithoutFill << "}"
      << ",\n  \"orientation\": {\"components\": " << orientation.components
      << ", \"faces_flipped\": " << orientation.facesFlipped << ", \"conflicts\": " << orientation.conflicts << "}"
      << ",\n  \"quality\": " << nested(quality.toJson()) << ",\n  \"meshing_time_s\": " << num(meshingSeconds())
@@ -217,6 +224,35 @@ ReconstructResult reconstruct(const PointCloud& input, const ReconstructParams& 
   }
   clock.end("holes", t);
 
+  if (params.repairValidity) {
+    t = clock.begin("validity");
+    ValidityParams vp = params.validity;
+    vp.holes = params.holes;
+    vp.refill = params.fillHoles && vp.refill;
+    vp.minComponentFaces = params.minComponentFaces;
+    vp.threads = params.threads;
+    result.validity = repairValidity(result.mesh, normals, vp);
+    if (result.validity.facesAdded > 0 && params.repairQuality > 0) {
+      // The fills can hold poor triangles: the same quality repairs as above, then the check again (a repair that
+      // made something intersect is undone by removal there).
+      const BadTriangleReport again = repairBadTriangles(result.mesh, normals, params.repairQuality, params.repairDeviation);
+      result.badTriangles.moved += again.moved;
+      result.badTriangles.removed += again.removed;
+      if (params.remeshBadRegions) {
+        flippedEarlier += orientConsistently(result.mesh, normals).facesFlipped;
+        result.remeshedVertices += remeshBadRegions(result.mesh, normals, params.repairQuality);
+      }
+      vp.rounds = 1;
+      const ValidityReport check = repairValidity(result.mesh, normals, vp);
+      result.validity.rounds += check.rounds;
+      result.validity.facesRemoved += check.facesRemoved;
+      result.validity.facesAdded += check.facesAdded;
+      result.validity.verticesAdded += check.verticesAdded;
+      result.validity.removedWithoutFill += check.removedWithoutFill;
+    }
+    clock.end("validity", t);
+  }
+
   t = clock.begin("orient");
   result.orientation = orientConsistently(result.mesh, normals);
   result.orientation.facesFlipped += flippedEarlier;  // the earlier passes' flips (before large holes, remeshing)
@@ -246,6 +282,7 @@ ReconstructResult reconstruct(const PointCloud& input, const ReconstructParams& 
     qp.threads = params.threads;
     qp.seed = params.seed + 1;
     result.quality = evaluateMesh(result.mesh, &cloud, qp);
+    result.uncoveredInput = uncoveredInput(cloud, result.quality);
     clock.end("quality", t);
   }
   clock.end("total", start);

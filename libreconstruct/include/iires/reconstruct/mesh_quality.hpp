@@ -7,6 +7,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "iires/types.hpp"
 
@@ -44,6 +45,19 @@ struct MeshQualityParams {
   void validate() const;
 };
 
+/// @brief Topology of one connected component (through shared vertices) of a mesh.
+struct ComponentTopology {
+  std::size_t faces = 0, vertices = 0, edges = 0;  ///< counts within the component
+  std::size_t boundaryLoops = 0;  ///< boundary loops (0: closed)
+  long long euler = 0;            ///< χ = V − E + F of the component
+  bool manifold = false;          ///< no non-manifold edge or vertex (and no degenerate face)
+  bool orientable = false;        ///< its faces can be oriented consistently (checked only when manifold)
+  bool closed = false;            ///< manifold and no boundary
+  /// Genus g of the surface from χ = 2 − 2g − b (b boundary loops); −1 when it is not defined (a non-manifold
+  /// or non-orientable component). Never printed as a number then.
+  long long genus = -1;
+};
+
 /// @brief The quality report of a mesh.
 struct MeshQuality {
   // Shape (over all faces; degenerate faces count with Q = 0 and angle 0).
@@ -64,12 +78,30 @@ struct MeshQuality {
   bool closed = false;                 ///< no boundary and no non-manifold edge (and at least one face)
   bool oriented = false;               ///< every directed edge is used by at most one face
   bool manifold = false;               ///< no non-manifold edge or vertex
-  /// Genus of a closed oriented manifold (components − χ/2), −1 otherwise.
+  bool orientable = false;             ///< every component is an orientable manifold
+  /// Sum of the components' genera when every one has a genus (ComponentTopology::genus), −1 otherwise
+  /// (then it is not printed: see parts). For one closed surface, its genus.
   long long genus = -1;
+  std::size_t closedComponents = 0;    ///< components that are closed manifolds
+  std::vector<ComponentTopology> parts;  ///< per component, most faces first (ties: lowest vertex index first)
+  /// Pairs of faces that intersect other than in a common vertex or edge (selfIntersections(); degenerate
+  /// faces are counted apart, in degenerateFaces).
+  std::size_t selfIntersections = 0;
   double meanEdgeLength = 0;           ///< mean length of the distinct edges
   double area = 0;                     ///< total surface area
   // Distance to the reference (cloud or mesh), when one was given.
   SurfaceDistance distance;
+  // Reference points the mesh does not cover (when a reference cloud was given).
+  double uncoveredDistance = 0;  ///< the threshold: 2 × meanEdgeLength (the output spacing)
+  std::size_t uncovered = 0;     ///< reference points farther than uncoveredDistance from the mesh
+  double uncoveredShare = 0;     ///< uncovered / reference points (0–1)
+  std::vector<std::size_t> uncoveredPoints;  ///< their indices in the reference, ascending
+
+  /// @brief Whether the mesh is valid for downstream use: faces, no self-intersection, no degenerate face,
+  /// manifold and consistently oriented.
+  bool valid() const {
+    return faces > 0 && selfIntersections == 0 && degenerateFaces == 0 && manifold && oriented;
+  }
 
   /// @brief The report as a JSON object.
   std::string toJson() const;
@@ -77,12 +109,17 @@ struct MeshQuality {
   std::string toTable() const;
 };
 
-/// @brief Shape and topology of @p mesh; with @p reference, also the two-sided distance to that cloud:
-/// reference→mesh exactly (point-to-triangle, CGAL AABB tree) and mesh→reference from params.meshSamples
-/// area-uniform samples of the mesh plus its vertices (distance to the nearest reference point).
+/// @brief Shape and topology of @p mesh (self-intersections included); with @p reference, also the two-sided
+/// distance to that cloud: reference→mesh exactly (point-to-triangle, CGAL AABB tree) and mesh→reference from
+/// params.meshSamples area-uniform samples of the mesh plus its vertices (distance to the nearest reference
+/// point), and the reference points farther than two output spacings from the mesh (uncovered).
 /// @note O(F log F + (n + s) log F). Deterministic for any thread count.
 MeshQuality evaluateMesh(const TriangleMesh& mesh, const PointCloud* reference = nullptr,
                          const MeshQualityParams& params = {});
+
+/// @brief The points of @p reference that @p quality found uncovered (MeshQuality::uncoveredPoints), with their
+/// normals when it has them, in index order. @p reference must be the cloud evaluateMesh() measured.
+PointCloud uncoveredInput(const PointCloud& reference, const MeshQuality& quality);
 
 /// @brief Two-sided distance between @p mesh and a reference *surface* (e.g. the true mesh a cloud was
 /// sampled from): both sides from area-uniform samples (plus vertices) measured exactly against the other mesh.

@@ -14,6 +14,7 @@
 #include "iires/reconstruct/advancing_front.hpp"
 #include "iires/reconstruct/mesh_quality.hpp"
 #include "iires/reconstruct/mesh_repair.hpp"
+#include "iires/reconstruct/mesh_validity.hpp"
 #include "iires/reconstruct/triangulate.hpp"
 #include "iires/resample.hpp"
 #include "iires/types.hpp"
@@ -59,6 +60,10 @@ struct ReconstructParams {
   /// Then the regions (2 rings) around triangles still below repairQuality are remeshed isotropically, kept when
   /// their worst Q rises (remeshBadRegions); nothing happens when no triangle is below it
   bool remeshBadRegions = true;
+  /// Make the mesh valid after the repairs above (repairValidity): no self-intersection, no non-manifold edge or
+  /// vertex; intersecting faces are removed with a neighbourhood and the hole is filled again (when fillHoles)
+  bool repairValidity = true;
+  ValidityParams validity;          ///< its settings (holes, minComponentFaces and threads are set from here)
   bool evaluate = true;             ///< compute the quality report (distance to the validated input cloud)
   MeshQualityParams quality;        ///< report settings (threads and seed are set from here)
   /// Neighbour rule for resampling and the 1-rings. nullptr = the resampler's default (intrinsic unless
@@ -68,7 +73,7 @@ struct ReconstructParams {
   int threads = 0;         ///< 0 = all cores; the mesh does not depend on it
   /// Optional progress report: called with a stage name and the fraction of that stage done, in [0, 1], from
   /// the calling thread only — the resampler's stages (see ResampleParams::progress, used when
-  /// resampling.progress is empty), then "normals" (no resampling), "triangulate", "holes", "orient",
+  /// resampling.progress is empty), then "normals" (no resampling), "triangulate", "holes", "validity", "orient",
   /// "quality". Empty = no reports. Does not affect the output.
   std::function<void(const std::string& stage, double fraction)> progress;
 
@@ -91,12 +96,14 @@ struct ReconstructResult {
   std::size_t flipsAfterFilling = 0; ///< Delaunay flips after hole filling (local method)
   BadTriangleReport badTriangles;    ///< vertices moved / removed to raise the worst triangles (repairBadTriangles)
   std::size_t remeshedVertices = 0;  ///< vertices moved / removed / added by remeshBadRegions
+  ValidityReport validity;           ///< what repairValidity found and did
   OrientationReport orientation;     ///< orientation diagnostics
   std::size_t unusedVertices = 0;    ///< samples no triangle uses (removed from the mesh)
   MeshQuality quality;               ///< the quality report (when params.evaluate)
+  PointCloud uncoveredInput;         ///< input points the mesh does not cover (quality.uncoveredPoints)
   std::vector<StageTime> timings;    ///< per stage, in order; the last is "total"
 
-  /// @brief Seconds spent meshing after resampling (triangulation, holes, orientation).
+  /// @brief Seconds spent meshing after resampling (triangulation, holes, validity repair, orientation).
   double meshingSeconds() const;
   /// @brief The report as a JSON object.
   std::string toJson() const;

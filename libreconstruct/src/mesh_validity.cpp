@@ -1,0 +1,139 @@
+#include "iires/reconstruct/mesh_validity.hpp"
+
+#include <algorithm>
+#include <cstdint>
+#include <stdexcept>
+#include <utility>
+
+#include "iires/reconstruct/self_intersections.hpp"
+
+namespace iires {
+namespace {
+
+/// Remove the faces flagged in @p drop (keeping the others in order). Returns how many were removed.
+std::size_t removeFaces(TriangleMesh& mesh, const std::vector<char>& drop) {
+  auto& T = mesh.triangles;
+  std::size_t w = 0;
+  for (std::size_t f = 0; f < T.size(); ++f)
+    if (!drop[f]) T[w++] = T[f];
+  const std::size_t removed = T.size() - w;
+  T.resize(w);
+  return removed;
+}
+
+/// At every edge with more than two faces keep the lowest-index face and the lowest-index one using the edge in
+/// the opposite direction (else the next one): the pair that can stay consistently oriented.
+std::size_t removeNonManifoldEdgeFaces(TriangleMesh& mesh, std::size_t* edgesFound) {
+  struct Use {
+    std::uint64_t key;
+    std::uint32_t face;
+    bool forward;
+  };
+  std::vector<Use> uses;
+  uses.reserve(3 * mesh.triangles.size());
+  for (std::uint32_t f = 0; f < mesh.triangles.size(); ++f)
+    for (int c = 0; c < 3; ++c) {
+      const auto a = static_cast<std::uint32_t>(mesh.triangles[f][c]);
+      const auto b = static_cast<std::uint32_t>(mesh.triangles[f][(c + 1) % 3]);
+      if (a == b) continue;
+      uses.push_back({(static_cast<std::uint64_t>(std::min(a, b)) << 32) | std::max(a, b), f, a < b});
+    }
+  std::sort(uses.begin(), uses.end(),
+            [](const Use& x, const Use& y) { return x.key != y.key ? x.key < y.key : x.face < y.face; });
+  std::vector<char> drop(mesh.triangles.size(), 0);
+  std::size_t found = 0;
+  for (std::size_t i = 0; i < uses.size();) {
+    std::size_t j = i;
+    while (j < uses.size() && uses[j].key == uses[i].key) ++j;
+    if (j - i > 2) {
+      ++found;
+      std::size_t second = i + 1;
+      for (std::size_t k = i + 1; k < j; ++k)
+        if (uses[k].forward != uses[i].forward) {
+          second = k;
+          break;
+        }
+      for (std::size_t k = i + 1; k < j; ++k)
+        if (k != second) drop[uses[k].face] = 1;
+    }
+    i = j;
+  }
+  if (edgesFound) *edgesFound = found;
+  return found ? removeFaces(mesh, drop) : 0;
+}
+
+/// Flags the faces of @p pairs, grown by @p rings rings of faces through shared vertices.
+std::vector<char> grownRegion(const TriangleMesh& mesh, const std::vector<std::pair<std::size_t, std::size_t>>& pairs,
+                              int rings) {
+  std::vector<char> in(mesh.triangles.size(), 0);
+  for (const auto& [f, g] : pairs) in[f] = in[g] = 1;
+  std::vector<char> vertexIn(mesh.vertices.size(), 0);
+  for (int r = 0; r < rings; ++r) {
+    for (std::size_t f = 0; f < in.size(); ++f)
+      if (in[f])
+        for (int c = 0; c < 3; ++c) vertexIn[static_cast<std::size_t>(mesh.triangles[f][c])] = 1;
+    for (std::size_t f = 0; f < in.size(); ++f)
+      for (int c = 0; c < 3; ++c)
+        if (vertexIn[static_cast<std::size_t>(mesh.triangles[f][c])]) in[f] = 1;
+  }
+  return in;
+}
+
+/// Make every edge and vertex manifold by removing faces; returns the faces removed.
+std::size_t removeNonManifold(TriangleMesh& mesh, std::size_t minComponentFaces, std::size_t* edgesFound = nullptr) {
+  std::size_t removed = removeNonManifoldEdgeFaces(mesh, edgesFound);
+  if (const std::size_t fans = removeExtraFans(mesh); fans > 0) {
+    removed += fans;
+    if (minComponentFaces > 1) removed += removeSmallComponents(mesh, minComponentFaces);
+  }
+  return removed;
+}
+
+/// Fill the holes a removal opened as the pipeline fills holes: small loops, extra fans, large loops.
+void refill(TriangleMesh& mesh, std::vector<Eigen::Vector3d>& normals, const ValidityParams& params,
+            ValidityReport& report) {
+  const std::size_t faces = mesh.triangles.size(), vertices = mesh.vertices.size();
+  fillSmallHoles(mesh, normals, params.holes);
+  const std::size_t pinched = removeNonManifold(mesh, params.minComponentFaces);
+  if (params.holes.maxRefinedExtent > 0) {
+    orientConsistently(mesh, normals);  // fillLargeHoles needs an oriented 2-manifold
+    fillLargeHoles(mesh, normals, params.holes);
+  }
+  report.facesRemoved += pinched;
+  report.facesAdded += mesh.triangles.size() + pinched - faces;
+  report.verticesAdded += mesh.vertices.size() - vertices;
+}
+
+}  // namespace
+
+void ValidityParams::validate() const {
+  if (rounds < 0) throw std::invalid_argument("validity repair: rounds must be non-negative");
+  holes.validate();
+}
+
+ValidityReport repairValidity(TriangleMesh& mesh, std::vector<Eigen::Vector3d>& normals, const ValidityParams& params) {
+  params.validate();
+  ValidityReport report;
+  report.facesRemoved += removeNonManifold(mesh, params.minComponentFaces, &report.nonManifoldEdges);
+  std::vector<std::pair<std::size_t, std::size_t>> pairs = selfIntersections(mesh, params.threads);
+  report.intersectingPairs = pairs.size();
+  for (int round = 1; round <= params.rounds && !pairs.empty() && params.refill; ++round) {
+    ++report.rounds;
+    report.facesRemoved += removeFaces(mesh, grownRegion(mesh, pairs, round));
+    report.facesRemoved += removeNonManifold(mesh, params.minComponentFaces);
+    if (params.minComponentFaces > 1) report.facesRemoved += removeSmallComponents(mesh, params.minComponentFaces);
+    refill(mesh, normals, params, report);
+    pairs = selfIntersections(mesh, params.threads);
+  }
+  // What still intersects goes without a fill: removing faces creates no intersection, and removeNonManifold
+  // only removes faces too.
+  while (!pairs.empty()) {
+    const std::size_t removed = removeFaces(mesh, grownRegion(mesh, pairs, 0)) + removeNonManifold(mesh, 0);
+    report.removedWithoutFill += removed;
+    report.facesRemoved += removed;
+    pairs = selfIntersections(mesh, params.threads);
+  }
+  return report;
+}
+
+}  // namespace iires

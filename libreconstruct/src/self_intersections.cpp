@@ -1,0 +1,277 @@
+#include "iires/reconstruct/self_intersections.hpp"
+
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/box_intersection_d.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <Eigen/Geometry>
+#include <cstdint>
+
+#include "iires/parallel.hpp"
+#include "iires/radix_sort.hpp"
+
+namespace iires {
+namespace {
+
+using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
+using Point = Kernel::Point_3;
+using Box = CGAL::Box_intersection_d::Box_with_info_d<double, 3, std::size_t,
+                                                      CGAL::Box_intersection_d::ID_FROM_BOX_ADDRESS>;
+
+/// Whether faces f and g (vertex indices, points p) intersect other than in their common vertices and edge.
+bool facesIntersect(const Eigen::Vector3i& f, const Eigen::Vector3i& g, const std::vector<Point>& p) {
+  auto pt = [&](int v) -> const Point& { return p[static_cast<std::size_t>(v)]; };
+  // Corners of f shared with g: sf[i] = the corner of g with f's vertex i, or -1.
+  std::array<int, 3> sf{-1, -1, -1};
+  int shared = 0;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      if (f[i] == g[j]) sf[i] = j, ++shared;
+  if (shared == 3) return true;  // the same triangle twice
+  if (shared == 2) {
+    // Common edge: they overlap only when coplanar with the two apexes on the same side of the edge.
+    int i = 0;
+    while (sf[i] >= 0) ++i;  // f's apex
+    int j = 0;
+    while (g[j] == f[(i + 1) % 3] || g[j] == f[(i + 2) % 3]) ++j;  // g's apex
+    const Point &a = pt(f[(i + 1) % 3]), &b = pt(f[(i + 2) % 3]), &fa = pt(f[i]), &ga = pt(g[j]);
+    return CGAL::coplanar(a, b, fa, ga) && CGAL::coplanar_orientation(a, b, fa, ga) == CGAL::POSITIVE;
+  }
+  const Kernel::Triangle_3 tf(pt(f[0]), pt(f[1]), pt(f[2])), tg(pt(g[0]), pt(g[1]), pt(g[2]));
+  if (shared == 1) {
+    // Common vertex: the edge of either face opposite it must not meet the other triangle.
+    int i = 0;
+    while (sf[i] < 0) ++i;
+    const int j = sf[i];
+    const Kernel::Segment_3 ef(pt(f[(i + 1) % 3]), pt(f[(i + 2) % 3])), eg(pt(g[(j + 1) % 3]), pt(g[(j + 2) % 3]));
+    return CGAL::do_intersect(tf, eg) || CGAL::do_intersect(tg, ef);
+  }
+  return CGAL::do_intersect(tf, tg);
+}
+
+/// Per vertex, whether its faces provably meet each other only in their common vertex and edges: seen along the
+/// fan's mean normal n, every face leans less than 60° from n (so it projects one-to-one onto the plane ⊥ n, into
+/// the angular wedge between its two spokes) and the wedges do not overlap — two of them touch only along a common
+/// spoke. Then two faces of the fan can only meet over a common ray, i.e. in their common edge. The test is in
+/// floating point with a margin (kMargin radians) no rounding can cross; fans that fail it get the exact tests.
+std::vector<char> separatedFans(const TriangleMesh& mesh) {
+  constexpr double kMargin = 1e-9, kMinLean = 0.5;  // cos 60°
+  const std::size_t nv = mesh.vertices.size(), nf = mesh.triangles.size();
+  std::vector<std::uint32_t> start(nv + 1, 0);
+  for (const auto& t : mesh.triangles)
+    for (int c = 0; c < 3; ++c) ++start[static_cast<std::size_t>(t[c]) + 1];
+  for (std::size_t v = 0; v < nv; ++v) start[v + 1] += start[v];
+  std::vector<std::uint32_t> incident(start[nv]);
+  {
+    std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
+    for (std::uint32_t f = 0; f < nf; ++f)
+      for (int c = 0; c < 3; ++c) incident[fill[static_cast<std::size_t>(mesh.triangles[f][c])]++] = f;
+  }
+  std::vector<char> good(nv, 0);
+  struct Wedge {
+    double from, to, length;  // angles of its spokes, and the angle between them
+    int first, last;          // spoke vertices
+  };
+  std::vector<Wedge> wedges;
+  std::vector<std::array<int, 2>> spokes;
+  for (std::size_t v = 0; v < nv; ++v) {
+    if (start[v] == start[v + 1]) continue;
+    const Eigen::Vector3d& o = mesh.vertices[v];
+    Eigen::Vector3d n = Eigen::Vector3d::Zero();
+    spokes.clear();
+    bool ok = true;
+    for (std::uint32_t s = start[v]; s < start[v + 1] && ok; ++s) {
+      const auto& t = mesh.triangles[incident[s]];
+      int c = 0;
+      while (static_cast<std::size_t>(t[c]) != v) ++c;
+      const int a = t[(c + 1) % 3], b = t[(c + 2) % 3];
+      if (a == b || static_cast<std::size_t>(a) == v || static_cast<std::size_t>(b) == v) ok = false;
+      spokes.push_back({a, b});
+      n += (mesh.vertices[static_cast<std::size_t>(a)] - o).cross(mesh.vertices[static_cast<std::size_t>(b)] - o);
+    }
+    if (!ok || !(n.norm() > 0)) continue;
+    n.normalize();
+    const Eigen::Vector3d u = n.unitOrthogonal(), w = n.cross(u);
+    auto angle = [&](int x) {
+      const Eigen::Vector3d d = mesh.vertices[static_cast<std::size_t>(x)] - o;
+      return std::atan2(d.dot(w), d.dot(u));
+    };
+    wedges.clear();
+    for (const auto& [a, b] : spokes) {
+      const Eigen::Vector3d fn = (mesh.vertices[static_cast<std::size_t>(a)] - o)
+                                     .cross(mesh.vertices[static_cast<std::size_t>(b)] - o);
+      if (!(fn.dot(n) >= kMinLean * fn.norm())) {
+        ok = false;
+        break;
+      }
+      const double from = angle(a), to = angle(b);
+      double length = to - from;
+      if (length < 0) length += 2 * M_PI;
+      if (!(length > kMargin && length < M_PI - kMargin)) {
+        ok = false;
+        break;
+      }
+      wedges.push_back({from, to, length, a, b});
+    }
+    if (!ok) continue;
+    // Sorted by their first spoke, each wedge must end before the next begins (or on the same spoke), and all of
+    // them together must go round once.
+    std::sort(wedges.begin(), wedges.end(), [](const Wedge& x, const Wedge& y) { return x.from < y.from; });
+    double turn = 0;
+    for (std::size_t i = 0; i < wedges.size() && ok && wedges.size() > 1; ++i) {
+      const Wedge &x = wedges[i], &y = wedges[(i + 1) % wedges.size()];
+      double gap = y.from - x.to;  // in [0, 2π): an overlap becomes a gap near 2π, and the turn two rounds
+      if (gap < 0) gap += 2 * M_PI;
+      if (!(gap > kMargin || (x.last == y.first && y.from == x.to))) ok = false;
+      turn += x.length + gap;
+    }
+    if (wedges.size() > 1 && std::abs(turn - 2 * M_PI) > 1e-6) ok = false;
+    good[v] = ok ? 1 : 0;
+  }
+  return good;
+}
+
+bool overlap(const CGAL::Bbox_3& a, const CGAL::Bbox_3& b) {
+  for (int d = 0; d < 3; ++d)
+    if (a.max(d) < b.min(d) || b.max(d) < a.min(d)) return false;
+  return true;
+}
+
+/// The pairs of overlapping (closed) boxes, each once, from a uniform grid of cells twice the median box size:
+/// every box is entered in the cells it overlaps and a pair is reported in the one cell that holds the lowest
+/// corner of the two boxes' intersection. Linear for a mesh of similar triangles (a reconstruction); returns false,
+/// leaving the work to CGAL's box intersection, when the sizes vary too much for a grid (boxes over many cells).
+template <typename Skip>
+bool gridCandidates(const std::vector<Box>& boxes, const Skip& skip,
+                    std::vector<std::pair<std::size_t, std::size_t>>& out) {
+  if (boxes.size() < 2) return true;
+  std::vector<double> extent(boxes.size());
+  CGAL::Bbox_3 all;
+  for (std::size_t i = 0; i < boxes.size(); ++i) {
+    const CGAL::Bbox_3& b = boxes[i].bbox();
+    extent[i] = std::max({b.xmax() - b.xmin(), b.ymax() - b.ymin(), b.zmax() - b.zmin()});
+    all += b;
+  }
+  std::nth_element(extent.begin(), extent.begin() + static_cast<std::ptrdiff_t>(extent.size() / 2), extent.end());
+  const double cell = 2.0 * extent[extent.size() / 2];
+  constexpr double kMaxCells = 1 << 20;  // per axis: cell coordinates fit 21 bits
+  if (!(cell > 0)) return false;
+  for (int d = 0; d < 3; ++d)
+    if ((all.max(d) - all.min(d)) / cell > kMaxCells) return false;
+  auto coord = [&](double x, int d) { return static_cast<std::uint32_t>((x - all.min(d)) / cell); };
+  auto key = [](std::uint64_t x, std::uint64_t y, std::uint64_t z) { return (x << 42) | (y << 21) | z; };
+  constexpr std::uint64_t kMaxCellsPerBox = 27;
+  std::vector<std::array<std::uint32_t, 3>> low(boxes.size());  // each box's lowest cell
+  std::vector<KeyedIndex> entries;                               // (cell, box), boxes in index order
+  entries.reserve(4 * boxes.size());
+  for (std::uint32_t i = 0; i < boxes.size(); ++i) {
+    const CGAL::Bbox_3& b = boxes[i].bbox();
+    std::uint32_t hi[3];
+    for (int d = 0; d < 3; ++d) low[i][d] = coord(b.min(d), d), hi[d] = coord(b.max(d), d);
+    const auto& lo = low[i];
+    if (std::uint64_t{hi[0] - lo[0] + 1} * (hi[1] - lo[1] + 1) * (hi[2] - lo[2] + 1) > kMaxCellsPerBox) return false;
+    for (std::uint64_t x = lo[0]; x <= hi[0]; ++x)
+      for (std::uint64_t y = lo[1]; y <= hi[1]; ++y)
+        for (std::uint64_t z = lo[2]; z <= hi[2]; ++z) entries.emplace_back(key(x, y, z), i);
+  }
+  radixSort(entries, 1);  // stable: boxes in index order within a cell
+  for (std::size_t r = 0; r < entries.size();) {
+    std::size_t e = r;
+    while (e < entries.size() && entries[e].first == entries[r].first) ++e;
+    for (std::size_t i = r; i < e; ++i)
+      for (std::size_t j = i + 1; j < e; ++j) {
+        const std::uint32_t bi = entries[i].second, bj = entries[j].second;
+        // The lowest corner of the two boxes' intersection lies in the cell max(low_i, low_j).
+        if (key(std::max(low[bi][0], low[bj][0]), std::max(low[bi][1], low[bj][1]),
+                std::max(low[bi][2], low[bj][2])) != entries[r].first)
+          continue;  // reported in another cell
+        if (!overlap(boxes[bi].bbox(), boxes[bj].bbox()) || skip(boxes[bi].info(), boxes[bj].info())) continue;
+        out.emplace_back(boxes[bi].info(), boxes[bj].info());  // bi < bj, and faces are in box order
+      }
+    r = e;
+  }
+  return true;
+}
+
+}  // namespace
+
+std::vector<std::pair<std::size_t, std::size_t>> selfIntersections(const TriangleMesh& mesh, int threads) {
+  std::vector<Point> p;
+  p.reserve(mesh.vertices.size());
+  for (const auto& v : mesh.vertices) p.emplace_back(v.x(), v.y(), v.z());
+  const auto& faces = mesh.triangles;
+  std::vector<Box> boxes;
+  boxes.reserve(faces.size());
+  for (std::size_t f = 0; f < faces.size(); ++f) {
+    const auto& t = faces[f];
+    if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) continue;
+    const Point &a = p[static_cast<std::size_t>(t[0])], &b = p[static_cast<std::size_t>(t[1])],
+                &c = p[static_cast<std::size_t>(t[2])];
+    if (CGAL::collinear(a, b, c)) continue;  // degenerate: counted apart
+    boxes.emplace_back(a.bbox() + b.bbox() + c.bbox(), f);
+  }
+  // Candidates from overlapping boxes (sequential), then the exact tests in parallel.
+  // Faces with a common vertex whose fan is separated (separatedFans) need no test.
+  const std::vector<char> separated = separatedFans(mesh);
+  auto skip = [&](std::size_t f, std::size_t g) {
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j)
+        if (faces[f][i] == faces[g][j] && separated[static_cast<std::size_t>(faces[f][i])]) return true;
+    return false;
+  };
+  std::vector<std::pair<std::size_t, std::size_t>> candidates;
+  if (!gridCandidates(boxes, skip, candidates)) {
+    candidates.clear();
+    std::vector<const Box*> ptr;
+    ptr.reserve(boxes.size());
+    for (const Box& b : boxes) ptr.push_back(&b);
+    constexpr std::ptrdiff_t kCutoff = 2000;  // below this many boxes a scan beats the segment tree (CGAL PMP's)
+    CGAL::box_self_intersection_d(
+        ptr.begin(), ptr.end(),
+        [&](const Box* x, const Box* y) {
+          if (!skip(x->info(), y->info()))
+            candidates.emplace_back(std::min(x->info(), y->info()), std::max(x->info(), y->info()));
+        },
+        kCutoff);
+  }
+  std::vector<char> hit(candidates.size(), 0);
+  constexpr std::size_t kParallelFrom = 20000;  // fewer tests take less than starting the threads
+  parallelFor(candidates.size(), candidates.size() < kParallelFrom ? 1 : threads, [&](std::size_t k) {
+    hit[k] = facesIntersect(faces[candidates[k].first], faces[candidates[k].second], p) ? 1 : 0;
+  });
+  std::vector<std::pair<std::size_t, std::size_t>> pairs;
+  for (std::size_t k = 0; k < candidates.size(); ++k)
+    if (hit[k]) pairs.push_back(candidates[k]);
+  std::sort(pairs.begin(), pairs.end());
+  return pairs;
+}
+
+std::vector<std::pair<std::size_t, std::size_t>> selfIntersectionsBruteForce(const TriangleMesh& mesh) {
+  std::vector<Point> p;
+  for (const auto& v : mesh.vertices) p.emplace_back(v.x(), v.y(), v.z());
+  const auto& faces = mesh.triangles;
+  std::vector<char> degenerate(faces.size(), 0);
+  for (std::size_t f = 0; f < faces.size(); ++f) {
+    const auto& t = faces[f];
+    degenerate[f] = t[0] == t[1] || t[1] == t[2] || t[0] == t[2] ||
+                    CGAL::collinear(p[static_cast<std::size_t>(t[0])], p[static_cast<std::size_t>(t[1])],
+                                    p[static_cast<std::size_t>(t[2])]);
+  }
+  std::vector<std::pair<std::size_t, std::size_t>> pairs;
+  for (std::size_t f = 0; f < faces.size(); ++f)
+    for (std::size_t g = f + 1; g < faces.size(); ++g)
+      if (!degenerate[f] && !degenerate[g] && facesIntersect(faces[f], faces[g], p)) pairs.emplace_back(f, g);
+  return pairs;
+}
+
+std::vector<std::size_t> selfIntersectingFaces(const TriangleMesh& mesh, int threads) {
+  std::vector<std::size_t> out;
+  for (const auto& [f, g] : selfIntersections(mesh, threads)) out.push_back(f), out.push_back(g);
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+  return out;
+}
+
+}  // namespace iires

@@ -1,0 +1,127 @@
+// Tests of self_intersections.hpp: known pairs on small meshes (a piercing triangle, a fold over a common edge,
+// a face through a neighbour's vertex), none on closed convex meshes, degenerate faces apart.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "iires/reconstruct/self_intersections.hpp"
+
+namespace iires {
+namespace {
+
+using V = Eigen::Vector3d;
+using F = Eigen::Vector3i;
+using Pairs = std::vector<std::pair<std::size_t, std::size_t>>;
+
+TriangleMesh tetrahedron() {
+  TriangleMesh m;
+  m.vertices = {V(0, 0, 0), V(1, 0, 0), V(0, 1, 0), V(0, 0, 1)};
+  m.triangles = {F(0, 2, 1), F(0, 1, 3), F(0, 3, 2), F(1, 2, 3)};
+  return m;
+}
+
+/// A closed UV sphere (no intersections by construction).
+TriangleMesh uvSphere(int rings, int segments) {
+  TriangleMesh m;
+  m.vertices.emplace_back(0, 0, 1);
+  for (int r = 1; r < rings; ++r)
+    for (int s = 0; s < segments; ++s) {
+      const double th = M_PI * r / rings, ph = 2 * M_PI * s / segments;
+      m.vertices.emplace_back(std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), std::cos(th));
+    }
+  m.vertices.emplace_back(0, 0, -1);
+  const int south = static_cast<int>(m.vertices.size()) - 1;
+  auto at = [&](int r, int s) { return 1 + (r - 1) * segments + (s % segments); };
+  for (int s = 0; s < segments; ++s) {
+    m.triangles.emplace_back(0, at(1, s), at(1, s + 1));
+    m.triangles.emplace_back(south, at(rings - 1, s + 1), at(rings - 1, s));
+  }
+  for (int r = 1; r + 1 < rings; ++r)
+    for (int s = 0; s < segments; ++s) {
+      m.triangles.emplace_back(at(r, s), at(r + 1, s), at(r + 1, s + 1));
+      m.triangles.emplace_back(at(r, s), at(r + 1, s + 1), at(r, s + 1));
+    }
+  return m;
+}
+
+TEST(SelfIntersections, NoneOnClosedConvexMeshes) {
+  EXPECT_TRUE(selfIntersections(tetrahedron()).empty());
+  EXPECT_TRUE(selfIntersections(uvSphere(12, 20)).empty());
+}
+
+TEST(SelfIntersections, TrianglePiercingOneFace) {
+  TriangleMesh m = tetrahedron();
+  // Crosses the bottom face (z = 0) and ends inside the tetrahedron: exactly one pair.
+  m.vertices.insert(m.vertices.end(), {V(0.2, 0.2, -0.5), V(0.3, 0.2, -0.5), V(0.25, 0.25, 0.1)});
+  m.triangles.emplace_back(4, 5, 6);
+  EXPECT_EQ(selfIntersections(m), (Pairs{{0, 4}}));
+  EXPECT_EQ(selfIntersectingFaces(m), (std::vector<std::size_t>{0, 4}));
+}
+
+TEST(SelfIntersections, CommonEdgeFoldedOntoItself) {
+  // Two faces on edge 0–1, coplanar, apexes on the same side: they overlap.
+  TriangleMesh m;
+  m.vertices = {V(0, 0, 0), V(1, 0, 0), V(0.5, 1, 0), V(0.6, 0.5, 0)};
+  m.triangles = {F(0, 1, 2), F(1, 0, 3)};
+  EXPECT_EQ(selfIntersections(m), (Pairs{{0, 1}}));
+  // Apexes on opposite sides (a flat pair): no intersection; out of the plane: none either.
+  m.vertices[3] = V(0.6, -0.5, 0);
+  EXPECT_TRUE(selfIntersections(m).empty());
+  m.vertices[3] = V(0.6, 0.5, 0.01);
+  EXPECT_TRUE(selfIntersections(m).empty());
+}
+
+TEST(SelfIntersections, CommonVertexWithCrossingEdge) {
+  // Faces share vertex 0; the second one's far edge passes through the first triangle.
+  TriangleMesh m;
+  m.vertices = {V(0, 0, 0), V(2, 0, 0), V(0, 2, 0), V(0.5, 0.5, -1), V(0.5, 0.5, 1)};
+  m.triangles = {F(0, 1, 2), F(0, 3, 4)};
+  EXPECT_EQ(selfIntersections(m), (Pairs{{0, 1}}));
+  // Move the far edge outside the first triangle: they meet in vertex 0 only.
+  m.vertices[3] = V(-0.5, -0.5, -1);
+  m.vertices[4] = V(-0.5, -0.5, 1);
+  EXPECT_TRUE(selfIntersections(m).empty());
+}
+
+TEST(SelfIntersections, DuplicateFaceAndDegenerateFace) {
+  TriangleMesh m = tetrahedron();
+  m.triangles.push_back(m.triangles[3]);  // the same triangle twice
+  EXPECT_EQ(selfIntersections(m), (Pairs{{3, 4}}));
+  TriangleMesh d = tetrahedron();
+  d.vertices.push_back(V(0.5, 0.5, 0));  // on edge 1–2: a collinear face takes part in no pair
+  d.triangles.emplace_back(1, 2, 4);
+  EXPECT_TRUE(selfIntersections(d).empty());
+}
+
+// The grid and the fan shortcut against testing every pair: a sphere whose vertices are pushed in and out at
+// random (folds, fans that overlap, faces through neighbours) and two overlapping spheres.
+TEST(SelfIntersections, MatchesBruteForceOnCrumpledMeshes) {
+  for (double noise : {0.0, 0.02, 0.08, 0.3}) {
+    TriangleMesh m = uvSphere(10, 14);
+    std::mt19937_64 rng(7);
+    std::normal_distribution<double> g(0.0, noise);
+    for (auto& v : m.vertices) v += V(g(rng), g(rng), g(rng));
+    const TriangleMesh s = uvSphere(6, 8);
+    const int off = static_cast<int>(m.vertices.size());
+    for (const auto& v : s.vertices) m.vertices.push_back(0.6 * v + V(0.7, 0.1, 0.0));
+    for (const auto& t : s.triangles) m.triangles.push_back(t + F(off, off, off));
+    const Pairs fast = selfIntersections(m), slow = selfIntersectionsBruteForce(m);
+    EXPECT_EQ(fast, slow) << "noise " << noise;
+    EXPECT_FALSE(slow.empty());
+  }
+}
+
+TEST(SelfIntersections, SameAnswerForAnyThreadCount) {
+  TriangleMesh a = uvSphere(16, 24), b = uvSphere(16, 24);
+  const int off = static_cast<int>(a.vertices.size());
+  for (const auto& v : b.vertices) a.vertices.push_back(0.7 * v + V(0.5, 0.2, 0.1));
+  for (const auto& t : b.triangles) a.triangles.push_back(t + F(off, off, off));
+  const Pairs one = selfIntersections(a, 1);
+  EXPECT_FALSE(one.empty());  // two spheres cut each other along a closed curve
+  EXPECT_EQ(one, selfIntersections(a, 2));
+  for (const auto& [f, g] : one) EXPECT_TRUE(f < b.triangles.size() && g >= b.triangles.size());
+}
+
+}  // namespace
+}  // namespace iires
