@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <string>
 #include <vector>
 
@@ -73,7 +74,7 @@ int main(int argc, char** argv) {
   const std::string prefix = "case=" + t.name + " input=" + std::to_string(count) +
                              " gap_spacings=" + std::to_string(gapSpacings).substr(0, 4) +
                              " noise_spacings=" + std::to_string(noise).substr(0, 4);
-  {  // --denoise-only
+  if (std::getenv("THIN_PARTS_NO_DENOISE_ONLY") == nullptr) {  // --denoise-only
     iires::PreprocessParams pp;
     pp.threads = threads;
     const double t0 = now();

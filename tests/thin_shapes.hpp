@@ -28,8 +28,8 @@ struct ThinCase {
 
   /// Distance from @p p to the true surface.
   double distance(const Eigen::Vector3d& p) const;
-  /// Which of the two near surfaces @p p belongs to (0 or 1), or −1 for points not on a near part (the fold,
-  /// the plate's rim, the spheres away from the contact).
+  /// Which of the two near surfaces @p p belongs to (0 or 1), or −1 for points on the fold (within a gap of
+  /// it) or the plate's rim (within two gaps of its edges: the rim face and the rounded creases beside it).
   int side(const Eigen::Vector3d& p) const;
 };
 
@@ -189,7 +189,7 @@ inline int ThinCase::side(const Eigen::Vector3d& p) const {
     case 0:
       return p.x() > 1.0 - gap ? -1 : (p.z() < gap / 2 ? 0 : 1);
     case 1:
-      return std::min({p.x(), 1 - p.x(), p.y(), 1 - p.y()}) < gap ? -1 : (p.z() < gap / 2 ? 0 : 1);
+      return std::min({p.x(), 1 - p.x(), p.y(), 1 - p.y()}) < 2 * gap ? -1 : (p.z() < gap / 2 ? 0 : 1);
     case 2:
       return p.x() < 0 ? 0 : 1;  // the whole spheres: their areas are equal
     default:

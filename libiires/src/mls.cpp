@@ -161,7 +161,8 @@ Eigen::Vector3d MlsSurface::project(const Eigen::Vector3d& x0, Eigen::Vector3d* 
       if (params_.sheetHeight <= 0) return true;
       const double d = (points_[j] - anchor).norm();
       return sameSheet(anchor, anchorNormal, points_[j], normals_[j],
-                       params_.sheetHeight * std::max(anchorSpacing, kSpacingPerWidth * h_[j]) + params_.sheetSlope * d);
+                       params_.sheetHeight * std::max(anchorSpacing, kSpacingPerWidth * h_[j]) +
+                           sheetTolerance(params_.sheetSlope, d, anchorNormal, normals_[j]));
     };
     bool gate = params_.sheetHeight > 0;
     if (gate && std::none_of(idx.begin(), idx.end(), [&](std::uint32_t j) { return facing(j) && onSheet(j); }))

@@ -11,6 +11,7 @@
 #include <stdexcept>
 #include <tuple>
 
+#include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 
 #include "iires/knn.hpp"
@@ -33,7 +34,8 @@ constexpr double kOffSurfaceLimit = 0.6;  // MlsSurface::project's offSurface be
 constexpr double kBeyondLimit = 0.05;
 constexpr double kCarryShare = 0.05;
 constexpr std::size_t kWiderQuery = 3;   // candidates queried for a sample the rule refuses some of
-constexpr double kCellSheetHeight = 1.25;  // voxel cells: another sheet lies this × the sheet height off a plane     // edits touching more than this share of samples restart the relaxation
+constexpr double kCellSheetHeight = 1.25;
+constexpr double kLayerGapSpacings = 1.5;  // voxel thinning: an empty band this many input spacings wide splits a cell  // voxel cells: another sheet lies this × the sheet height off a plane     // edits touching more than this share of samples restart the relaxation
 
 /// The working sample set S.
 struct Samples {
@@ -87,7 +89,7 @@ struct Edge {
 /// share a cell (a gap narrower than the cell) each keep a point.
 std::vector<std::uint32_t> voxelThin(const std::vector<Eigen::Vector3d>& pts, const std::vector<Eigen::Vector3d>& normals,
                                      std::size_t target, double cell, std::uint64_t seed, int threads,
-                                     double sheetHeight = 0) {
+                                     double sheetHeight = 0, bool keepLayers = false) {
   Eigen::Vector3d lo = pts[0], hi = pts[0];
   for (const auto& p : pts) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
   // A seed shifts the grid by a fraction of a cell in each axis (seed 0: no shift).
@@ -140,6 +142,36 @@ std::vector<std::uint32_t> voxelThin(const std::vector<Eigen::Vector3d>& pts, co
     cell *= std::sqrt(std::clamp(ratio, 0.25, 4.0));
   }
   sortCells(cell);  // (already sorted when the loop stopped on it)
+  // A cell whose points form two layers (a gap wider than layerGap between their heights along the cell's
+  // thinnest direction, with at least two points on each side) holds two sheets closer than the cell is wide.
+  double layerGap = 0;
+  if (keepLayers) {
+    // The input spacing (mean nearest-neighbour distance ≈ half the grid spacing of a random sampling), from
+    // the occupied cells: each holds about cell² of surface.
+    std::size_t cells = 0;
+    for (std::size_t r = 0; r < n; ++r) cells += r == 0 || byCell[r].first != byCell[r - 1].first;
+    layerGap = kLayerGapSpacings * 0.5 * cell / std::sqrt(static_cast<double>(n) / static_cast<double>(cells));
+  }
+  std::vector<double> heights;
+  auto layered = [&](std::size_t begin, std::size_t end) {
+    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+    for (std::size_t x = begin; x < end; ++x) mean += pts[byCell[x].second];
+    mean /= static_cast<double>(end - begin);
+    Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+    for (std::size_t x = begin; x < end; ++x) {
+      const Eigen::Vector3d d = pts[byCell[x].second] - mean;
+      cov.noalias() += d * d.transpose();
+    }
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
+    eig.computeDirect(cov);
+    const Eigen::Vector3d axis = eig.eigenvectors().col(0);
+    heights.clear();
+    for (std::size_t x = begin; x < end; ++x) heights.push_back(axis.dot(pts[byCell[x].second] - mean));
+    std::sort(heights.begin(), heights.end());
+    for (std::size_t x = 2; x + 1 < heights.size(); ++x)
+      if (heights[x] - heights[x - 1] > layerGap) return true;
+    return false;
+  };
   // Per cell the point nearest its centre (ties: the lowest index, the first of its run), returned in index
   // order. With a sheet height, per cell one point per sheet: the points off the planes of the cell's points
   // picked so far by more than it (another sheet a gap away, e.g. the same way facing) are picked too, nearest
@@ -152,6 +184,10 @@ std::vector<std::uint32_t> voxelThin(const std::vector<Eigen::Vector3d>& pts, co
     if (r == first || toCentre[i] < toCentre[best]) best = i;
     if (r + 1 < n && byCell[r + 1].first == byCell[r].first) continue;
     picked[best] = 1;
+    if (layerGap > 0 && r + 1 - first >= 4 && layered(first, r + 1)) {
+      for (std::size_t x = first; x <= r; ++x) picked[byCell[x].second] = 1;  // two sheets: not thinned
+      continue;
+    }
     if (sheetHeight <= 0 || normals.empty() || r == first) continue;
     run.clear();
     for (std::size_t x = first; x <= r; ++x) run.push_back(byCell[x].second);
@@ -1001,9 +1037,11 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
     // Far denser than the output: thin first, so every O(n) stage below works on ≈ maxInputPerSample·N points.
     t = clock.begin("thin");
     const std::size_t target = workingTarget;
+    // Intrinsic control: cells holding two sheets (a gap the input resolves, narrower than a cell) keep all
+    // their points, so that no later stage sees the sheets merged.
     cloud = select(cloud, voxelThin(cloud.points, cloud.normals, target,
                                     bboxDiagonal(cloud.points) / std::sqrt(static_cast<double>(target)), 0,
-                                    params.threads));
+                                    params.threads, 0.0, params.intrinsic));
     clock.end("thin", t);
   }
   result.thinnedPoints = cloud.size();

@@ -8,6 +8,8 @@
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
+#include <cstdio>
+#include <cstdlib>
 
 #include "iires/disjoint_sets.hpp"
 #include "iires/normals.hpp"
@@ -16,9 +18,9 @@
 namespace iires {
 namespace {
 
-constexpr double kMadToSigma = 1.4826;   // a normal distribution's σ per median absolute deviation
 constexpr std::size_t kSpacingRow = 16;
-constexpr int kConsensusPasses = 2;       // normal averaging passes over the same-sheet neighbours  // local spacing: mean nearest-neighbour distance over these row entries
+constexpr int kConsensusPasses = 2;       // normal averaging passes over the same-sheet neighbours
+constexpr std::size_t kOrientNeighbours = 8;  // neighbours per point in the orientation's spanning tree  // local spacing: mean nearest-neighbour distance over these row entries
 
 /// Unit PCA normal of @p p and the points @p idx (fewer than 2 neighbours: @p fallback).
 Eigen::Vector3d pcaNormal(const std::vector<Eigen::Vector3d>& points, std::size_t p,
@@ -44,7 +46,7 @@ Eigen::Vector3d pcaNormal(const std::vector<Eigen::Vector3d>& points, std::size_
 /// neighbours, so the plane with most support is its own.
 Eigen::Vector3d robustNormal(const std::vector<Eigen::Vector3d>& points, std::size_t p, const std::uint32_t* idx,
                              std::size_t count, double height, double slope) {
-  constexpr std::size_t kCandidates = 8;
+  constexpr std::size_t kCandidates = 6;
   std::array<std::uint32_t, 129> others{};
   std::size_t m = 0;
   for (std::size_t a = 0; a < count && m < others.size(); ++a)
@@ -90,7 +92,7 @@ Eigen::Vector3d robustNormal(const std::vector<Eigen::Vector3d>& points, std::si
   // by PCA to the neighbours within the tolerance (a plane through three noisy points tilts), then scored
   // again. A plane across both sheets (containing the gap's direction) gathers points of both in a strip,
   // fewer than the sheet's own plane holds.
-  constexpr std::size_t kRefined = 3;
+  constexpr std::size_t kRefined = 2;
   std::array<std::pair<double, Eigen::Vector3d>, kRefined> top;
   top.fill({-1.0, Eigen::Vector3d::UnitZ()});
   const std::size_t cand = std::min(m, kCandidates);
@@ -128,7 +130,6 @@ void SheetParams::validate() const {
   if (firstNeighbours < 2 || firstNeighbours > pcaNeighbours) fail("firstNeighbours must be in [2, pcaNeighbours]");
   if (refits < 0 || refits > 8) fail("refits must be in [0, 8]");
   if (!(finalHeightSpacings > 0) || !std::isfinite(finalHeightSpacings)) fail("finalHeightSpacings must be finite and > 0");
-  if (!(noiseFactor >= 0) || !std::isfinite(noiseFactor)) fail("noiseFactor must be finite and >= 0");
   if (!(heightSpacings > 0) || !std::isfinite(heightSpacings)) fail("heightSpacings must be finite and > 0");
   if (!(heightSlope >= 0) || !std::isfinite(heightSlope)) fail("heightSlope must be finite and >= 0");
   if (!(maxNormalAngleDeg > 0 && maxNormalAngleDeg <= 180)) fail("maxNormalAngleDeg must be in (0, 180]");
@@ -144,201 +145,230 @@ std::string SheetReport::toJson() const {
   return o.str();
 }
 
-SheetReport separateSheets(const std::vector<Eigen::Vector3d>& points, NeighbourTable& table,
-                           std::vector<Eigen::Vector3d>& normals, const SheetParams& params,
-                           const std::vector<Eigen::Vector3d>* givenNormals) {
-  params.validate();
-  const auto start = std::chrono::steady_clock::now();
-  const std::size_t n = points.size(), K = table.k();
-  if (table.size() != n) throw std::invalid_argument("separateSheets: the table is not of these points");
-  SheetReport report;
-  report.points = n;
-  const bool given = givenNormals && givenNormals->size() == n;
-  const int threads = params.threads;
-  // The rows once, flat (padded with the point itself), and each point's nearest-neighbour distance.
-  std::vector<std::uint32_t> rows(n * K);
-  std::vector<std::uint8_t> found(n);
-  std::vector<double> nearest(n, 0.0), spacing(n, 0.0);
+namespace {
+
+/// The working state of separateSheets(): the table's rows (flat, padded with the point itself), the local
+/// spacing, the normals and which points' neighbourhoods are one sheet already ("plain").
+struct SheetState {
+  SheetState(const std::vector<Eigen::Vector3d>& p, const SheetParams& sp, std::vector<Eigen::Vector3d>& nrm)
+      : points(p), params(sp), normals(nrm) {}
+  const std::vector<Eigen::Vector3d>& points;
+  const SheetParams& params;
+  std::vector<Eigen::Vector3d>& normals;
+  std::size_t n = 0, K = 0, pcaK = 0;
+  std::vector<std::uint32_t> rows;
+  std::vector<std::uint8_t> found, plain;
+  std::vector<double> spacing;
+  double minDot = -1.0;
+
+  const std::uint32_t* row(std::size_t i) const { return rows.data() + i * K; }
+  /// The rule with a height tolerance of @p heightSpacings local spacings (plus the slope term).
+  bool same(std::size_t i, std::size_t j, double heightSpacings) const {
+    const double d = (points[j] - points[i]).norm();
+    const double tolerance = heightSpacings * std::min(spacing[i], spacing[j]) +
+                             sheetTolerance(params.heightSlope, d, normals[i], normals[j]);
+    return sameSheet(points[i], normals[i], points[j], normals[j], tolerance, minDot);
+  }
+  bool loose(std::size_t i, std::size_t j) const { return same(i, j, params.heightSpacings); }
+  /// The final rule: two points whose whole rows lie on their planes are on one sheet.
+  bool final(std::size_t i, std::size_t j) const {
+    return (plain[i] && plain[j]) || same(i, j, params.finalHeightSpacings);
+  }
+  /// PCA normal of point i over its first pcaK same-sheet (loose) neighbours, or its normal when too few.
+  Eigen::Vector3d sheetFit(std::size_t i) const {
+    std::array<std::uint32_t, 129> sheet;
+    std::size_t m = 0;
+    for (std::size_t a = 0; a < found[i] && m < pcaK; ++a)
+      if (const std::uint32_t j = row(i)[a]; j != i && loose(i, j)) sheet[m++] = j;
+    return m > params.minNeighbours ? pcaNormal(points, i, sheet.data(), m, normals[i]) : normals[i];
+  }
+};
+
+/// Rows, nearest-neighbour distances and the local spacing (the mean nearest-neighbour distance over the point
+/// and its kSpacingRow nearest: a random sampling's nearest-neighbour distances vary by half their mean).
+void readRows(SheetState& st, const NeighbourTable& table, int threads) {
+  const std::size_t n = st.n, K = st.K;
+  st.rows.resize(n * K);
+  st.found.assign(n, 0);
+  st.spacing.assign(n, 0.0);
+  std::vector<double> nearest(n, 0.0);
   parallelFor(n, threads, [&](std::size_t i) {
     thread_local std::vector<std::uint32_t> idx;
     thread_local std::vector<double> d2;
     const std::size_t f = table.get(i, K, idx, d2);
-    std::copy_n(idx.begin(), f, rows.begin() + static_cast<long>(i * K));
-    std::fill(rows.begin() + static_cast<long>(i * K + f), rows.begin() + static_cast<long>((i + 1) * K),
+    std::copy_n(idx.begin(), f, st.rows.begin() + static_cast<long>(i * K));
+    std::fill(st.rows.begin() + static_cast<long>(i * K + f), st.rows.begin() + static_cast<long>((i + 1) * K),
               static_cast<std::uint32_t>(i));
-    found[i] = static_cast<std::uint8_t>(f);
+    st.found[i] = static_cast<std::uint8_t>(f);
     for (std::size_t a = 0; a < f; ++a)
       if (idx[a] != i) {
         nearest[i] = std::sqrt(d2[a]);
         break;
       }
   });
-  // Local spacing: the mean nearest-neighbour distance over the point and its nearest (a random sampling's
-  // nearest-neighbour distances vary by half their mean; the mean of kSpacingRow of them by an eighth).
   parallelFor(n, threads, [&](std::size_t i) {
-    const std::size_t m = std::min<std::size_t>(found[i], kSpacingRow);
+    const std::size_t m = std::min<std::size_t>(st.found[i], kSpacingRow);
     double sum = 0;
-    for (std::size_t a = 0; a < m; ++a) sum += nearest[rows[i * K + a]];
-    spacing[i] = m ? sum / static_cast<double>(m) : 0.0;
+    for (std::size_t a = 0; a < m; ++a) sum += nearest[st.row(i)[a]];
+    st.spacing[i] = m ? sum / static_cast<double>(m) : 0.0;
   });
-  {
-    std::vector<double> sorted = spacing;
-    std::nth_element(sorted.begin(), sorted.begin() + static_cast<long>(n / 2), sorted.end());
-    report.spacing = n ? sorted[n / 2] : 0.0;
+}
+
+/// Whether every neighbour in point i's row lies within the loose tolerance of the plane (p_i, @p normal).
+bool rowOnPlane(const SheetState& st, std::size_t i, const Eigen::Vector3d& normal) {
+  const double height = st.params.heightSpacings * st.spacing[i];
+  for (std::size_t a = 0; a < st.found[i]; ++a) {
+    const Eigen::Vector3d d = st.points[st.row(i)[a]] - st.points[i];
+    if (std::abs(normal.dot(d)) > height + st.params.heightSlope * d.norm()) return false;
   }
-  const double minDot = given ? std::cos(params.maxNormalAngleDeg * M_PI / 180.0) : -1.0;
-  auto keep = [&](std::size_t i, std::size_t j) {
-    const double d = (points[j] - points[i]).norm();
-    const double tolerance = params.heightSpacings * std::min(spacing[i], spacing[j]) + params.heightSlope * d;
-    return sameSheet(points[i], normals[i], points[j], normals[j], tolerance, minDot);
-  };
-  const std::size_t pcaK = std::min<std::size_t>(K, static_cast<std::size_t>(params.pcaNeighbours) + 1);
-  if (given) {
-    normals.resize(n);
-    parallelFor(n, threads, [&](std::size_t i) {
-      const double len = (*givenNormals)[i].norm();
-      normals[i] = len > 0 ? Eigen::Vector3d((*givenNormals)[i] / len) : Eigen::Vector3d::UnitZ();
-    });
-  } else {
-    // A robust plane over the nearest (most of them on the point's sheet where two are close), then PCA over
-    // the same-sheet ones among more.
-    const std::size_t firstK = std::min<std::size_t>(K, static_cast<std::size_t>(params.firstNeighbours) + 1);
-    // A neighbourhood that the plain PCA plane holds entirely (within the tolerance) is one sheet: most points
-    // of a surface without close sheets stop there.
-    normals.assign(n, Eigen::Vector3d::UnitZ());
-    std::vector<std::uint8_t> plain(n, 0);
-    parallelFor(n, threads, [&](std::size_t i) {
-      const std::uint32_t* row = rows.data() + i * K;
-      const std::size_t count = std::min<std::size_t>(found[i], firstK);
-      const double height = params.heightSpacings * spacing[i];
-      const Eigen::Vector3d n0 = pcaNormal(points, i, row, count, Eigen::Vector3d::UnitZ());
-      bool held = true;
-      for (std::size_t a = 0; a < count && held; ++a) {
-        const Eigen::Vector3d d = points[row[a]] - points[i];
-        held = std::abs(n0.dot(d)) <= height + params.heightSlope * d.norm();
-      }
-      plain[i] = held;
-      normals[i] = held ? n0 : robustNormal(points, i, row, count, height, params.heightSlope);
-    });
-    std::vector<Eigen::Vector3d> refit(normals);
-    for (int r = 0; r < params.refits; ++r) {
-      parallelFor(n, threads, [&](std::size_t i) {
-        if (plain[i]) return;
-        std::array<std::uint32_t, 129> same;
-        std::size_t m = 0;
-        for (std::size_t a = 0; a < found[i] && m < pcaK; ++a)
-          if (keep(i, rows[i * K + a])) same[m++] = rows[i * K + a];
-        refit[i] = m > params.minNeighbours ? pcaNormal(points, i, same.data(), m, normals[i]) : normals[i];
-      });
-      normals.swap(refit);
-      refit = normals;
-    }
-    // A point whose normal its neighbours do not confirm (fewer than a third of them on its sheet by it: the
-    // fit failed where the sheets' samples mix) takes the normal of its nearest neighbour that is confirmed;
-    // then every fitted one is refitted over its sheet once more.
-    std::vector<std::uint8_t> confirmed(n, 0);
-    parallelFor(n, threads, [&](std::size_t i) {
-      std::size_t m = 0;
-      for (std::size_t a = 0; a < found[i]; ++a) m += rows[i * K + a] != i && keep(i, rows[i * K + a]);
-      confirmed[i] = plain[i] || (m >= params.minNeighbours && 3 * m >= found[i]);
-    });
-    parallelFor(n, threads, [&](std::size_t i) {
-      if (confirmed[i]) return;
-      for (std::size_t a = 0; a < found[i]; ++a)
-        if (const std::uint32_t j = rows[i * K + a]; j != i && confirmed[j]) {
-          refit[i] = normals[j];
-          break;
-        }
-    });
-    normals.swap(refit);
-    refit = normals;
-    parallelFor(n, threads, [&](std::size_t i) {
-      if (plain[i]) return;
-      std::array<std::uint32_t, 129> same;
-      std::size_t m = 0;
-      for (std::size_t a = 0; a < found[i] && m < pcaK; ++a)
-        if (keep(i, rows[i * K + a])) same[m++] = rows[i * K + a];
-      if (m > params.minNeighbours) refit[i] = pcaNormal(points, i, same.data(), m, normals[i]);
-    });
-    normals.swap(refit);
-    // Consensus: each normal becomes the mean of its same-sheet neighbours' (signs aligned with its own). A few
-    // neighbouring points whose fits all chose a plane across both sheets (a slab their sampling happens to
-    // support) confirm each other, but their neighbourhoods hold mostly points with the sheet's normal.
-    for (int pass = 0; pass < kConsensusPasses; ++pass) {
-      parallelFor(n, threads, [&](std::size_t i) {
-        Eigen::Vector3d sum = normals[i];
-        for (std::size_t a = 0, m = 0; a < found[i] && m < pcaK; ++a)
-          if (const std::uint32_t j = rows[i * K + a]; j != i && keep(i, j)) {
-            sum += normals[j].dot(normals[i]) < 0 ? -normals[j] : normals[j];
-            ++m;
-          }
-        refit[i] = sum.squaredNorm() > 0 ? Eigen::Vector3d(sum.normalized()) : normals[i];
-      });
-      normals.swap(refit);
-    }
-  }
-  // The final rule, with the normals settled: the height tolerance narrows to finalHeightSpacings plus
-  // noiseFactor × the larger of the two points' noise (the median height of their same-sheet neighbours off
-  // their planes), so that a normal the fit got a little wrong leaves no pair across a gap, while a noisy sheet
-  // keeps its neighbours (a gap narrower than the noise cannot be told from it).
-  std::vector<double> noise(n, 0.0);
+  return true;
+}
+
+/// Normals of a cloud without them: plain PCA where the whole row lies on its plane; elsewhere a robust plane,
+/// refitted over the same-sheet neighbours, repaired from a confirmed neighbour when its own are too few, and
+/// averaged with its same-sheet neighbours' (kConsensusPasses).
+void estimateSheetNormals(SheetState& st, int threads) {
+  const std::size_t n = st.n, firstK = std::min<std::size_t>(st.K, static_cast<std::size_t>(st.params.firstNeighbours) + 1);
+  st.normals.assign(n, Eigen::Vector3d::UnitZ());
   parallelFor(n, threads, [&](std::size_t i) {
-    std::array<double, 129> h;
+    const std::size_t count = std::min<std::size_t>(st.found[i], firstK);
+    const Eigen::Vector3d n0 = pcaNormal(st.points, i, st.row(i), count, Eigen::Vector3d::UnitZ());
+    st.plain[i] = rowOnPlane(st, i, n0);
+    st.normals[i] = st.plain[i] ? n0
+                                : robustNormal(st.points, i, st.row(i), count,
+                                               st.params.heightSpacings * st.spacing[i], st.params.heightSlope);
+  });
+  std::vector<std::uint32_t> fitted;  // the points that are not plain: all further work is theirs
+  for (std::size_t i = 0; i < n; ++i)
+    if (!st.plain[i]) fitted.push_back(static_cast<std::uint32_t>(i));
+  static auto P0 = std::chrono::steady_clock::now();
+  auto plap = [&](const char* w) { if (getenv("SHEETPROF")) { auto t1 = std::chrono::steady_clock::now(); fprintf(stderr, " %s %.4f\n", w, std::chrono::duration<double>(t1 - P0).count()); P0 = t1; } };
+  plap("plain+robust");
+  if (getenv("SHEETPROF")) fprintf(stderr, "fitted %zu of %zu\n", fitted.size(), n);
+  std::vector<Eigen::Vector3d> next(fitted.size());
+  auto update = [&](auto&& fn) {  // Jacobi: every point reads the previous normals
+    parallelFor(fitted.size(), threads, [&](std::size_t x) { next[x] = fn(fitted[x]); });
+    for (std::size_t x = 0; x < fitted.size(); ++x) st.normals[fitted[x]] = next[x];
+  };
+  for (int r = 0; r < st.params.refits; ++r) update([&](std::size_t i) { return st.sheetFit(i); });
+  // A normal that fewer than a third of its neighbours confirm (the fit failed where the sheets' samples mix)
+  // takes its nearest confirmed neighbour's; then all are refitted over their sheet once more.
+  std::vector<std::uint8_t> confirmed(st.plain);
+  parallelFor(fitted.size(), threads, [&](std::size_t x) {
+    const std::size_t i = fitted[x];
     std::size_t m = 0;
-    for (std::size_t a = 0; a < found[i] && m < pcaK; ++a)
-      if (const std::uint32_t j = rows[i * K + a]; j != i && keep(i, j))
-        h[m++] = std::abs(normals[i].dot(points[j] - points[i]));
-    if (m == 0) return;
-    std::nth_element(h.begin(), h.begin() + static_cast<long>(m / 2), h.begin() + static_cast<long>(m));
-    noise[i] = kMadToSigma * h[m / 2];
+    for (std::size_t a = 0; a < st.found[i]; ++a) m += st.row(i)[a] != i && st.loose(i, st.row(i)[a]);
+    confirmed[i] = m >= st.params.minNeighbours && 3 * m >= st.found[i];
   });
-  auto keepFinal = [&](std::size_t i, std::size_t j) {
-    const double d = (points[j] - points[i]).norm();
-    const double tolerance = params.finalHeightSpacings * std::min(spacing[i], spacing[j]) +
-                             params.heightSlope * d + params.noiseFactor * std::max(noise[i], noise[j]);
-    return sameSheet(points[i], normals[i], points[j], normals[j], tolerance, minDot);
-  };
+  update([&](std::size_t i) {
+    if (!confirmed[i])
+      for (std::size_t a = 0; a < st.found[i]; ++a)
+        if (const std::uint32_t j = st.row(i)[a]; j != i && confirmed[j]) return st.normals[j];
+    return st.normals[i];
+  });
+  update([&](std::size_t i) { return st.sheetFit(i); });
+  plap("refits");
+  // Consensus: a few neighbouring points whose fits all chose a plane across both sheets (a slab their sampling
+  // happens to support) confirm each other, but their neighbourhoods hold mostly points of the sheet's normal.
+  for (int pass = 0; pass < kConsensusPasses; ++pass)
+    update([&](std::size_t i) {
+      Eigen::Vector3d sum = st.normals[i];
+      for (std::size_t a = 0, m = 0; a < st.found[i] && m < st.pcaK; ++a)
+        if (const std::uint32_t j = st.row(i)[a]; j != i && st.loose(i, j)) {
+          sum += st.normals[j].dot(st.normals[i]) < 0 ? -st.normals[j] : st.normals[j];
+          ++m;
+        }
+      return sum.squaredNorm() > 0 ? Eigen::Vector3d(sum.normalized()) : st.normals[i];
+    });
+}
+
+/// Near-contact zones (points with a Euclidean neighbour on another sheet, connected through same-sheet
+/// edges) and the distinct pairs of zones that face each other across a gap.
+void countZones(const SheetState& st, SheetReport& report, int threads) {
+  const std::size_t n = st.n;
   std::vector<std::uint8_t> near(n, 0);
-  std::vector<std::uint32_t> sheetRows(n * K);
   parallelFor(n, threads, [&](std::size_t i) {
-    std::size_t w = 0;
-    for (std::size_t a = 0; a < found[i]; ++a) {
-      const std::uint32_t j = rows[i * K + a];
-      if (j == i || keepFinal(i, j)) {
-        sheetRows[i * K + w++] = j;
-      } else {
-        near[i] = 1;
-      }
-    }
-    std::fill(sheetRows.begin() + static_cast<long>(i * K + w), sheetRows.begin() + static_cast<long>((i + 1) * K),
-              static_cast<std::uint32_t>(i));
+    if (st.plain[i]) return;  // a plain point's row holds only its sheet's points
+    for (std::size_t a = 0; a < st.found[i] && !near[i]; ++a) near[i] = !st.final(i, st.row(i)[a]);
   });
-  // Orientation over the same-sheet graph only: an edge across a gap would carry one sheet's orientation to
-  // the other at no cost (the pair is parallel).
-  if (!given) orientNormals(points, normals, sheetRows, K, K, threads);
-  report.crossPairs = table.filter(keepFinal, params.minNeighbours, threads);
-  // Near-contact zones: the near points, connected through same-sheet edges; sheet pairs: the distinct pairs
-  // of zones facing each other across a gap.
   DisjointSets zones(n);
   for (std::size_t i = 0; i < n; ++i) {
     if (!near[i]) continue;
     ++report.nearPoints;
-    for (std::size_t a = 0; a < K; ++a)
-      if (const std::uint32_t j = sheetRows[i * K + a]; j != i && near[j]) zones.unite(static_cast<std::uint32_t>(i), j);
+    for (std::size_t a = 0; a < st.found[i]; ++a)
+      if (const std::uint32_t j = st.row(i)[a]; j != i && near[j] && st.final(i, j))
+        zones.unite(static_cast<std::uint32_t>(i), j);
   }
   std::vector<std::array<std::uint32_t, 2>> pairs;
   for (std::size_t i = 0; i < n; ++i) {
     if (!near[i]) continue;
     report.nearZones += zones.find(static_cast<std::uint32_t>(i)) == i;
-    for (std::size_t a = 0; a < found[i]; ++a) {
-      const std::uint32_t j = rows[i * K + a];
-      if (j == i || !near[j] || keepFinal(i, j)) continue;
+    for (std::size_t a = 0; a < st.found[i]; ++a) {
+      const std::uint32_t j = st.row(i)[a];
+      if (j == i || !near[j] || st.final(i, j)) continue;
       const std::uint32_t zi = zones.find(static_cast<std::uint32_t>(i)), zj = zones.find(j);
       pairs.push_back({std::min(zi, zj), std::max(zi, zj)});
     }
   }
   std::sort(pairs.begin(), pairs.end());
   report.sheetPairs = static_cast<std::size_t>(std::unique(pairs.begin(), pairs.end()) - pairs.begin());
+}
+
+}  // namespace
+
+SheetReport separateSheets(const std::vector<Eigen::Vector3d>& points, NeighbourTable& table,
+                           std::vector<Eigen::Vector3d>& normals, const SheetParams& params,
+                           const std::vector<Eigen::Vector3d>* givenNormals) {
+  params.validate();
+  const auto start = std::chrono::steady_clock::now();
+  if (table.size() != points.size()) throw std::invalid_argument("separateSheets: the table is not of these points");
+  const int threads = params.threads;
+  SheetState st(points, params, normals);
+  st.n = points.size();
+  st.K = table.k();
+  st.pcaK = std::min<std::size_t>(st.K, static_cast<std::size_t>(params.pcaNeighbours) + 1);
+  st.plain.assign(st.n, 0);
+  SheetReport report;
+  report.points = st.n;
+  auto T0 = std::chrono::steady_clock::now();
+  auto lap = [&](const char* what) { if (getenv("SHEETPROF")) { auto t1 = std::chrono::steady_clock::now(); fprintf(stderr, "%s %.4f\n", what, std::chrono::duration<double>(t1 - T0).count()); T0 = t1; } };
+  readRows(st, table, threads);
+  lap("rows");
+  if (st.n > 0) {
+    std::vector<double> sorted = st.spacing;
+    std::nth_element(sorted.begin(), sorted.begin() + static_cast<long>(st.n / 2), sorted.end());
+    report.spacing = sorted[st.n / 2];
+  }
+  const bool given = givenNormals && givenNormals->size() == st.n;
+  if (given) {
+    st.minDot = std::cos(params.maxNormalAngleDeg * M_PI / 180.0);
+    normals.resize(st.n);
+    parallelFor(st.n, threads, [&](std::size_t i) {
+      const double len = (*givenNormals)[i].norm();
+      normals[i] = len > 0 ? Eigen::Vector3d((*givenNormals)[i] / len) : Eigen::Vector3d::UnitZ();
+      st.plain[i] = rowOnPlane(st, i, normals[i]);
+    });
+  } else {
+    estimateSheetNormals(st, threads);
+    lap("normals");
+    // Orientation over the same-sheet graph only (an edge across a gap would carry one sheet's orientation to
+    // the other at no cost: the pair is parallel), on each point's kOrientNeighbours nearest.
+    const std::size_t orientK = std::min<std::size_t>(st.K, kOrientNeighbours + 1);
+    std::vector<std::uint32_t> graph(st.n * orientK);
+    parallelFor(st.n, threads, [&](std::size_t i) {
+      for (std::size_t a = 0; a < orientK; ++a) {
+        const std::uint32_t j = st.row(i)[a];
+        graph[i * orientK + a] = j == i || st.final(i, j) ? j : static_cast<std::uint32_t>(i);
+      }
+    });
+    orientNormals(points, normals, graph, orientK, orientK, threads);
+    lap("orient");
+  }
+  report.crossPairs = table.filter([&](std::size_t i, std::size_t j) { return st.final(i, j); },
+                                   params.minNeighbours, threads);
+  lap("filter");
+  countZones(st, report, threads);
+  lap("zones");
   report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return report;
 }

@@ -19,7 +19,7 @@ struct MlsParams {
   /// Sheet rule (sheets.hpp) in every fit: input points off the query's sheet by more than sheetHeight local
   /// spacings + sheetSlope × their distance get no weight (0 = off: the normals' sign test only).
   double sheetHeight = 1.0;
-  double sheetSlope = 0.2;  ///< see sheetHeight
+  double sheetSlope = 0.1;  ///< see sheetHeight (and sheets.hpp, sheetTolerance)
 };
 
 /// @brief The input neighbourhood of a previous projection, kept by a caller that projects the same moving

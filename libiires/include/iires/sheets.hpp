@@ -9,10 +9,11 @@
 /// graph) instead of the straight-line neighbourhood.
 ///
 /// Test: q is on p's sheet when each lies within a height of the other's tangent plane,
-///   |n_p·(q − p)| ≤ τ and |n_q·(p − q)| ≤ τ,  τ = heightSpacings·s + heightSlope·|q − p|,
+///   |n_p·(q − p)| ≤ τ and |n_q·(p − q)| ≤ τ,  τ = heightSpacings·s + |q − p|·(heightSlope + sin(θ/2)),
 /// s the local spacing (mean nearest-neighbour distance); and, with oriented normals, when the normals do not
 /// face each other (angle ≤ maxNormalAngleDeg). Across a gap of g ≥ 2.5 spacings the height is ≈ g; on one
-/// sheet it is noise, curvature (|q − p|²/2R) and the normal's error (the slope term).
+/// sheet it is noise, curvature (|q − p|²/2R ≈ |q − p|·θ/2, θ the angle between the normals) and the
+/// normals' error (the slope term).
 
 #include <Eigen/Core>
 #include <cstddef>
@@ -33,11 +34,10 @@ struct SheetParams {
   double heightSpacings = 1.0;   ///< height tolerance, in local spacings (a gap must exceed ≈ 2 of them)
   double heightSlope = 0.1;      ///< plus this × the pair's distance (normal error, curvature; ≈ 6°)
   /// The final rule (the rows every later stage reads), with the normals settled: height tolerance
-  /// finalHeightSpacings·s + heightSlope·|q − p| + noiseFactor·σ, σ the larger of the two points' noise (the
-  /// robust spread of their same-sheet neighbours' heights): tight on a clean cloud, as wide as the noise on a
-  /// noisy one (a gap narrower than the noise cannot be told from it).
+  /// finalHeightSpacings·s + heightSlope·|q − p|, tight so that a normal the fit got a little wrong leaves no
+  /// pair across a gap. Two points whose whole rows lie within the first tolerance of their planes (no other
+  /// sheet near either) are neighbours without it, so a curved or noisy sheet keeps its rows.
   double finalHeightSpacings = 0.5;
-  double noiseFactor = 0.0;      ///< see finalHeightSpacings (0: off)
   double maxNormalAngleDeg = 120.0;  ///< oriented normals: pairs whose normals differ by more are apart
   std::size_t minNeighbours = 3;  ///< a row left with fewer same-sheet neighbours keeps its Euclidean row
   int threads = 0;               ///< 0 = all cores; the result does not depend on it
@@ -69,6 +69,14 @@ struct SheetReport {
 SheetReport separateSheets(const std::vector<Eigen::Vector3d>& points, NeighbourTable& table,
                            std::vector<Eigen::Vector3d>& normals, const SheetParams& params = {},
                            const std::vector<Eigen::Vector3d>* givenNormals = nullptr);
+
+/// @brief The distance-dependent part of the sheet tolerance for a pair @p d apart with unit normals @p np,
+/// @p nq: slope·d for the normals' error, plus d·sin(θ/2) for the bend between them (θ the angle between the
+/// unoriented normals): on a sheet curving with radius R, q lies ≈ d·θ/2 off p's tangent plane, while two
+/// sheets facing each other across a gap are parallel and get no more than slope·d.
+inline double sheetTolerance(double slope, double d, const Eigen::Vector3d& np, const Eigen::Vector3d& nq) {
+  return d * (slope + std::sqrt(std::max(0.0, 0.5 * (1.0 - std::abs(np.dot(nq))))));
+}
 
 /// @brief The sheet test for one pair: @p tolerance is τ (absolute units), @p minNormalDot the cosine of the
 /// largest normal angle (−1 for unoriented normals: then only the heights count).
