@@ -19,8 +19,9 @@
 // --methods local,advancing-front,bpa,poisson,input-advancing-front.
 // --models: meshes/NAME.off of the data directory ("closed": the closed 2-manifold corpus; "none": no meshes;
 // "hand-vertices": the 1,197 vertices of CGAL's hand mesh as the input); --points: points_3/FILE inputs
-// ("real": the corpus's real point sets; "none", the default: none), resampled to each of --point-counts. --seed: the sampleMesh seed of the dense input (default 1, as
-// `iires-sample-mesh --seed 1`); --dump DIR writes each local mesh to DIR/MODEL_N.off.
+// ("real": the corpus's real point sets; "none", the default: none), resampled to each of --point-counts.
+// --seed: the sampleMesh seed of the dense input (default 3; issue 20's runs use 1, as `iires-sample-mesh
+// --seed 1`); --dump DIR writes each local mesh to DIR/MODEL_N.off.
 // (internally: --child METHOD --input FILE --cloud FILE --truth MESH|"" --spacing L --n N runs one method)
 #include <sys/wait.h>
 #include <unistd.h>
@@ -238,7 +239,7 @@ int main(int argc, char** argv) {
   std::size_t dense = 100000;
   double ratio = 1.0;
   int threads = 0;
-  unsigned seed = 1;
+  unsigned seed = 3;
   std::string dump;
   ChildJob child;
   for (int i = 1; i + 1 < argc; i += 2) {
