@@ -1,19 +1,23 @@
-// register_bench: the acceptance trials of issue 6, iires-register vs Open3D baselines on the same inputs.
+// register_bench: the registration acceptance trials (issues 6 and 21), iires-register vs Open3D baselines on
+// the same inputs.
 //
 // Each trial: source and target sampled independently from a reference model at different densities, noise
 // N(0, (0.33·l)²) along the normal (l = the clean cloud's mean nearest-neighbour spacing); the source is put
 // under a random rotation (uniform on SO(3)), a scale in [0.2, 5] (log-uniform) and a translation of 1–3
-// object diagonals; optionally 25 % of the source is cut off by a random plane. Success (DESIGN §7): rotation
-// error < 5°, error of the mapped source centroid < 2 % of the target's diagonal, scale error < 2 %; the
-// surface criterion (mean distance from the source mapped by the estimate to the source mapped by the truth
-// < 1 % of the diagonal, and scale error < 2 %) is reported too and decides on symmetric shapes (knot1). With
-// --partial the distance is to the whole source surface mapped by the truth (before the cut): a symmetric pose
-// puts the cut source on another, equally valid part of the surface.
+// object diagonals. Partial scans: --cut F cuts the share F of the source off by a random plane, --target-cut F
+// the share F of the target by another random plane (both clouds partial, different parts missing);
+// --outliers F adds F·n points spread uniformly over each cloud's bounding box grown by 10 %. iires runs at its
+// defaults (no overlap hint) unless --overlap gives one. Success (DESIGN §7): rotation error < 5°, error of
+// the mapped source centroid < 2 % of the target's diagonal, scale error < 2 %; the surface criterion (mean
+// distance from the source mapped by the estimate to the whole source surface — before any cut — mapped by the
+// truth < 1 % of the diagonal, and scale error < 2 %) decides on the models named by --symmetric (a symmetric
+// pose puts the source on another, equally valid part of the surface).
 //
 // Prints key=value lines, one per model and method, and a summary per method.
 // time_s is wall time per pair, cpu_s the process's user + system CPU time per pair (all threads; on a shared
 // machine the honest measure of work). For iires the mean wall time of each stage is printed too.
-//   register_bench [--models bunny00,armadillo,...] [--trials N] [--first-trial K] [--partial] [--seed S]
+//   register_bench [--models bunny00,armadillo,...] [--trials N] [--first-trial K] [--cut F] [--target-cut F]
+//                  [--partial (= --cut 0.25)] [--outliers F] [--overlap F] [--symmetric knot1,...] [--seed S]
 //                  [--threads T] [--methods iires,iires-euler,o3d-fpfh,o3d-fpfh-norm,o3d-icp]
 //                  [--source-count N] [--target-count N] [--samples M] [--so3-count K] [--thin F] [--icp-candidates C]
 //                  [--resample preprocess=0,intrinsic=0,maxPasses=4,...] [--verbose]
@@ -114,9 +118,40 @@ Cloud transformed(const Cloud& p, const Eigen::Matrix4d& T) {
   return out;
 }
 
+/// The points of @p c on the kept side of a random plane that cuts off the share @p share of them.
+iires::PointCloud cutByPlane(const iires::PointCloud& c, double share, std::mt19937_64& rng) {
+  std::normal_distribution<double> g(0, 1);
+  const Vec n = Vec(g(rng), g(rng), g(rng)).normalized();
+  std::vector<double> h;
+  for (const auto& p : c.points) h.push_back(p.dot(n));
+  std::vector<double> sorted = h;
+  const std::size_t k = std::min(sorted.size() - 1, static_cast<std::size_t>((1.0 - share) * sorted.size()));
+  std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(k), sorted.end());
+  iires::PointCloud kept;
+  for (std::size_t i = 0; i < h.size(); ++i)
+    if (h[i] < sorted[k]) kept.points.push_back(c.points[i]);
+  return kept;
+}
+
+/// @p c plus share·n points uniform in its bounding box grown by 10 % of the diagonal on each side.
+void addOutliers(iires::PointCloud& c, double share, std::mt19937_64& rng) {
+  if (share <= 0) return;
+  Eigen::AlignedBox3d box;
+  for (const auto& p : c.points) box.extend(p);
+  const double margin = 0.1 * box.diagonal().norm();
+  std::uniform_real_distribution<double> u(0, 1);
+  const auto count = static_cast<std::size_t>(share * static_cast<double>(c.size()));
+  for (std::size_t i = 0; i < count; ++i) {
+    Vec p;
+    for (int d = 0; d < 3; ++d) p[d] = box.min()[d] - margin + u(rng) * (box.sizes()[d] + 2 * margin);
+    c.points.push_back(p);
+  }
+}
+
 struct Errors {
   double rotDeg = 180, trans = 1e9, scale = 1e9, surface = 1e9, seconds = 0, cpu = 0;
   bool ok = false, okSurface = false, failed = false;
+  double overlap = 0;  // iires: the estimated overlap
 };
 
 /// @p surface: the whole source surface (before any cut) in source coordinates, for the surface error.
@@ -213,8 +248,8 @@ Eigen::Matrix4d o3dIcp(const Cloud& source, const Cloud& target, double maxDist)
 }
 
 struct Tally {
-  int trials = 0, ok = 0, okSurface = 0, failed = 0, ambiguous = 0;
-  std::vector<double> rot, trans, scale, seconds, cpu;
+  int trials = 0, ok = 0, okSurface = 0, okScored = 0, failed = 0, ambiguous = 0;
+  std::vector<double> rot, trans, scale, seconds, cpu, overlap;
   std::vector<std::pair<std::string, double>> stages;  // summed wall time per stage (iires), in stage order
   void addStages(const std::vector<iires::StageTime>& timings) {
     for (const auto& st : timings) {
@@ -223,9 +258,12 @@ struct Tally {
       else it->second += st.seconds;
     }
   }
-  void add(const Errors& e) {
+  /// @p bySurface: the model is symmetric, its trials are scored by the surface criterion.
+  void add(const Errors& e, bool bySurface) {
     ++trials;
     ok += e.ok;
+    okScored += bySurface ? e.okSurface : e.ok;
+    overlap.push_back(e.overlap);
     okSurface += e.okSurface;
     cpu.push_back(e.cpu);
     failed += e.failed;
@@ -247,14 +285,16 @@ double mean(const std::vector<double>& v) {
   return v.empty() ? 0 : s / static_cast<double>(v.size());
 }
 
+/// success_scored: pose criterion, or the surface criterion on the --symmetric models (the acceptance figure).
 void print(const std::string& model, const std::string& method, const Tally& t, bool partial) {
   std::printf(
-      "model=%s method=%s partial=%d trials=%d success=%.3f success_surface=%.3f ambiguous=%d failed=%d "
-      "rot_err_deg_median=%.3g trans_err_median=%.3g scale_err_median=%.3g time_s_mean=%.3f time_s_median=%.3f "
-      "cpu_s_mean=%.3f ok=%d ok_surface=%d\n",
-      model.c_str(), method.c_str(), partial ? 1 : 0, t.trials, t.trials ? double(t.ok) / t.trials : 0.0,
-      t.trials ? double(t.okSurface) / t.trials : 0.0, t.ambiguous, t.failed, median(t.rot), median(t.trans),
-      median(t.scale), mean(t.seconds), median(t.seconds), mean(t.cpu), t.ok, t.okSurface);
+      "model=%s method=%s partial=%d trials=%d success_scored=%.3f success=%.3f success_surface=%.3f ambiguous=%d "
+      "failed=%d rot_err_deg_median=%.3g trans_err_median=%.3g scale_err_median=%.3g overlap_median=%.3g "
+      "time_s_mean=%.3f time_s_median=%.3f cpu_s_mean=%.3f ok=%d ok_surface=%d\n",
+      model.c_str(), method.c_str(), partial ? 1 : 0, t.trials, t.trials ? double(t.okScored) / t.trials : 0.0,
+      t.trials ? double(t.ok) / t.trials : 0.0, t.trials ? double(t.okSurface) / t.trials : 0.0, t.ambiguous,
+      t.failed, median(t.rot), median(t.trans), median(t.scale), median(t.overlap), mean(t.seconds),
+      median(t.seconds), mean(t.cpu), t.ok, t.okSurface);
   if (!t.stages.empty()) {
     std::printf("stages model=%s method=%s partial=%d", model.c_str(), method.c_str(), partial ? 1 : 0);
     for (const auto& [name, sum] : t.stages) std::printf(" %s_s=%.4f", name.c_str(), sum / t.trials);
@@ -269,7 +309,9 @@ int main(int argc, char** argv) {
   std::vector<std::string> models = {"bunny00", "armadillo", "fandisk", "hand", "kitten", "knot1"};
   std::vector<std::string> methods = {"iires", "o3d-fpfh", "o3d-fpfh-norm", "o3d-icp"};
   int trials = 50, threads = 0;
-  bool partial = false, verbose = false;
+  bool verbose = false;
+  double cut = 0, targetCut = 0, outliers = 0, overlapHint = 0;  // 0 = no cut / no outliers / no hint
+  std::vector<std::string> symmetric = {"knot1"};
   std::uint64_t seed = 1;
   std::size_t sourceCount = 5000, targetCount = 30000;
   const iires::reg::RegistrationParams defaults;
@@ -277,6 +319,10 @@ int main(int argc, char** argv) {
               icpCandidates = defaults.icpCandidates;
   int firstTrial = 0;
   iires::ResampleParams resampleParams = defaults.resample;
+  iires::reg::RotationSearchParams searchParams = defaults.search;
+  int screenIterations = defaults.screenIterations;
+  std::vector<double> searchOverlaps = defaults.searchOverlaps;
+  double searchOverlapExponent = defaults.searchOverlapExponent, fitOverlapExponent = defaults.fitOverlapExponent;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto next = [&]() -> std::string {
@@ -310,38 +356,62 @@ int main(int argc, char** argv) {
         else throw std::invalid_argument("unknown resample key " + key);
       }
     }
-    else if (a == "--partial") partial = true;
+    else if (a == "--search") {  // override the rotation search's settings: key=value,...
+      for (const auto& kv : split(next())) {
+        const auto eq = kv.find('=');
+        const std::string key = kv.substr(0, eq);
+        if (key == "searchOverlaps") {  // levels separated by ':'
+          searchOverlaps.clear();
+          std::stringstream ss(kv.substr(eq + 1));
+          for (std::string f; std::getline(ss, f, ':');) searchOverlaps.push_back(std::stod(f));
+          continue;
+        }
+        const double v = std::stod(kv.substr(eq + 1));
+        if (key == "coarsePoints") searchParams.coarsePoints = static_cast<std::size_t>(v);
+        else if (key == "coarseKeep") searchParams.coarseKeep = static_cast<std::size_t>(v);
+        else if (key == "fullKeep") searchParams.fullKeep = static_cast<std::size_t>(v);
+        else if (key == "minSeparationDeg") searchParams.minSeparationDeg = v;
+        else if (key == "refineLevels") searchParams.refineLevels = static_cast<int>(v);
+        else if (key == "screenIterations") screenIterations = static_cast<int>(v);
+        else if (key == "searchOverlapExponent") searchOverlapExponent = v;
+        else if (key == "fitOverlapExponent") fitOverlapExponent = v;
+        else if (key == "keep") searchParams.keep = static_cast<std::size_t>(v);
+        else throw std::invalid_argument("unknown search key " + key);
+      }
+    }
+    else if (a == "--partial") cut = 0.25;
+    else if (a == "--cut") cut = std::stod(next());
+    else if (a == "--target-cut") targetCut = std::stod(next());
+    else if (a == "--outliers") outliers = std::stod(next());
+    else if (a == "--overlap") overlapHint = std::stod(next());
+    else if (a == "--symmetric") symmetric = split(next());
     else if (a == "--verbose") verbose = true;
     else {
       std::cerr << "unknown argument " << a << "\n";
       return 2;
     }
   }
+  const bool partial = cut > 0 || targetCut > 0;
+  std::printf("config cut=%.3f target_cut=%.3f outliers=%.3f overlap_hint=%.3f\n", cut, targetCut, outliers,
+              overlapHint);
   open3d::utility::SetVerbosityLevel(open3d::utility::VerbosityLevel::Error);
   std::map<std::string, Tally> overall;
   for (const auto& name : models) {
     const Model model = loadModel(name);
+    const bool bySurface = std::find(symmetric.begin(), symmetric.end(), name) != symmetric.end();
     std::map<std::string, Tally> tally;
     for (int trial = firstTrial; trial < firstTrial + trials; ++trial) {
       std::mt19937_64 rng(seed * 1000003 + std::hash<std::string>{}(name) % 100000 + trial);
       const bool swap = trial % 2 == 1;  // alternate which cloud is the dense one
       iires::PointCloud src = sampleModel(model, swap ? targetCount : sourceCount, rng());
-      const iires::PointCloud tgt = sampleModel(model, swap ? sourceCount : targetCount, rng());
+      iires::PointCloud tgt = sampleModel(model, swap ? sourceCount : targetCount, rng());
       const double diag = iires::bboxDiagonal(tgt.points);
       const iires::PointCloud whole = src;  // before the cut: the surface a symmetric pose may land on
-      if (partial) {  // cut 25 % of the source off by a random plane
-        std::normal_distribution<double> g(0, 1);
-        const Vec n = Vec(g(rng), g(rng), g(rng)).normalized();
-        std::vector<double> h;
-        for (const auto& p : src.points) h.push_back(p.dot(n));
-        std::vector<double> sorted = h;
-        std::nth_element(sorted.begin(), sorted.begin() + sorted.size() * 3 / 4, sorted.end());
-        const double cut = sorted[sorted.size() * 3 / 4];
-        iires::PointCloud kept;
-        for (std::size_t i = 0; i < h.size(); ++i)
-          if (h[i] < cut) kept.points.push_back(src.points[i]);
-        src = kept;
-      }
+      if (cut > 0) src = cutByPlane(src, cut, rng);
+      if (targetCut > 0) tgt = cutByPlane(tgt, targetCut, rng);
+      const std::size_t sourceSurfacePoints = src.size();
+      addOutliers(src, outliers, rng);
+      addOutliers(tgt, outliers, rng);
       // Pose: the source is moved by M = (sR | t); the truth is T_target_source = M⁻¹.
       std::uniform_real_distribution<double> u(0, 1);
       const Eigen::Matrix3d R = randomRotation(rng);
@@ -353,12 +423,15 @@ int main(int argc, char** argv) {
       M.topRightCorner<3, 1>() = t;
       const Eigen::Matrix4d truth = M.inverse();
       const Cloud source = transformed(src.points, M), sourceWhole = transformed(whole.points, M);
+      // The errors are measured on the source's surface points (its outliers have no true position).
+      const Cloud sourceSurface(source.begin(), source.begin() + static_cast<std::ptrdiff_t>(sourceSurfacePoints));
       const Cloud& target = tgt.points;
       for (const auto& method : methods) {
         const auto t0 = Clock::now();
         const double cpu0 = cpuSeconds();
         Eigen::Matrix4d est = Eigen::Matrix4d::Identity();
         bool ambiguous = false;
+        double overlapEstimate = 0;
         try {
           if (method == "iires" || method == "iires-euler") {
             iires::reg::RegistrationParams p;
@@ -367,15 +440,21 @@ int main(int argc, char** argv) {
             p.maxInputPerSample = thin;
             p.icpCandidates = icpCandidates;
             p.resample = resampleParams;
+            p.search = searchParams;
+            p.screenIterations = screenIterations;
+            p.searchOverlaps = searchOverlaps;
+            p.searchOverlapExponent = searchOverlapExponent;
+            p.fitOverlapExponent = fitOverlapExponent;
             p.threads = threads;
             p.seed = seed + trial;
-            if (partial) p.overlap = 0.75;
+            if (overlapHint > 0) p.overlap = overlapHint;
             if (method == "iires-euler") p.grid = iires::reg::RotationGridType::kEuler;
             iires::PointCloud sc;
             sc.points = source;
             const auto r = iires::reg::registerClouds(sc, tgt, p);
             est = r.T_target_source;
             ambiguous = r.ambiguous;
+            overlapEstimate = r.sourceOverlap;
             tally[method].addStages(r.timings);
             overall[method].addStages(r.timings);
             if (verbose) {
@@ -401,17 +480,18 @@ int main(int argc, char** argv) {
           est = Eigen::Matrix4d::Constant(std::nan(""));
         }
         const double secs = std::chrono::duration<double>(Clock::now() - t0).count();
-        Errors e = evaluate(est, truth, source, sourceWhole, diag, secs);
+        Errors e = evaluate(est, truth, sourceSurface, sourceWhole, diag, secs);
         e.cpu = cpuSeconds() - cpu0;
-        tally[method].add(e);
+        e.overlap = overlapEstimate;
+        tally[method].add(e, bySurface);
         tally[method].ambiguous += ambiguous;
-        overall[method].add(e);
+        overall[method].add(e, bySurface);
         overall[method].ambiguous += ambiguous;
         if (verbose)
           std::printf("trial model=%s method=%s trial=%d scale=%.3f rot_err=%.3f trans_err=%.4f scale_err=%.4f "
-                      "surface_err=%.4f ok=%d ambiguous=%d time_s=%.3f\n",
+                      "surface_err=%.4f ok=%d ok_surface=%d ambiguous=%d overlap=%.3f time_s=%.3f\n",
                       name.c_str(), method.c_str(), trial, s, e.rotDeg, e.trans, e.scale, e.surface, e.ok ? 1 : 0,
-                      ambiguous ? 1 : 0, secs);
+                      e.okSurface ? 1 : 0, ambiguous ? 1 : 0, overlapEstimate, secs);
       }
     }
     for (const auto& method : methods) print(name, method, tally[method], partial);

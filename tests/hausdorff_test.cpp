@@ -85,6 +85,50 @@ TEST(Hausdorff, BoundedEqualsExactUnderTheBoundAndExitsAbove) {
   }
 }
 
+TEST(Hausdorff, PartialWithUnknownOverlapMatchesTheOracleAndItsBound) {
+  // Every level's exact value is the oracle's quantile; the multi-level distance is their penalised minimum,
+  // and the bound exits exactly when that minimum is above it.
+  const Points a = randomPoints(400, 17), b = randomPoints(300, 18);
+  const iires::KnnIndex ib(b);
+  const Eigen::Matrix3d r = Eigen::AngleAxisd(0.4, Eigen::Vector3d(3, -1, 2).normalized()).toRotationMatrix();
+  Points ra;
+  for (const auto& x : a) ra.push_back(r * x);
+  const std::vector<double> overlaps{1.0, 0.8, 0.6};
+  const auto levels = iires::reg::trimLevels(a.size(), overlaps, 2.0);
+  ASSERT_EQ(levels.size(), 3u);
+  EXPECT_EQ(levels[1].outliers, 80u);
+  EXPECT_NEAR(levels[2].penalty, std::pow(1.0 / 0.6, 2.0), 1e-12);
+  double expected = std::numeric_limits<double>::infinity();
+  std::size_t expectedLevel = 0;
+  for (std::size_t j = 0; j < overlaps.size(); ++j) {
+    const double v = levels[j].penalty * oracle(ra, b, overlaps[j]);
+    if (v < expected) expected = v, expectedLevel = j;
+  }
+  std::vector<double> scratch;
+  std::size_t visited = 0, level = 99;
+  const double inf = std::numeric_limits<double>::infinity();
+  EXPECT_NEAR(iires::reg::boundedPartialHausdorff(a, r, ib, levels, inf, scratch, &visited, &level), expected, 1e-12);
+  EXPECT_EQ(level, expectedLevel);
+  EXPECT_NEAR(iires::reg::boundedPartialHausdorff(a, r, ib, levels, expected * (1 + 1e-9), scratch), expected, 1e-12);
+  EXPECT_TRUE(std::isinf(iires::reg::boundedPartialHausdorff(a, r, ib, levels, expected * (1 - 1e-9), scratch)));
+  EXPECT_THROW(iires::reg::trimLevels(10, {}, 2.0), std::invalid_argument);
+  EXPECT_THROW(iires::reg::trimLevels(10, {1.0, 0.0}, 2.0), std::invalid_argument);
+}
+
+TEST(Hausdorff, PenalisedQuantileFindsTheOverlapOfAPartialSet) {
+  // 70 % of the points have a partner at distance ≈ 0.01, the rest are 1–2 away: every level down to 0.7 is
+  // worse (the far points), and smaller levels only pay their penalty — the estimate is 0.7, not the smallest.
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> near(0.005, 0.01), far(1.0, 2.0);
+  std::vector<double> d2;
+  for (int i = 0; i < 700; ++i) d2.push_back(std::pow(near(rng), 2));
+  for (int i = 0; i < 300; ++i) d2.push_back(std::pow(far(rng), 2));
+  const auto levels = iires::reg::trimLevels(d2.size(), {1.0, 0.85, 0.7, 0.55, 0.4}, 2.0);
+  std::size_t level = 99;
+  iires::reg::penalisedQuantile(d2, levels, &level);
+  EXPECT_EQ(level, 2u);
+}
+
 TEST(Hausdorff, AllowedOutliersAndBadOverlap) {
   EXPECT_EQ(iires::reg::allowedOutliers(100, 1.0), 0u);
   EXPECT_EQ(iires::reg::allowedOutliers(100, 0.75), 25u);

@@ -70,6 +70,48 @@ TEST(Icp, ConvergesFromANearbyPoseWithScale) {
   }
 }
 
+TEST(Icp, FractionalRmsdKeepsThePairsThatFitAndNotFewer) {
+  // 600 residuals of 0.01 and 400 of 0.5: the estimate keeps exactly the 600 (a smaller k gains nothing,
+  // a larger one takes in the far pairs).
+  std::vector<double> d2(600, 0.01 * 0.01);
+  d2.insert(d2.end(), 400, 0.25);
+  const auto fit = iires::reg::fractionalRmsd(d2, 0.4, 1.5);
+  EXPECT_EQ(fit.keep, 600u);
+  EXPECT_NEAR(fit.rms, 0.01, 1e-12);
+  EXPECT_NEAR(fit.score, 0.01 * std::pow(1000.0 / 600.0, 1.5), 1e-12);
+  // All alike: everything is kept.
+  EXPECT_EQ(iires::reg::fractionalRmsd(std::vector<double>(50, 1.0), 0.4, 1.5).keep, 50u);
+  EXPECT_THROW(iires::reg::fractionalRmsd({}, 0.4, 1.5), std::invalid_argument);
+}
+
+TEST(Icp, EstimatedOverlapAlignsTwoPartialCloudsWithScale) {
+  // Source and target each miss a different part of the blob (a cap of 30 % each) and the source carries
+  // 10 % far outliers; with the overlap estimated per iteration and both directions matched, ICP with scale
+  // still lands on the truth and reports the overlaps it used.
+  const Points whole = blob(3000);
+  Points target, part;
+  for (const auto& x : whole)
+    if (x.x() < 0.9) target.push_back(x);
+  for (const auto& x : blob(2000))
+    if (x.y() > -0.55) part.push_back(x);
+  for (int i = 0; i < 150; ++i) part.emplace_back(4 + 0.01 * i, -3, 2);
+  const Eigen::Matrix4d truth =
+      similarity(1.0, Eigen::AngleAxisd(0.08, Eigen::Vector3d(1, 2, 0).normalized()).toRotationMatrix(),
+                 Eigen::Vector3d(0.04, -0.03, 0.02));
+  const Points source = transformed(part, truth.inverse());
+  const iires::KnnIndex tree(target);
+  iires::reg::IcpParams p;
+  p.estimateOverlap = true;
+  p.bidirectional = true;
+  p.maxIterations = 100;
+  const auto r = iires::reg::similarityIcp(source, target, tree, Eigen::Matrix4d::Identity(), p);
+  EXPECT_TRUE(r.T_target_source.isApprox(truth, 0.01)) << r.T_target_source;
+  EXPECT_NEAR(r.scale, 1.0, 0.01);
+  EXPECT_GT(r.overlap, 0.5);
+  EXPECT_LT(r.overlap, 0.95);
+  EXPECT_LT(r.reverseOverlap, 0.95);
+}
+
 TEST(Icp, RigidKeepsUnitScaleAndTrimmedIgnoresExtraPoints) {
   Points target = blob(2000);
   Points source = transformed(blob(1000), similarity(1.0, Eigen::Matrix3d::Identity(), Eigen::Vector3d(0.05, 0, 0)));

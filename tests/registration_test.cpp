@@ -88,16 +88,17 @@ RegistrationParams fast() {
   return p;
 }
 
-/// @p cloud without the 25 % of its points farthest along @p normal (a scan missing a part).
-PointCloud cutByPlane(const PointCloud& cloud, const Eigen::Vector3d& normal) {
+/// @p cloud without the share @p share of its points farthest along @p normal (a scan missing a part).
+PointCloud cutByPlane(const PointCloud& cloud, const Eigen::Vector3d& normal, double share = 0.25) {
   const Eigen::Vector3d n = normal.normalized();
   std::vector<double> h;
   for (const auto& q : cloud.points) h.push_back(q.dot(n));
   std::vector<double> sorted = h;
-  std::nth_element(sorted.begin(), sorted.begin() + sorted.size() * 3 / 4, sorted.end());
+  const auto k = static_cast<std::size_t>((1.0 - share) * static_cast<double>(sorted.size()));
+  std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(k), sorted.end());
   PointCloud cut;
   for (std::size_t i = 0; i < h.size(); ++i)
-    if (h[i] < sorted[sorted.size() * 3 / 4]) cut.points.push_back(cloud.points[i]);
+    if (h[i] < sorted[k]) cut.points.push_back(cloud.points[i]);
   return cut;
 }
 
@@ -171,6 +172,83 @@ TEST(Registration, PartialSourceWithTrimmedEnergy) {
   EXPECT_LE(r.hausdorffTrimmed, r.hausdorff);
 }
 
+TEST(Registration, PartialScansWithoutAnOverlapHint) {
+  // The overlap is estimated: a source missing 25 % (a cut by a plane) and, second, both clouds missing a
+  // different part (20 % each), at the default settings.
+  const PointCloud full = scan("bunny00", 8000, 42), target = scan("bunny00", 20000, 41);
+  const Eigen::Matrix4d pose = similarity(2.5, 120, {1, 0, 1}, Eigen::Vector3d(-0.5, 0.2, 0.4));
+  const PointCloud source = moved(cutByPlane(full, Eigen::Vector3d(1, 0.3, -0.5)), pose);
+  const RegistrationParams defaults;
+  EXPECT_EQ(defaults.overlap, 0.0);
+  const auto r = registerClouds(source, target, defaults);
+  expectRecovered(r, pose.inverse(), source, target, "source cut, no hint");
+  // The source lies on the target; about a quarter of the target has no partner.
+  EXPECT_GT(r.sourceOverlap, 0.9);
+  EXPECT_GT(r.targetOverlap, 0.6);
+  EXPECT_LT(r.targetOverlap, 0.9);
+  // A runner-up, if any candidate ended ≥ 10° away, fits worse.
+  EXPECT_TRUE(r.runnerUpScore == 0 || r.runnerUpScore > r.score) << r.runnerUpScore;
+  EXPECT_NE(r.toJson().find("\"runner_up_transform\""), std::string::npos);
+
+  const PointCloud bothSource = moved(cutByPlane(full, Eigen::Vector3d(0.2, 0.3, 1), 0.2), pose);
+  const PointCloud bothTarget = cutByPlane(target, Eigen::Vector3d(1, -0.2, 0.1), 0.2);
+  const auto b = registerClouds(bothSource, bothTarget, defaults);
+  expectRecovered(b, pose.inverse(), bothSource, bothTarget, "both cut, no hint");
+  EXPECT_LT(b.sourceOverlap, 0.97);
+  EXPECT_LT(b.targetOverlap, 0.97);
+}
+
+TEST(Registration, IdenticalInputsGiveTheIdentity) {
+  // The same cloud twice (larger than maxInputPerSample·M, so it is thinned) must come back as the identity
+  // within ICP's tolerance: both clouds are thinned and resampled alike.
+  const PointCloud a = scan("armadillo", 9000, 13);
+  const auto r = registerClouds(a, a, RegistrationParams{});
+  EXPECT_LT(r.rotationAngleDeg, 1e-3);
+  EXPECT_NEAR(r.scale, 1.0, 1e-6);
+  EXPECT_LT(r.translation.norm(), 1e-6 * iires::bboxDiagonal(a.points));
+  EXPECT_GT(r.sourceOverlap, 0.99);
+  EXPECT_GT(r.targetOverlap, 0.99);
+}
+
+TEST(Registration, SampleCountAboveTheInputsIsCapped) {
+  // Resampling to more points than either cloud has adds nothing; M = 10⁶ on clouds of 2,000 and 3,000 points
+  // runs at M = 3,000 (and in seconds, not hours).
+  const PointCloud a = scan("fandisk", 2000, 17), b = scan("fandisk", 3000, 18);
+  auto p = fast();
+  p.samples = 1000000;
+  const auto r = registerClouds(moved(a, similarity(1.5, 40, {0, 1, 0}, {1, 2, 3})), b, p);
+  EXPECT_EQ(r.samples, 3000u);
+  EXPECT_EQ(r.samplesRequested, 1000000u);
+  // Small clouds keep the default M (upsampling stays allowed up to it).
+  const auto small = registerClouds(a, b, fast());
+  EXPECT_EQ(small.samples, 1000u);
+}
+
+TEST(Registration, HippoScansRegisterWithoutHints) {
+  // CGAL's two real hippo scans (same scanner: rigid; they share about half of the surface): the default run
+  // (scale estimated, overlap estimated) lands on the pose of the hinted rigid run.
+  const PointCloud a = iires::readPointCloud(iires::test::dataPath("points_3/hippo1.ply"));
+  const PointCloud b = iires::readPointCloud(iires::test::dataPath("points_3/hippo2.ply"));
+  auto hinted = RegistrationParams{};
+  hinted.estimateScale = false;
+  hinted.overlap = 0.7;
+  const auto h = registerClouds(a, b, hinted);
+  const auto d = registerClouds(a, b, RegistrationParams{});
+  EXPECT_LT(iires::reg::rotationAngle(h.rotation, d.rotation) * 180 / M_PI, 2.0);
+  EXPECT_NEAR(d.scale, 1.0, 0.02);
+  const double diag = iires::bboxDiagonal(b.points);
+  Eigen::Vector3d c = Eigen::Vector3d::Zero();
+  for (const auto& q : a.points) c += q;
+  c /= static_cast<double>(a.size());
+  const Eigen::Vector3d ch = h.T_target_source.topLeftCorner<3, 3>() * c + h.T_target_source.topRightCorner<3, 1>();
+  const Eigen::Vector3d cd = d.T_target_source.topLeftCorner<3, 3>() * c + d.T_target_source.topRightCorner<3, 1>();
+  EXPECT_LT((ch - cd).norm(), 0.02 * diag);
+  // About half of each scan overlaps the other.
+  EXPECT_LT(d.sourceOverlap, 0.9);
+  EXPECT_LT(d.targetOverlap, 0.95);
+  EXPECT_FALSE(d.ambiguous);
+}
+
 TEST(Registration, RigidKeepsScaleOneWhenTheCloudsDiffer) {
   // Without scale estimation both clouds share one unit: a cut source (smaller RMS radius than the target)
   // must still come back at scale 1, not at the ratio of the radii.
@@ -242,7 +320,7 @@ TEST(Registration, DegenerateInputsAreRejectedOrFlagged) {
   nan.points[7].x() = std::nan("");
   EXPECT_THROW(registerClouds(nan, good, fast()), iires::InputError);
   auto bad = fast();
-  bad.overlap = 0;
+  bad.overlap = 1.5;
   EXPECT_THROW(registerClouds(good, good, bad), std::invalid_argument);
   bad = fast();
   bad.samples = 10;
@@ -356,6 +434,12 @@ TEST(RegisterTool, BadInputsExitTwoAndWriteNothing) {
   EXPECT_EQ(iires::test::run(reg + " " + dir + "/ok.xyz " + dir + "/ok.xyz --grid hopf" + outs, &out), 2);
   EXPECT_EQ(iires::test::run(reg + " " + dir + "/ok.xyz " + dir + "/ok.xyz -o " + dir + "/nodir/a.ply", &out), 2);
   EXPECT_EQ(iires::test::run(reg + " " + dir + "/ok.xyz", &out), 2);
+  // An output option with an empty file name would write nothing: a usage error, not a silent success.
+  for (const char* option : {"-o", "--transform", "--report"}) {
+    EXPECT_EQ(iires::test::run(reg + " " + dir + "/ok.xyz " + dir + "/ok.xyz " + option + " ''", &out), 2)
+        << option;
+    EXPECT_NE(out.find("file name is empty"), std::string::npos) << out;
+  }
   for (const char* f : {"/a.ply", "/T.txt", "/r.json"}) EXPECT_FALSE(iires::test::fileExists(dir + f)) << f;
   EXPECT_EQ(iires::test::run(reg + " --version", &out), 0);
   EXPECT_NE(out.find("iires"), std::string::npos);

@@ -22,13 +22,18 @@ int main(int argc, char** argv) {
     bool noScale = false, quiet = false, showProgress = false, fullResample = false;
     app.add_option("SOURCE", sourcePath, "cloud to move (.ply .pcd .xyz .xyzn .pts, or mesh vertices)")->required();
     app.add_option("TARGET", targetPath, "cloud to align to")->required();
-    app.add_option("-o,--output", alignedPath, "write SOURCE mapped into TARGET coordinates (.ply .xyz .xyzn)");
-    app.add_option("--transform", transformPath, "write the 4x4 matrix T_target_source, one row per line");
-    app.add_option("--report", reportPath, "write the report as JSON to this file");
-    app.add_option("-m,--samples", samples, "points each cloud is resampled to (>= 50)");
+    auto* outputOption =
+        app.add_option("-o,--output", alignedPath, "write SOURCE mapped into TARGET coordinates (.ply .xyz .xyzn)");
+    auto* transformOption =
+        app.add_option("--transform", transformPath, "write the 4x4 matrix T_target_source, one row per line");
+    auto* reportOption = app.add_option("--report", reportPath, "write the report as JSON to this file");
+    app.add_option("-m,--samples", samples,
+                   "points each cloud is resampled to (>= 50; above 1000 capped at the larger input's size)");
     app.add_option("--grid", grid, "rotation grid: so3 (uniform, default) or euler (the paper's 24^3)")
         ->check(CLI::IsMember({"so3", "euler"}));
-    app.add_option("--overlap", params.overlap, "share of each cloud that overlaps the other, (0, 1]");
+    auto* overlapOption = app.add_option("--overlap", params.overlap,
+                                         "share of each cloud that overlaps the other, (0, 1], if known for sure "
+                                         "(default: estimated)");
     app.add_flag("--no-scale", noScale, "rigid registration: keep the scale at 1");
     std::string outlierMode = "pull";
     app.add_option("--outliers", outlierMode,
@@ -42,9 +47,13 @@ int main(int argc, char** argv) {
     app.add_flag("--progress", showProgress, "progress on stderr even when it is not a terminal");
     app.set_version_flag("--version", iires::tools::versionString());
     if (const int code = iires::tools::parseArgs(app, argc, argv); code != iires::tools::kContinue) return code;
+    // An output option given with an empty name would silently write nothing.
+    for (const auto* option : {outputOption, transformOption, reportOption})
+      if (option->count() > 0 && option->as<std::string>().empty())
+        throw iires::InputError(option->get_name() + ": the file name is empty");
     if (samples < 50) throw iires::InputError("-m/--samples must be at least 50 (got " + std::to_string(samples) + ")");
     iires::tools::checkCount("-m", samples, kBytesPerSample);
-    if (!(params.overlap > 0.0 && params.overlap <= 1.0))
+    if (overlapOption->count() > 0 && !(params.overlap > 0.0 && params.overlap <= 1.0))
       throw iires::InputError("--overlap must be in (0, 1] (got " + std::to_string(params.overlap) + ")");
     params.samples = static_cast<std::size_t>(samples);
     params.grid = iires::reg::parseRotationGridType(grid);
@@ -86,7 +95,9 @@ int main(int argc, char** argv) {
     if (!quiet) {
       std::cout << iires::reg::formatTransform(result.T_target_source);
       std::cout << "scale " << result.scale << "  rotation " << result.rotationAngleDeg << " deg  rmse "
-                << result.rmse << "  hausdorff " << result.hausdorff << (result.ambiguous ? "  AMBIGUOUS: " : "")
+                << result.rmse << "  hausdorff " << result.hausdorff << "  overlap " << result.sourceOverlap << " / "
+                << result.targetOverlap << "  runner-up x" << result.secondBestScoreRatio
+                << (result.ambiguous ? "  AMBIGUOUS: " : "")
                 << result.ambiguityReason << "\n";
     }
     return iires::tools::kOk;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
 
@@ -38,27 +39,78 @@ double hausdorffDistance(const std::vector<Eigen::Vector3d>& a, const std::vecto
 double boundedDirectedHausdorff(const std::vector<Eigen::Vector3d>& from, const Eigen::Matrix3d& rotation,
                                 const KnnIndex& to, std::size_t outliers, double bound,
                                 std::vector<double>& scratch, std::size_t* visited) {
-  const double bound2 = std::isfinite(bound) ? bound * bound : std::numeric_limits<double>::infinity();
+  TrimLevel level;
+  level.outliers = outliers;
+  return boundedPartialHausdorff(from, rotation, to, {level}, bound, scratch, visited);
+}
+
+std::vector<TrimLevel> trimLevels(std::size_t n, const std::vector<double>& overlaps, double exponent) {
+  if (overlaps.empty()) throw std::invalid_argument("trimLevels: no overlap given");
+  if (!(exponent >= 0.0)) throw std::invalid_argument("trimLevels: the exponent must be >= 0");
+  const double top = *std::max_element(overlaps.begin(), overlaps.end());
+  std::vector<TrimLevel> levels;
+  for (double f : overlaps) {
+    TrimLevel l;
+    l.overlap = f;
+    l.outliers = allowedOutliers(n, f);  // validates f
+    l.penalty = std::pow(top / f, exponent);
+    levels.push_back(l);
+  }
+  return levels;
+}
+
+double penalisedQuantile(std::vector<double>& d2, const std::vector<TrimLevel>& levels, std::size_t* level) {
+  double best = std::numeric_limits<double>::infinity();
+  for (std::size_t j = 0; j < levels.size(); ++j) {
+    const std::size_t k = d2.size() - 1 - levels[j].outliers;
+    std::nth_element(d2.begin(), d2.begin() + static_cast<std::ptrdiff_t>(k), d2.end());
+    const double v = levels[j].penalty * std::sqrt(d2[k]);
+    if (v < best) {
+      best = v;
+      if (level) *level = j;
+    }
+  }
+  return best;
+}
+
+double boundedPartialHausdorff(const std::vector<Eigen::Vector3d>& from, const Eigen::Matrix3d& rotation,
+                               const KnnIndex& to, const std::vector<TrimLevel>& levels, double bound,
+                               std::vector<double>& scratch, std::size_t* visited, std::size_t* level) {
+  constexpr std::size_t kMaxLevels = 16;
+  if (levels.empty() || levels.size() > kMaxLevels)
+    throw std::invalid_argument("boundedPartialHausdorff: between 1 and 16 levels");
+  // Level j is beaten once more than its outliers lie farther than bound / penalty_j.
+  double limit2[kMaxLevels];
+  std::size_t over[kMaxLevels] = {};
+  for (std::size_t j = 0; j < levels.size(); ++j) {
+    const double t = bound / levels[j].penalty;
+    limit2[j] = std::isfinite(t) ? t * t : std::numeric_limits<double>::infinity();
+  }
+  const bool plainMax = levels.size() == 1 && levels[0].outliers == 0;
+  std::size_t alive = levels.size();  // levels not beaten yet
   scratch.clear();
-  std::size_t over = 0, i = 0;
-  double worst = 0;  // running maximum, enough when no outliers are allowed
+  double worst = 0;  // running maximum, enough for a single untrimmed level
+  std::size_t i = 0;
   for (; i < from.size(); ++i) {
     double d2 = 0;
     to.nearest(rotation * from[i], &d2);
-    if (d2 > bound2 && ++over > outliers) {
+    for (std::size_t j = 0; j < levels.size(); ++j)
+      if (d2 > limit2[j] && over[j]++ == levels[j].outliers) --alive;
+    if (alive == 0) {
       if (visited) *visited = i + 1;
       return std::numeric_limits<double>::infinity();
     }
-    if (outliers == 0)
+    if (plainMax)
       worst = std::max(worst, d2);
     else
       scratch.push_back(d2);
   }
   if (visited) *visited = i;
-  if (outliers == 0) return std::sqrt(worst);
-  const std::size_t k = scratch.size() - 1 - outliers;
-  std::nth_element(scratch.begin(), scratch.begin() + static_cast<std::ptrdiff_t>(k), scratch.end());
-  return std::sqrt(scratch[k]);
+  if (plainMax) {
+    if (level) *level = 0;
+    return std::sqrt(worst);
+  }
+  return penalisedQuantile(scratch, levels, level);
 }
 
 }  // namespace iires::reg

@@ -3,6 +3,7 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <numeric>
 #include <stdexcept>
@@ -16,8 +17,67 @@ namespace iires::reg {
 void IcpParams::validate() const {
   if (maxIterations < 1) throw std::invalid_argument("ICP: maxIterations must be at least 1");
   if (!(overlap > 0.0 && overlap <= 1.0)) throw std::invalid_argument("ICP: overlap must be in (0, 1]");
+  if (!(reverseOverlap >= 0.0 && reverseOverlap <= 1.0))
+    throw std::invalid_argument("ICP: reverseOverlap must be 0 or in (0, 1]");
   if (!(tolerance > 0.0)) throw std::invalid_argument("ICP: tolerance must be positive");
+  if (!(minOverlap > 0.0 && minOverlap <= 1.0)) throw std::invalid_argument("ICP: minOverlap must be in (0, 1]");
+  if (!(overlapExponent >= 0.0)) throw std::invalid_argument("ICP: overlapExponent must be >= 0");
 }
+
+FractionalFit fractionalRmsd(const std::vector<double>& sortedD2, double minOverlap, double exponent,
+                             double floor) {
+  if (sortedD2.empty()) throw std::invalid_argument("fractionalRmsd: no residuals");
+  if (!(minOverlap > 0.0 && minOverlap <= 1.0))
+    throw std::invalid_argument("fractionalRmsd: minOverlap must be in (0, 1]");
+  if (!(exponent >= 0.0)) throw std::invalid_argument("fractionalRmsd: exponent must be >= 0");
+  const std::size_t n = sortedD2.size();
+  const std::size_t first = n - allowedOutliers(n, minOverlap);
+  FractionalFit best;
+  best.score = std::numeric_limits<double>::infinity();
+  double sum = 0;
+  for (std::size_t k = 1; k <= n; ++k) {
+    sum += sortedD2[k - 1];
+    if (k < first) continue;
+    const double rms = std::sqrt(sum / static_cast<double>(k));
+    const double score = std::max(rms, floor) * std::pow(static_cast<double>(n) / static_cast<double>(k), exponent);
+    if (score <= best.score) best = {score, rms, k};  // ties: the larger overlap
+  }
+  return best;
+}
+
+namespace {
+
+/// Residual RMS below this share of the source's radius is rounding noise (see fractionalRmsd's floor).
+constexpr double kRoundingFloor = 1e-12;
+
+double scaleOf(const Eigen::Matrix4d& t) { return t.topLeftCorner<3, 3>().col(0).norm(); }
+
+/// Order the pair indices so that the pairs to use come first, and return how many: the ⌈overlap·n⌉ nearest
+/// (fixed overlap), or the k nearest minimising the fractional RMSD (estimated). Ties broken by index, so
+/// the choice is deterministic.
+std::size_t selectNearest(const std::vector<double>& d2, std::vector<std::size_t>& order, const IcpParams& p,
+                          double overlap, double floor) {
+  const std::size_t n = d2.size();
+  order.resize(n);
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  auto closer = [&](std::size_t x, std::size_t y) { return d2[x] < d2[y] || (d2[x] == d2[y] && x < y); };
+  if (p.estimateOverlap) {
+    std::sort(order.begin(), order.end(), closer);
+    std::vector<double> sorted(n);
+    for (std::size_t i = 0; i < n; ++i) sorted[i] = d2[order[i]];
+    const std::size_t keep = fractionalRmsd(sorted, p.minOverlap, p.overlapExponent, floor).keep;
+    std::sort(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(keep));
+    return keep;
+  }
+  const std::size_t keep = n - allowedOutliers(n, overlap);
+  if (keep < n) {
+    std::nth_element(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(keep - 1), order.end(), closer);
+    std::sort(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(keep));
+  }
+  return keep;
+}
+
+}  // namespace
 
 Eigen::Matrix4d umeyamaTransform(const std::vector<Eigen::Vector3d>& a, const std::vector<Eigen::Vector3d>& b,
                                  bool withScale) {
@@ -36,13 +96,13 @@ IcpResult similarityIcp(const std::vector<Eigen::Vector3d>& source, const std::v
   params.validate();
   if (source.size() < 3 || target.size() < 3) throw std::invalid_argument("ICP needs at least 3 points per cloud");
   const std::size_t n = source.size();
-  const std::size_t keep = n - allowedOutliers(n, params.overlap);
+  std::size_t keep = n;
   IcpResult result;
   Eigen::Matrix4d T = init;
   std::vector<std::int64_t> match(n);
   std::vector<double> d2(n);
   std::vector<std::size_t> order(n);
-  std::vector<Eigen::Vector3d> a(keep), b(keep);
+  std::vector<Eigen::Vector3d> a, b;
   // RMS radius of the source about its centroid: translation changes are measured relative to it.
   Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
   for (const auto& p : source) centroid += p;
@@ -54,19 +114,13 @@ IcpResult similarityIcp(const std::vector<Eigen::Vector3d>& source, const std::v
     const Eigen::Matrix3d m = t.topLeftCorner<3, 3>();
     const Eigen::Vector3d tr = t.topRightCorner<3, 1>();
     parallelFor(n, params.threads, [&](std::size_t i) { match[i] = targetIndex.nearest(m * source[i] + tr, &d2[i]); });
-    std::iota(order.begin(), order.end(), std::size_t{0});
-    if (keep < n) {
-      // The keep nearest pairs; ties broken by index so the choice is deterministic.
-      std::nth_element(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(keep - 1), order.end(),
-                       [&](std::size_t x, std::size_t y) { return d2[x] < d2[y] || (d2[x] == d2[y] && x < y); });
-      std::sort(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(keep));
-    }
+    keep = selectNearest(d2, order, params, params.overlap, kRoundingFloor * radius * scaleOf(t));
   };
   // Reverse matches (target → source), for bidirectional mode: the target moved by T⁻¹ against a tree on
   // the source; distances are compared in target units (× scale).
   std::unique_ptr<KnnIndex> sourceTree;
   const std::size_t m = target.size();
-  const std::size_t keepReverse = m - allowedOutliers(m, params.overlap);
+  std::size_t keepReverse = m;
   std::vector<std::int64_t> rmatch(params.bidirectional ? m : 0);
   std::vector<double> rd2(rmatch.size());
   std::vector<std::size_t> rorder(rmatch.size());
@@ -76,12 +130,8 @@ IcpResult similarityIcp(const std::vector<Eigen::Vector3d>& source, const std::v
     const Eigen::Matrix3d mi = inv.topLeftCorner<3, 3>();
     const Eigen::Vector3d ti = inv.topRightCorner<3, 1>();
     parallelFor(m, params.threads, [&](std::size_t i) { rmatch[i] = sourceTree->nearest(mi * target[i] + ti, &rd2[i]); });
-    std::iota(rorder.begin(), rorder.end(), std::size_t{0});
-    if (keepReverse < m) {
-      std::nth_element(rorder.begin(), rorder.begin() + static_cast<std::ptrdiff_t>(keepReverse - 1), rorder.end(),
-                       [&](std::size_t x, std::size_t y) { return rd2[x] < rd2[y] || (rd2[x] == rd2[y] && x < y); });
-      std::sort(rorder.begin(), rorder.begin() + static_cast<std::ptrdiff_t>(keepReverse));
-    }
+    const double reverseOverlap = params.reverseOverlap > 0.0 ? params.reverseOverlap : params.overlap;
+    keepReverse = selectNearest(rd2, rorder, params, reverseOverlap, kRoundingFloor * radius);  // source units
   };
   for (int it = 0; it < params.maxIterations; ++it) {
     matchAll(T);
@@ -121,6 +171,11 @@ IcpResult similarityIcp(const std::vector<Eigen::Vector3d>& source, const std::v
   result.scale = T.topLeftCorner<3, 3>().col(0).norm();
   result.rmse = std::sqrt(sum / static_cast<double>(keep));
   result.matched = keep;
+  result.overlap = static_cast<double>(keep) / static_cast<double>(n);
+  if (params.bidirectional) {
+    matchReverse(T);
+    result.reverseOverlap = static_cast<double>(keepReverse) / static_cast<double>(m);
+  }
   return result;
 }
 

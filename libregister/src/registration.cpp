@@ -22,6 +22,10 @@ namespace iires::reg {
 namespace {
 
 constexpr std::size_t kMinPoints = 10;
+/// Residual RMS below this (normalised units: unit RMS radius) is rounding noise, e.g. identical clouds.
+constexpr double kRoundingFloor = 1e-12;
+/// The final ICP of an estimated overlap keeps this share of the estimated pairs (both directions).
+constexpr double kPolishShare = 0.9;
 
 using Clock = std::chrono::steady_clock;
 double since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
@@ -131,6 +135,119 @@ ResampleResult resampleFor(const PointCloud& cloud, const RegistrationParams& pa
   }
 }
 
+/// How well a pose fits, in normalised units (lower is better), and the overlaps it implies.
+struct PoseScore {
+  double score = std::numeric_limits<double>::infinity();
+  double sourceOverlap = 1, targetOverlap = 1;
+};
+
+/// Symmetric score of a pose T of the normalised source S against the normalised target: the RMS of the two
+/// directions' distances, trimmed to the given overlap, or, with the overlap unknown, each direction's
+/// fractional RMSD (its own overlap estimate). Symmetric, so a shrunken source that covers only part of the
+/// target does not win.
+PoseScore scorePose(const std::vector<Eigen::Vector3d>& ns, const std::vector<Eigen::Vector3d>& nt,
+                    const KnnIndex& targetTree, const Eigen::Matrix4d& T, const RegistrationParams& params) {
+  const std::vector<Eigen::Vector3d> moved = applied(ns, T);
+  const KnnIndex movedTree(moved);
+  PoseScore out;
+  if (params.overlap > 0.0) {
+    const double a = trimmedRms(moved, targetTree, params.overlap, params.threads);
+    const double b = trimmedRms(nt, movedTree, params.overlap, params.threads);
+    out.score = std::sqrt(0.5 * (a * a + b * b));
+    out.sourceOverlap = out.targetOverlap = params.overlap;
+    return out;
+  }
+  auto direction = [&](const std::vector<Eigen::Vector3d>& from, const KnnIndex& to, double* overlap) {
+    std::vector<double> d2(from.size());
+    parallelFor(from.size(), params.threads, [&](std::size_t i) { to.nearest(from[i], &d2[i]); });
+    std::sort(d2.begin(), d2.end());
+    const double minOverlap = *std::min_element(params.searchOverlaps.begin(), params.searchOverlaps.end());
+    const FractionalFit fit = fractionalRmsd(d2, minOverlap, params.fitOverlapExponent, kRoundingFloor);
+    *overlap = static_cast<double>(fit.keep) / static_cast<double>(from.size());
+    return fit.score;
+  };
+  const double a = direction(moved, targetTree, &out.sourceOverlap);
+  const double b = direction(nt, movedTree, &out.targetOverlap);
+  out.score = std::sqrt(0.5 * (a * a + b * b));
+  return out;
+}
+
+/// The search's candidates refined by ICP and scored; best = the lowest score.
+struct Refined {
+  std::vector<IcpResult> icp;
+  std::vector<PoseScore> score;
+  std::size_t best = 0;
+};
+
+/// ICP (with scale unless rigid) from each of the best few candidates for screenIterations, scored by
+/// scorePose(); the best continues to convergence. A known overlap < 1 trims the pairs in both directions; an
+/// unknown one is estimated in every iteration (fractional RMSD, both directions).
+Refined refineCandidates(const std::vector<Eigen::Vector3d>& ns, const std::vector<Eigen::Vector3d>& nt,
+                         const RotationSearchResult& found, const RegistrationParams& params) {
+  IcpParams ip = params.icp;
+  const bool estimate = params.overlap == 0.0;
+  ip.overlap = estimate ? 1.0 : params.overlap;
+  ip.estimateOverlap = estimate;
+  ip.minOverlap = estimate ? *std::min_element(params.searchOverlaps.begin(), params.searchOverlaps.end()) : 1.0;
+  ip.overlapExponent = params.fitOverlapExponent;
+  ip.estimateScale = params.estimateScale;
+  ip.threads = params.threads;
+  ip.bidirectional = ip.bidirectional || params.overlap < 1.0;  // partial scans: both directions
+  const KnnIndex targetTree(nt);
+  const std::size_t nc = std::min(params.icpCandidates, found.candidates.size());
+  Refined out;
+  out.icp.resize(nc);
+  out.score.resize(nc);
+  IcpParams screen = ip;
+  screen.maxIterations = params.screenIterations;
+  for (std::size_t c = 0; c < nc; ++c) {
+    if (params.progress) params.progress("icp", static_cast<double>(c) / static_cast<double>(nc + 1));
+    Eigen::Matrix4d init = Eigen::Matrix4d::Identity();
+    init.topLeftCorner<3, 3>() = found.candidates[c].rotation;
+    out.icp[c] = similarityIcp(ns, nt, targetTree, init, screen);
+    out.score[c] = scorePose(ns, nt, targetTree, out.icp[c].T_target_source, params);
+  }
+  for (std::size_t c = 1; c < nc; ++c)
+    if (out.score[c].score < out.score[out.best].score) out.best = c;
+  IcpResult& best = out.icp[out.best];
+  if (!best.converged) {  // the winner continues to convergence
+    const int screened = best.iterations;
+    best = similarityIcp(ns, nt, targetTree, best.T_target_source, ip);
+    best.iterations += screened;
+  }
+  if (estimate) {
+    // Polish with the estimated overlaps, trimmed a little further and held fixed: pairs beyond the overlap
+    // (at a cut's edge) bias the scale and the position, while dropping a few true pairs costs little
+    // (trimmed ICP practice).
+    IcpParams polish = ip;
+    polish.estimateOverlap = false;
+    polish.overlap = kPolishShare * best.overlap;
+    polish.reverseOverlap = kPolishShare * best.reverseOverlap;
+    const int before = best.iterations;
+    const double forward = best.overlap, reverse = best.reverseOverlap;
+    best = similarityIcp(ns, nt, targetTree, best.T_target_source, polish);
+    best.iterations += before;
+    best.overlap = forward;
+    best.reverseOverlap = reverse;
+  }
+  out.score[out.best] = scorePose(ns, nt, targetTree, best.T_target_source, params);
+  if (params.progress) params.progress("icp", 1.0);
+  return out;
+}
+
+/// A similarity Tn = (σR | τ) between the normalised clouds in original units: with s_n = (s − c_s)/r_s and
+/// t = r_t t_n + c_t, t = (σ r_t / r_s) R s + (c_t + r_t τ − (σ r_t / r_s) R c_s). R is re-orthonormalised
+/// (Umeyama's is orthonormal up to rounding).
+Eigen::Matrix4d toOriginalUnits(const Eigen::Matrix4d& Tn, double sigma, const Frame& fs, const Frame& ft) {
+  Eigen::JacobiSVD<Eigen::Matrix3d> svd(Tn.topLeftCorner<3, 3>() / sigma, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  const Eigen::Matrix3d R = svd.matrixU() * svd.matrixV().transpose();
+  const double scale = sigma * ft.radius / fs.radius;
+  Eigen::Matrix4d T = Eigen::Matrix4d::Identity();
+  T.topLeftCorner<3, 3>() = scale * R;
+  T.topRightCorner<3, 1>() = ft.centroid + ft.radius * Tn.topRightCorner<3, 1>() - scale * R * fs.centroid;
+  return T;
+}
+
 std::string num(double v) {
   if (!std::isfinite(v)) return "null";
   std::ostringstream s;
@@ -153,8 +270,15 @@ void RegistrationParams::validate() const {
   if (samples < 50) throw std::invalid_argument("registration: samples (M) must be at least 50");
   if (eulerSteps < 1) throw std::invalid_argument("registration: eulerSteps must be at least 1");
   if (so3Count < 1) throw std::invalid_argument("registration: so3Count must be at least 1");
-  if (!(overlap > 0.0 && overlap <= 1.0))
-    throw std::invalid_argument("registration: overlap must be in (0, 1], got " + std::to_string(overlap));
+  if (!(overlap >= 0.0 && overlap <= 1.0))
+    throw std::invalid_argument("registration: overlap must be 0 (estimate) or in (0, 1], got " +
+                                std::to_string(overlap));
+  if (searchOverlaps.empty() || searchOverlaps.size() > 16)
+    throw std::invalid_argument("registration: searchOverlaps needs between 1 and 16 levels");
+  for (double f : searchOverlaps)
+    if (!(f > 0.0 && f <= 1.0)) throw std::invalid_argument("registration: searchOverlaps must lie in (0, 1]");
+  if (!(searchOverlapExponent >= 0.0) || !(fitOverlapExponent >= 0.0))
+    throw std::invalid_argument("registration: the overlap exponents must be >= 0");
   if (icpCandidates < 1) throw std::invalid_argument("registration: icpCandidates must be at least 1");
   if (screenIterations < 1) throw std::invalid_argument("registration: screenIterations must be at least 1");
   if (maxInputPerSample != 0 && maxInputPerSample < 2)
@@ -188,8 +312,12 @@ std::string formatTransform(const Eigen::Matrix4d& T) {
 }
 
 RegistrationResult registerClouds(const PointCloud& sourceIn, const PointCloud& targetIn,
-                                  const RegistrationParams& params) {
-  params.validate();
+                                  const RegistrationParams& requested) {
+  requested.validate();
+  // M above both input sizes adds no information (and a huge M costs hours): cap it at the larger input,
+  // never below the default.
+  RegistrationParams params = requested;
+  params.samples = std::min(requested.samples, std::max({RegistrationParams{}.samples, sourceIn.size(), targetIn.size()}));
   const auto tTotal = Clock::now();
   RegistrationResult r;
   auto stage = [&](const char* name, Clock::time_point t) { r.timings.push_back({name, since(t)}); };
@@ -202,14 +330,17 @@ RegistrationResult registerClouds(const PointCloud& sourceIn, const PointCloud& 
   r.sourcePoints = sourceIn.size();
   r.targetPoints = targetIn.size();
   r.samples = params.samples;
+  r.samplesRequested = requested.samples;
   stage("validate", t);
 
   // 2. Cheap thinning of dense inputs to maxInputPerSample·M points, then resample both to the same M
   // isotropic points: centroid and RMS radius no longer depend on density.
   t = Clock::now();
   const std::size_t workingCap = params.maxInputPerSample * params.samples;
-  source = randomSubset(source, workingCap, params.seed * 2 + 1);
-  target = randomSubset(target, workingCap, params.seed * 2 + 2);
+  // The same seed for both: the subset depends on the cloud, not on its role, so that identical inputs give
+  // identical working clouds (and the identity).
+  source = randomSubset(source, workingCap, params.seed);
+  target = randomSubset(target, workingCap, params.seed);
   OutlierParams op = params.outliers;
   op.threads = params.threads;
   source = cleanOutliers(source, op, &r.outliersFound);
@@ -245,8 +376,10 @@ RegistrationResult registerClouds(const PointCloud& sourceIn, const PointCloud& 
 
   // 4. Rotation search, eq. (11)–(12).
   t = Clock::now();
+  const bool estimate = params.overlap == 0.0;
   RotationSearchParams sp = params.search;
-  sp.overlap = params.overlap;
+  sp.overlaps = estimate ? params.searchOverlaps : std::vector<double>{params.overlap};
+  sp.overlapExponent = params.searchOverlapExponent;
   sp.seed = params.seed;
   sp.threads = params.threads;
   sp.keep = std::max(sp.keep, params.icpCandidates);
@@ -261,62 +394,32 @@ RegistrationResult registerClouds(const PointCloud& sourceIn, const PointCloud& 
   stage("search", t);
   if (found.candidates.empty()) throw std::runtime_error("rotation search found no candidate");
 
-  // 5. ICP (with scale) from each of the best few candidates; score by the symmetric trimmed RMS distance so
-  // a shrunken source that covers only part of the target does not win.
+  // 5. ICP from each of the best few candidates, ranked by the symmetric score.
   t = Clock::now();
-  IcpParams ip = params.icp;
-  ip.overlap = params.overlap;
-  ip.estimateScale = params.estimateScale;
-  ip.threads = params.threads;
-  ip.bidirectional = ip.bidirectional || params.overlap < 1.0;  // partial scans: trim both directions
-  const KnnIndex targetTree(nt);
-  const std::size_t nc = std::min(params.icpCandidates, found.candidates.size());
-  std::vector<IcpResult> icp(nc);
-  std::vector<double> score(nc);
-  IcpParams screen = ip;
-  screen.maxIterations = params.screenIterations;
-  // Symmetric trimmed RMS distance (normalised units) of the source moved by T and the target.
-  auto symmetricScore = [&](const Eigen::Matrix4d& T) {
-    const std::vector<Eigen::Vector3d> moved = applied(ns, T);
-    const KnnIndex movedTree(moved);
-    const double a = trimmedRms(moved, targetTree, params.overlap, params.threads);
-    const double b = trimmedRms(nt, movedTree, params.overlap, params.threads);
-    return std::sqrt(0.5 * (a * a + b * b));
-  };
-  for (std::size_t c = 0; c < nc; ++c) {
-    if (params.progress) params.progress("icp", static_cast<double>(c) / static_cast<double>(nc + 1));
-    Eigen::Matrix4d init = Eigen::Matrix4d::Identity();
-    init.topLeftCorner<3, 3>() = found.candidates[c].rotation;
-    icp[c] = similarityIcp(ns, nt, targetTree, init, screen);
-    score[c] = symmetricScore(icp[c].T_target_source);
-  }
-  std::size_t best = 0;
-  for (std::size_t c = 1; c < nc; ++c)
-    if (score[c] < score[best]) best = c;
-  // The winner continues to convergence.
-  {
-    const int screened = icp[best].iterations;
-    const bool done = icp[best].converged;
-    if (!done) {
-      icp[best] = similarityIcp(ns, nt, targetTree, icp[best].T_target_source, ip);
-      icp[best].iterations += screened;
-      score[best] = symmetricScore(icp[best].T_target_source);
-    }
-  }
-  if (params.progress) params.progress("icp", 1.0);
+  const Refined refined = refineCandidates(ns, nt, found, params);
   stage("icp", t);
 
-  // Ambiguity: a clearly different pose (≥ 10° away after ICP) that fits about as well.
-  const Eigen::Matrix4d& Tn = icp[best].T_target_source;
-  const Eigen::Matrix3d Rbest = Tn.topLeftCorner<3, 3>() / icp[best].scale;
+  // 6. The result, the runner-up and the ambiguity flags; back to original units.
+  t = Clock::now();
+  const std::size_t best = refined.best;
+  const IcpResult& icp = refined.icp[best];
+  const Eigen::Matrix4d& Tn = icp.T_target_source;
+  const Eigen::Matrix3d Rbest = Tn.topLeftCorner<3, 3>() / icp.scale;
+  r.score = refined.score[best].score;
+  r.sourceOverlap = refined.score[best].sourceOverlap;
+  r.targetOverlap = refined.score[best].targetOverlap;
   double second = std::numeric_limits<double>::infinity();
-  for (std::size_t c = 0; c < nc; ++c) {
+  for (std::size_t c = 0; c < refined.icp.size(); ++c) {
     if (c == best) continue;
-    const Eigen::Matrix3d Rc = icp[c].T_target_source.topLeftCorner<3, 3>() / icp[c].scale;
-    if (rotationAngle(Rbest, Rc) >= 10.0 * M_PI / 180.0) second = std::min(second, score[c]);
+    const Eigen::Matrix3d Rc = refined.icp[c].T_target_source.topLeftCorner<3, 3>() / refined.icp[c].scale;
+    if (rotationAngle(Rbest, Rc) >= 10.0 * M_PI / 180.0 && refined.score[c].score < second) {
+      second = refined.score[c].score;
+      r.runnerUpScore = second;
+      r.runnerUpTransform = toOriginalUnits(refined.icp[c].T_target_source, refined.icp[c].scale, fs, ft);
+    }
   }
-  r.secondBestScoreRatio = std::isfinite(second) && score[best] > 0 ? second / score[best] : 0.0;
-  if (std::isfinite(second) && second <= score[best] * (1.0 + params.ambiguityTolerance)) {
+  r.secondBestScoreRatio = std::isfinite(second) && r.score > 0 ? second / r.score : 0.0;
+  if (std::isfinite(second) && second <= r.score * (1.0 + params.ambiguityTolerance)) {
     r.ambiguous = true;
     r.ambiguityReason = "another pose fits within " + num(100 * params.ambiguityTolerance) +
                         "% (symmetric shape?)";
@@ -326,38 +429,26 @@ RegistrationResult registerClouds(const PointCloud& sourceIn, const PointCloud& 
     r.ambiguityReason = r.ambiguityReason.empty() ? std::string("planar cloud: mirrored poses fit equally well")
                                                   : r.ambiguityReason + "; planar cloud";
   }
-
-  // 6. Back to original units: t_n = σ R s_n + τ with s_n = (s − c_s)/r_s and t = r_t t_n + c_t gives
-  // t = (σ r_t / r_s) R s + (c_t + r_t τ − (σ r_t / r_s) R c_s).
-  t = Clock::now();
-  const double sigma = icp[best].scale;
-  const Eigen::Vector3d tau = Tn.topRightCorner<3, 1>();
-  r.rotation = Rbest;
-  {  // re-orthonormalise (Umeyama's R is orthonormal up to rounding)
-    Eigen::JacobiSVD<Eigen::Matrix3d> svd(r.rotation, Eigen::ComputeFullU | Eigen::ComputeFullV);
-    r.rotation = svd.matrixU() * svd.matrixV().transpose();
-  }
-  r.scale = sigma * ft.radius / fs.radius;
-  r.translation = ft.centroid + ft.radius * tau - r.scale * r.rotation * fs.centroid;
-  r.T_target_source.setIdentity();
-  r.T_target_source.topLeftCorner<3, 3>() = r.scale * r.rotation;
-  r.T_target_source.topRightCorner<3, 1>() = r.translation;
+  r.T_target_source = toOriginalUnits(Tn, icp.scale, fs, ft);
+  r.scale = icp.scale * ft.radius / fs.radius;
+  r.rotation = r.T_target_source.topLeftCorner<3, 3>() / r.scale;
+  r.translation = r.T_target_source.topRightCorner<3, 1>();
   const Eigen::AngleAxisd aa(r.rotation);
   r.rotationAngleDeg = aa.angle() * 180.0 / M_PI;
   r.rotationAxis = aa.axis();
-  r.rmse = icp[best].rmse * ft.radius;
-  r.icpIterations = icp[best].iterations;
-  r.icpConverged = icp[best].converged;
+  r.rmse = icp.rmse * ft.radius;
+  r.icpIterations = icp.iterations;
+  r.icpConverged = icp.converged;
   r.bestCandidate = found.candidates[best].gridIndex;
   r.candidateRank = best;
   r.normalisedEnergy = found.candidates[best].energy;
-  r.hausdorff = hausdorffDistance(applied(rs.cloud.points, r.T_target_source), rt.cloud.points, 1.0, params.threads);
-  r.hausdorffTrimmed = params.overlap < 1.0 ? hausdorffDistance(applied(rs.cloud.points, r.T_target_source),
-                                                                rt.cloud.points, params.overlap, params.threads)
-                                            : r.hausdorff;
-  {  // overlap: share of the aligned source samples with a target sample within one sample spacing
-    const std::vector<Eigen::Vector3d> aligned = applied(rs.cloud.points, r.T_target_source);
-    const KnnIndex targetSamples(rt.cloud.points);
+  const std::vector<Eigen::Vector3d> aligned = applied(rs.cloud.points, r.T_target_source);
+  r.hausdorff = hausdorffDistance(aligned, rt.cloud.points, 1.0, params.threads);
+  {  // trimmed to the overlaps (estimated or given), each direction its own
+    const KnnIndex alignedTree(aligned), targetSamples(rt.cloud.points);
+    r.hausdorffTrimmed = std::max(directedHausdorff(aligned, targetSamples, r.sourceOverlap, params.threads),
+                                  directedHausdorff(rt.cloud.points, alignedTree, r.targetOverlap, params.threads));
+    // overlap share: aligned source samples with a target sample within one sample spacing
     const double l = spacingStats(rt.cloud.points, params.threads).mean;
     std::vector<char> near(aligned.size());
     parallelFor(aligned.size(), params.threads, [&](std::size_t i) {
@@ -375,18 +466,24 @@ RegistrationResult registerClouds(const PointCloud& sourceIn, const PointCloud& 
 std::string RegistrationResult::toJson() const {
   std::ostringstream s;
   auto vec = [&](const Eigen::Vector3d& v) { return "[" + num(v.x()) + ", " + num(v.y()) + ", " + num(v.z()) + "]"; };
-  s << "{\n  \"transform\": [";
-  for (int i = 0; i < 4; ++i) {
-    s << (i ? ", " : "") << "[";
-    for (int j = 0; j < 4; ++j) s << (j ? ", " : "") << num(T_target_source(i, j));
-    s << "]";
-  }
-  s << "],\n  \"scale\": " << num(scale) << ",\n  \"rotation\": [";
+  auto matrix = [](const Eigen::Matrix4d& T) {
+    std::string m = "[";
+    for (int i = 0; i < 4; ++i) {
+      m += i ? ", [" : "[";
+      for (int j = 0; j < 4; ++j) m += (j ? ", " : "") + num(T(i, j));
+      m += "]";
+    }
+    return m + "]";
+  };
+  s << "{\n  \"transform\": " << matrix(T_target_source) << ",\n  \"scale\": " << num(scale) << ",\n  \"rotation\": [";
   for (int i = 0; i < 3; ++i) s << (i ? ", " : "") << vec(rotation.row(i).transpose());
   s << "],\n  \"rotation_angle_deg\": " << num(rotationAngleDeg) << ",\n  \"rotation_axis\": " << vec(rotationAxis)
     << ",\n  \"translation\": " << vec(translation) << ",\n  \"rmse\": " << num(rmse)
     << ",\n  \"hausdorff\": " << num(hausdorff) << ",\n  \"hausdorff_trimmed\": " << num(hausdorffTrimmed)
-    << ",\n  \"overlap_share\": " << num(overlapShare)
+    << ",\n  \"overlap_share\": " << num(overlapShare) << ",\n  \"source_overlap\": " << num(sourceOverlap)
+    << ",\n  \"target_overlap\": " << num(targetOverlap) << ",\n  \"score\": " << num(score)
+    << ",\n  \"runner_up_transform\": " << matrix(runnerUpTransform) << ",\n  \"runner_up_score\": "
+    << num(runnerUpScore)
     << ",\n  \"normalised_energy\": " << num(normalisedEnergy) << ",\n  \"grid\": \"" << grid
     << "\",\n  \"grid_size\": " << gridSize << ",\n  \"best_candidate\": " << bestCandidate
     << ",\n  \"candidate_rank\": " << candidateRank << ",\n  \"icp_iterations\": " << icpIterations
@@ -396,7 +493,7 @@ std::string RegistrationResult::toJson() const {
     << ",\n  \"ambiguity_reason\": \"" << ambiguityReason << "\",\n  \"second_best_score_ratio\": "
     << num(secondBestScoreRatio) << ",\n  \"source_points\": " << sourcePoints << ",\n  \"target_points\": "
     << targetPoints << ",\n  \"source_working_points\": " << sourceWorkingPoints
-    << ",\n  \"target_working_points\": " << targetWorkingPoints << ",\n  \"stray_samples_dropped\": " << strayDropped << ",\n  \"outliers_found\": " << outliersFound << ",\n  \"samples\": " << samples << ",\n  \"source_radius\": " << num(sourceRadius)
+    << ",\n  \"target_working_points\": " << targetWorkingPoints << ",\n  \"stray_samples_dropped\": " << strayDropped << ",\n  \"outliers_found\": " << outliersFound << ",\n  \"samples\": " << samples << ",\n  \"samples_requested\": " << samplesRequested << ",\n  \"source_radius\": " << num(sourceRadius)
     << ",\n  \"target_radius\": " << num(targetRadius) << ",\n  \"timings\": {";
   for (std::size_t i = 0; i < timings.size(); ++i)
     s << (i ? ", " : "") << "\"" << timings[i].name << "_s\": " << num(timings[i].seconds);

@@ -54,7 +54,11 @@ Eigen::Matrix3d expMap(const Eigen::Vector3d& w) {
 }  // namespace
 
 void RotationSearchParams::validate() const {
-  if (!(overlap > 0.0 && overlap <= 1.0)) throw std::invalid_argument("rotation search: overlap must be in (0, 1]");
+  if (overlaps.empty() || overlaps.size() > 16)
+    throw std::invalid_argument("rotation search: between 1 and 16 overlaps");
+  for (double f : overlaps)
+    if (!(f > 0.0 && f <= 1.0)) throw std::invalid_argument("rotation search: overlap must be in (0, 1]");
+  if (!(overlapExponent >= 0.0)) throw std::invalid_argument("rotation search: overlapExponent must be >= 0");
   if (coarsePoints < 8) throw std::invalid_argument("rotation search: coarsePoints must be at least 8");
   if (coarseKeep < 1 || fullKeep < 1 || keep < 1)
     throw std::invalid_argument("rotation search: coarseKeep, fullKeep and keep must be at least 1");
@@ -68,28 +72,32 @@ struct RotationSearch::Impl {
   std::vector<Eigen::Vector3d> source, target;              // shuffled copies (visit order)
   std::vector<Eigen::Vector3d> sourceCoarse, targetCoarse;  // their first coarsePoints
   std::unique_ptr<KnnIndex> sourceTree, targetTree;
-  std::size_t sourceOutliers = 0, targetOutliers = 0, sourceCoarseOutliers = 0, targetCoarseOutliers = 0;
+  std::vector<TrimLevel> sourceLevels, targetLevels, sourceCoarseLevels, targetCoarseLevels;
   mutable std::atomic<std::size_t> queries{0};
 
-  // E(R) = max(h_f(R·S → T), h_f(Rᵀ·T → S)), eq. (11); Rᵀ·T → S has the same distances as T → R·S.
-  double eval(const std::vector<Eigen::Vector3d>& s, std::size_t so, const std::vector<Eigen::Vector3d>& t,
-              std::size_t to, const Eigen::Matrix3d& r, double bound) const {
+  // E(R) = max(h(R·S → T), h(Rᵀ·T → S)), eq. (11); Rᵀ·T → S has the same distances as T → R·S.
+  // fs, ft (optional) receive the overlap level each direction chose.
+  double eval(const std::vector<Eigen::Vector3d>& s, const std::vector<TrimLevel>& sl,
+              const std::vector<Eigen::Vector3d>& t, const std::vector<TrimLevel>& tl, const Eigen::Matrix3d& r,
+              double bound, double* fs = nullptr, double* ft = nullptr) const {
     thread_local std::vector<double> scratch;
-    std::size_t visited = 0, visited2 = 0;
-    const double a = boundedDirectedHausdorff(s, r, *targetTree, so, bound, scratch, &visited);
+    std::size_t visited = 0, visited2 = 0, ls = 0, lt = 0;
+    const double a = boundedPartialHausdorff(s, r, *targetTree, sl, bound, scratch, &visited, &ls);
     if (!std::isfinite(a)) {
       queries.fetch_add(visited, std::memory_order_relaxed);
       return kInf;
     }
-    const double b = boundedDirectedHausdorff(t, r.transpose(), *sourceTree, to, bound, scratch, &visited2);
+    const double b = boundedPartialHausdorff(t, r.transpose(), *sourceTree, tl, bound, scratch, &visited2, &lt);
     queries.fetch_add(visited + visited2, std::memory_order_relaxed);
+    if (fs && std::isfinite(b)) *fs = sl[ls].overlap;
+    if (ft && std::isfinite(b)) *ft = tl[lt].overlap;
     return std::max(a, b);
   }
-  double full(const Eigen::Matrix3d& r, double bound) const {
-    return eval(source, sourceOutliers, target, targetOutliers, r, bound);
+  double full(const Eigen::Matrix3d& r, double bound, double* fs = nullptr, double* ft = nullptr) const {
+    return eval(source, sourceLevels, target, targetLevels, r, bound, fs, ft);
   }
   double coarse(const Eigen::Matrix3d& r, double bound) const {
-    return eval(sourceCoarse, sourceCoarseOutliers, targetCoarse, targetCoarseOutliers, r, bound);
+    return eval(sourceCoarse, sourceCoarseLevels, targetCoarse, targetCoarseLevels, r, bound);
   }
 
   /// The best @p keepCount of @p order (indices into @p rotations) by energy @p fn, with early exit against
@@ -143,16 +151,17 @@ RotationSearch::RotationSearch(const std::vector<Eigen::Vector3d>& source, const
   outerFirst(m.target);
   m.sourceTree = std::make_unique<KnnIndex>(m.source);
   m.targetTree = std::make_unique<KnnIndex>(m.target);
-  m.sourceOutliers = allowedOutliers(m.source.size(), params.overlap);
-  m.targetOutliers = allowedOutliers(m.target.size(), params.overlap);
-  m.sourceCoarseOutliers = allowedOutliers(m.sourceCoarse.size(), params.overlap);
-  m.targetCoarseOutliers = allowedOutliers(m.targetCoarse.size(), params.overlap);
+  m.sourceLevels = trimLevels(m.source.size(), params.overlaps, params.overlapExponent);
+  m.targetLevels = trimLevels(m.target.size(), params.overlaps, params.overlapExponent);
+  m.sourceCoarseLevels = trimLevels(m.sourceCoarse.size(), params.overlaps, params.overlapExponent);
+  m.targetCoarseLevels = trimLevels(m.targetCoarse.size(), params.overlaps, params.overlapExponent);
 }
 
 RotationSearch::~RotationSearch() = default;
 
-double RotationSearch::energy(const Eigen::Matrix3d& rotation, double bound) const {
-  return impl_->full(rotation, bound);
+double RotationSearch::energy(const Eigen::Matrix3d& rotation, double bound, double* sourceOverlap,
+                              double* targetOverlap) const {
+  return impl_->full(rotation, bound, sourceOverlap, targetOverlap);
 }
 
 double RotationSearch::coarseEnergy(const Eigen::Matrix3d& rotation, double bound) const {
@@ -233,6 +242,7 @@ RotationSearchResult RotationSearch::search(const std::vector<Eigen::Matrix3d>& 
       c.energy = e[best];
     }
   }
+  for (auto& c : result.candidates) m.full(c.rotation, kInf, &c.sourceOverlap, &c.targetOverlap);
   std::stable_sort(result.candidates.begin(), result.candidates.end(),
                    [](const RotationCandidate& a, const RotationCandidate& b) { return a.energy < b.energy; });
   report(1.0);

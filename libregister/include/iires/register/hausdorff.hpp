@@ -49,4 +49,35 @@ double boundedDirectedHausdorff(const std::vector<Eigen::Vector3d>& from, const 
                                 const KnnIndex& to, std::size_t outliers, double bound,
                                 std::vector<double>& scratch, std::size_t* visited = nullptr);
 
+/// @brief One trimming level of a partial Hausdorff distance whose overlap is not known: the largest
+/// @p outliers distances are ignored and the largest remaining one is multiplied by @p penalty.
+struct TrimLevel {
+  double overlap = 1.0;      ///< f: share of the points expected to have a partner
+  std::size_t outliers = 0;  ///< n − ⌈f·n⌉ (see allowedOutliers())
+  double penalty = 1.0;      ///< (f_max / f)^λ ≥ 1: a smaller overlap must fit proportionally better
+};
+
+/// @brief The trimming levels for a set of @p n points: one per overlap f of @p overlaps (each in (0, 1]),
+/// penalty (max(overlaps) / f)^@p exponent. Scored by min over levels of penalty·h_f, the trimmed distance
+/// does not drift to the smallest overlap (h_f alone only shrinks as f does) — the criterion of trimmed ICP
+/// with unknown overlap (Chetverikov et al. 2005; Phillips et al.'s fractional RMSD, 2007) applied to the
+/// Hausdorff quantile.
+/// @throws std::invalid_argument for an empty list, an overlap outside (0, 1] or a negative exponent.
+std::vector<TrimLevel> trimLevels(std::size_t n, const std::vector<double>& overlaps, double exponent);
+
+/// @brief min over @p levels of penalty·(the (outliers+1)-th largest of √d2) — the partial Hausdorff distance
+/// with the overlap estimated among the levels. @p d2 holds squared distances and is reordered.
+/// @param[out] level if not null, receives the index of the minimising level (the lowest on ties)
+double penalisedQuantile(std::vector<double>& d2, const std::vector<TrimLevel>& levels, std::size_t* level = nullptr);
+
+/// @brief boundedDirectedHausdorff() over several trimming levels: the directed distance of R·A to B scored by
+/// penalisedQuantile(). Returns +∞ as soon as every level has more than its outliers farther than
+/// bound / penalty (the result is then certainly greater than @p bound).
+/// @param levels from trimLevels() for from.size() points; every outliers < from.size()
+/// @param[out] level if not null and the result is finite, the index of the minimising level
+double boundedPartialHausdorff(const std::vector<Eigen::Vector3d>& from, const Eigen::Matrix3d& rotation,
+                               const KnnIndex& to, const std::vector<TrimLevel>& levels, double bound,
+                               std::vector<double>& scratch, std::size_t* visited = nullptr,
+                               std::size_t* level = nullptr);
+
 }  // namespace iires::reg

@@ -16,6 +16,13 @@ struct IcpParams {
   int maxIterations = 50;      ///< iterations at most (≥ 1)
   bool estimateScale = true;   ///< estimate a similarity (sR | t); false = rigid (R | t)
   double overlap = 1.0;        ///< share of source points matched each iteration (the nearest ones), (0, 1]
+  double reverseOverlap = 0.0; ///< bidirectional: the same for the target points, (0, 1]; 0 = as overlap
+  /// Estimate the overlap in every iteration instead (trimmed ICP with unknown overlap, Chetverikov et al.
+  /// 2005): per direction keep the k nearest pairs that minimise the fractional RMSD, see fractionalRmsd(),
+  /// with k ≥ ⌈minOverlap·n⌉; @ref overlap is then ignored
+  bool estimateOverlap = false;
+  double minOverlap = 0.4;     ///< smallest overlap considered by the estimate, (0, 1]
+  double overlapExponent = 1.5;  ///< λ of the estimate's penalty (n/k)^λ (≥ 0)
   bool bidirectional = false;  ///< also match every target point to its nearest source point (both sets
                                ///< trimmed to overlap): a part missing from either cloud cannot pull the fit
   double tolerance = 1e-6;     ///< stop when the update's rotation angle (rad) and relative translation and
@@ -34,7 +41,25 @@ struct IcpResult {
   bool converged = false;    ///< the tolerance was met before maxIterations
   double rmse = 0.0;         ///< RMS distance of the matched (trimmed) pairs at the result, target units
   std::size_t matched = 0;   ///< pairs used in the last iteration
+  double overlap = 1.0;        ///< share of the source points matched in the last iteration
+  double reverseOverlap = 1.0; ///< bidirectional: share of the target points matched (else 1)
 };
+
+/// @brief The fractional RMSD of one set of residuals (Phillips, Liu & Tomasi 2007): the k nearest of n
+/// pairs fit with RMS r_k = √(mean of the k smallest d²), scored r_k·(n/k)^λ so that dropping pairs pays only
+/// when they are clearly worse than the rest; min over k ≥ ⌈minOverlap·n⌉.
+struct FractionalFit {
+  double score = 0;      ///< the minimum of r_k·(n/k)^λ
+  double rms = 0;        ///< r_k at the minimum
+  std::size_t keep = 0;  ///< k at the minimum
+};
+
+/// @brief fractionalRmsd of the squared distances @p sortedD2 (ascending, non-empty).
+/// @param floor r_k below it counts as @p floor: residuals at rounding level (identical clouds) are all
+/// "exact", and then every pair is kept
+/// @throws std::invalid_argument for an empty list, minOverlap outside (0, 1] or a negative exponent.
+FractionalFit fractionalRmsd(const std::vector<double>& sortedD2, double minOverlap, double exponent,
+                             double floor = 0.0);
 
 /// @brief Align @p source to @p target starting from @p init: each iteration matches every transformed source
 /// point to its nearest target point, keeps the ⌈overlap·n⌉ closest pairs and solves for the similarity (or

@@ -23,15 +23,26 @@ namespace iires::reg {
 /// @brief Parameters of registerClouds().
 struct RegistrationParams {
   std::size_t samples = 1000;  ///< M, points each cloud is resampled to (≥ 50) [paper: around 2000; 1000 is
-                               ///< as accurate in the benchmark at half the cost]
+                               ///< as accurate in the benchmark at half the cost]; an M above the default is
+                               ///< capped at the larger input's point count
   RotationGridType grid = RotationGridType::kSo3;  ///< candidate rotations; kEuler is the paper's grid
   int eulerSteps = 24;         ///< Euler grid: steps per angle [24, θ = π/12]
   std::size_t so3Count = 6144; ///< SO(3) grid: rotations (6,144 cover SO(3) within ≈ 11.4°, as 24³ Euler)
-  double overlap = 1.0;        ///< share of each cloud expected to overlap the other, (0, 1]; < 1 trims the
-                               ///< Hausdorff energy and the ICP correspondences (partial scans)
+  /// Share of each cloud expected to overlap the other: 0 = unknown, estimated (the default: the search
+  /// scores every level of searchOverlaps, the ICP and the choice among candidates use the fractional RMSD);
+  /// in (0, 1] = known (a hint the user is sure of): the energy and the ICP are trimmed to it, 1 = whole clouds
+  double overlap = 0.0;
+  /// Overlap levels the search scores when overlap = 0 (each in (0, 1], at most 16); the smallest is also the
+  /// ICP's minOverlap
+  std::vector<double> searchOverlaps{1.0, 0.8, 0.6};
+  double searchOverlapExponent = 2.0;  ///< λ of the search's penalty (f_max / f)^λ (≥ 0)
+  double fitOverlapExponent = 2.5;     ///< λ of the ICP's and the final score's fractional RMSD (≥ 0):
+                                       ///< smaller lets a cut source slide along the target, larger takes in
+                                       ///< pairs beyond the overlap of two partial scans [Phillips et al.: 3]
   bool estimateScale = true;   ///< false: the scale is fixed to 1 (rigid registration)
-  std::size_t icpCandidates = 5;  ///< distinct search candidates refined by ICP (≥ 1)
-  int screenIterations = 12;   ///< ICP iterations per candidate before scoring; the best continues (≥ 1)
+  std::size_t icpCandidates = 12;  ///< distinct search candidates refined by ICP (≥ 1): partial scans shift
+                                  ///< the normalised frames, so the true rotation is often not the search's best
+  int screenIterations = 8;    ///< ICP iterations per candidate before scoring; the best continues (≥ 1)
   double ambiguityTolerance = 0.05;  ///< another ICP result within this relative score of the best but
                                      ///< ≥ 10° away marks the result ambiguous (symmetric shape)
   double planarityThreshold = 1e-3;  ///< smallest/largest covariance eigenvalue below this → planar flag
@@ -75,6 +86,14 @@ struct RegistrationResult {
   double hausdorffTrimmed = 0;  ///< the same, trimmed to the overlap (= hausdorff when overlap = 1)
   double overlapShare = 0;      ///< share of the aligned source samples within one mean sample spacing of a
                                 ///< target sample (1 = the source lies entirely on the target)
+  double sourceOverlap = 1;     ///< estimated share of the source that overlaps the target (the ICP's, or the
+                                ///< given overlap)
+  double targetOverlap = 1;     ///< estimated share of the target that overlaps the source
+  double score = 0;             ///< symmetric (fractional) RMS distance of the result, normalised units: lower
+                                ///< is better; the candidates are ranked by it
+  /// The runner-up: the best refined candidate ≥ 10° away from the result (identity and +∞ score if none)
+  Eigen::Matrix4d runnerUpTransform = Eigen::Matrix4d::Identity();
+  double runnerUpScore = 0;     ///< its score (0 = none)
   double normalisedEnergy = 0;  ///< search energy E of the chosen candidate (normalised units)
   std::string grid;             ///< "so3" or "euler"
   std::size_t gridSize = 0;     ///< candidates in the grid
@@ -86,8 +105,9 @@ struct RegistrationResult {
   bool ambiguous = false;       ///< another clearly different pose fits about as well (symmetry or a plane)
   bool planar = false;          ///< a cloud is (nearly) planar: mirror poses fit equally well
   std::string ambiguityReason;  ///< why ambiguous is set ("" otherwise)
-  double secondBestScoreRatio = 0;  ///< score of the best clearly different pose / best score (≥ 1; 0 = none)
-  std::size_t sourcePoints = 0, targetPoints = 0, samples = 0;  ///< input sizes, M
+  double secondBestScoreRatio = 0;  ///< runnerUpScore / score (≥ 1; 0 = none)
+  std::size_t sourcePoints = 0, targetPoints = 0, samples = 0;  ///< input sizes, M (as used)
+  std::size_t samplesRequested = 0;  ///< M as requested (samples is capped at the larger input, ≥ the default)
   double sourceRadius = 0, targetRadius = 0;  ///< RMS radii used for the normalisation, original units
   std::size_t sourceWorkingPoints = 0, targetWorkingPoints = 0;  ///< points given to the resampler (after thinning)
   /// Resampled points dropped as non-finite or far outside their input's bounding box (a failed surface

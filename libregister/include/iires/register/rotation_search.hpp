@@ -1,8 +1,9 @@
 #pragma once
 /// @file rotation_search.hpp
 /// @brief The global rotation search of the registration (paper eq. 11–12, DESIGN §4 step 3): over a grid of
-/// candidate rotations R, minimise the (trimmed) Hausdorff energy E(R) = max(h_f(R·S → T), h_f(Rᵀ·T → S))
-/// between two normalised clouds S and T.
+/// candidate rotations R, minimise the (trimmed) Hausdorff energy E(R) = max(h(R·S → T), h(Rᵀ·T → S))
+/// between two normalised clouds S and T. With one overlap f, h = h_f is the trimmed Hausdorff distance; with
+/// several (unknown overlap), each direction takes min_f (f_max / f)^λ · h_f — its own overlap estimate.
 
 #include <Eigen/Core>
 #include <cstddef>
@@ -19,13 +20,17 @@ namespace iires::reg {
 
 /// @brief Parameters of the rotation search.
 struct RotationSearchParams {
-  double overlap = 1.0;           ///< trimmed Hausdorff: share of points expected to overlap, (0, 1]; 1 = plain
-  std::size_t coarsePoints = 192; ///< points of each cloud used by the coarse pass (≥ 8; a lower bound of E)
+  /// Trimmed Hausdorff: the shares of points that may overlap, each in (0, 1]; {1} = plain, {f} = known
+  /// overlap f, several = the overlap is estimated among them per direction and candidate (at most 16)
+  std::vector<double> overlaps{1.0};
+  double overlapExponent = 2.0;   ///< λ of the penalty (f_max / f)^λ of a smaller overlap (≥ 0)
+  std::size_t coarsePoints = 96;  ///< points of each cloud used by the coarse pass (≥ 8; a lower bound of E)
   std::size_t coarseKeep = 48;    ///< best coarse candidates passed on to the exact energy (≥ 1)
-  std::size_t fullKeep = 16;      ///< best exact candidates kept for the selection of distinct ones (≥ 1)
+  std::size_t fullKeep = 48;      ///< best exact candidates kept for the selection of distinct ones (≥ 1)
   std::size_t keep = 5;           ///< distinct candidates returned, best first (≥ 1)
   double minSeparationDeg = 25.0; ///< returned candidates differ pairwise by at least this rotation angle
-  int refineLevels = 2;           ///< local refinement: step halvings around each returned candidate (0 = off)
+  int refineLevels = 0;           ///< local refinement: step halvings around each returned candidate (0 = off;
+                                  ///< the registration's ICP refines every candidate instead)
   double refineStepDeg = 5.0;     ///< first local step (≈ half the grid spacing), degrees (> 0)
   std::uint64_t seed = 0;         ///< order in which points are visited (early exits come early in random order)
   int threads = 0;                ///< 0 = all cores; the result does not depend on it
@@ -44,6 +49,7 @@ struct RotationCandidate {
   double gridEnergy = 0;                                   ///< E at the grid rotation
   Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();  ///< after local refinement
   double energy = 0;                                       ///< E after local refinement (≤ gridEnergy)
+  double sourceOverlap = 1, targetOverlap = 1;  ///< overlap levels chosen at that energy (S → T, T → S)
 };
 
 /// @brief The search's answer and its cost.
@@ -68,8 +74,10 @@ class RotationSearch {
   RotationSearch& operator=(const RotationSearch&) = delete;
 
   /// @brief E(R) over all points, eq. (11); +∞ once it certainly exceeds @p bound.
+  /// @param[out] sourceOverlap, targetOverlap if not null and E is finite: the overlap level each direction chose
   /// @note Thread-safe.
-  double energy(const Eigen::Matrix3d& rotation, double bound = std::numeric_limits<double>::infinity()) const;
+  double energy(const Eigen::Matrix3d& rotation, double bound = std::numeric_limits<double>::infinity(),
+                double* sourceOverlap = nullptr, double* targetOverlap = nullptr) const;
 
   /// @brief E(R) on the coarse subsets only: a lower bound of energy().
   double coarseEnergy(const Eigen::Matrix3d& rotation,
