@@ -22,11 +22,9 @@ int main(int argc, char** argv) {
     bool noScale = false, quiet = false, showProgress = false, fullResample = false;
     app.add_option("SOURCE", sourcePath, "cloud to move (.ply .pcd .xyz .xyzn .pts, or mesh vertices)")->required();
     app.add_option("TARGET", targetPath, "cloud to align to")->required();
-    auto* outputOption =
-        app.add_option("-o,--output", alignedPath, "write SOURCE mapped into TARGET coordinates (.ply .xyz .xyzn)");
-    auto* transformOption =
-        app.add_option("--transform", transformPath, "write the 4x4 matrix T_target_source, one row per line");
-    auto* reportOption = app.add_option("--report", reportPath, "write the report as JSON to this file");
+    app.add_option("-o,--output", alignedPath, "write SOURCE mapped into TARGET coordinates (.ply .xyz .xyzn)");
+    app.add_option("--transform", transformPath, "write the 4x4 matrix T_target_source, one row per line");
+    app.add_option("--report", reportPath, "write the report as JSON to this file");
     app.add_option("-m,--samples", samples,
                    "points each cloud is resampled to (>= 50; above 1000 capped at the larger input's size)");
     app.add_option("--grid", grid, "rotation grid: so3 (uniform, default) or euler (the paper's 24^3)")
@@ -47,10 +45,6 @@ int main(int argc, char** argv) {
     app.add_flag("--progress", showProgress, "progress on stderr even when it is not a terminal");
     app.set_version_flag("--version", iires::tools::versionString());
     if (const int code = iires::tools::parseArgs(app, argc, argv); code != iires::tools::kContinue) return code;
-    // An output option given with an empty name would silently write nothing.
-    for (const auto* option : {outputOption, transformOption, reportOption})
-      if (option->count() > 0 && option->as<std::string>().empty())
-        throw iires::InputError(option->get_name() + ": the file name is empty");
     if (samples < 50) throw iires::InputError("-m/--samples must be at least 50 (got " + std::to_string(samples) + ")");
     iires::tools::checkCount("-m", samples, kBytesPerSample);
     if (overlapOption->count() > 0 && !(params.overlap > 0.0 && params.overlap <= 1.0))
@@ -59,6 +53,7 @@ int main(int argc, char** argv) {
     params.grid = iires::reg::parseRotationGridType(grid);
     params.estimateScale = !noScale;
     params.outliers.mode = iires::parseOutlierMode(outlierMode);
+    // Before any work: no output name empty, none an input, no two the same file.
     iires::tools::checkOutputPaths(app, {{"--output", alignedPath}, {"--transform", transformPath}, {"--report", reportPath}},
                                    {sourcePath, targetPath});
     if (!alignedPath.empty() && iires::extensionOf(alignedPath) != ".ply" && iires::extensionOf(alignedPath) != ".xyz" &&
