@@ -12,6 +12,7 @@
 
 #include "iires/io.hpp"
 #include "iires/reconstruct/reconstruct.hpp"
+#include "iires/register/registration.hpp"
 #include "iires/resample.hpp"
 #include "iires/sampling.hpp"
 #include "shapes.hpp"
@@ -182,6 +183,18 @@ TEST(Attributes, ColoursDoNotBleedAcrossAThinGap) {
   EXPECT_LE(kept.mixed, kept.checked / 100);
   EXPECT_LE(kept.wrongLabel, kept.checked / 100);
   EXPECT_GT(mixed.mixed, mixed.checked / 3);
+}
+
+TEST(Attributes, AlignedCloudKeepsItsAttributes) {
+  PointCloud cloud;
+  cloud.points = {{0, 0, 0}, {1, 0, 0}};
+  cloud.attributes.push_back({"label", AttributeKind::kLabel, "int", {4, 5}});
+  Eigen::Matrix4d T = Eigen::Matrix4d::Identity();
+  T(0, 3) = 2;
+  const PointCloud moved = iires::reg::transformCloud(cloud, T);
+  EXPECT_EQ(moved.points[1].x(), 3.0);
+  ASSERT_EQ(moved.attributes.size(), 1u);
+  EXPECT_EQ(moved.attributes[0].values, (std::vector<double>{4, 5}));
 }
 
 TEST(Attributes, NoAttributesNoStage) {
