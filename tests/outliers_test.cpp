@@ -148,6 +148,26 @@ TEST(Outliers, PullBringsOutliersWithinOneSpacing) {
   }
 }
 
+// Points far from the object, scattered and so each other's neighbours, are outliers too; pulling one would
+// carry it along a slightly tilted plane far off the surface, so it is removed instead.
+TEST(Outliers, ScatteredFarPointsAreFoundAndNeverPulledOffTheSurface) {
+  PointCloud cloud;
+  for (const auto& p : iires::test::fibonacciSphere(4000)) cloud.points.push_back(p);
+  std::mt19937_64 rng(21);
+  std::normal_distribution<double> g(0.0, 1.0);
+  std::uniform_real_distribution<double> exponent(1.0, 6.0);
+  for (int i = 0; i < 50; ++i)
+    cloud.points.push_back(std::pow(10.0, exponent(rng)) * 3.5 * Eigen::Vector3d(g(rng), g(rng), g(rng)).normalized());
+  for (const OutlierMode mode : {OutlierMode::kPull, OutlierMode::kRemove}) {
+    OutlierParams p;
+    p.mode = mode;
+    const auto r = iires::processOutliers(cloud, p);
+    EXPECT_EQ(std::count_if(r.outliers.begin(), r.outliers.end(), [](std::uint32_t i) { return i >= 4000; }), 50);
+    for (const auto& q : r.cloud.points) EXPECT_NEAR(q.norm(), 1.0, 0.01) << q.transpose();
+    EXPECT_EQ(r.pulled + r.removed, r.found);
+  }
+}
+
 TEST(Outliers, RemoveDropsThem) {
   const Noisy data = noisyPlane(20000, 1.0, 0.33, 0.03, 14);
   OutlierParams p;

@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <exception>
 #include <filesystem>
 #include <fstream>
@@ -10,6 +11,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "iires/io.hpp"
 #include "iires/types.hpp"
 
 namespace iires::tools {
@@ -46,6 +48,7 @@ std::string humanBytes(double bytes) {
 }  // namespace
 
 int guardedMain(const std::string& toolName, const std::function<int()>& body) {
+  removeTemporariesOnSignal();
   try {
     return body();
   } catch (const InputError& e) {
@@ -74,8 +77,10 @@ int parseArgs(CLI::App& app, int argc, char** argv) {
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
     const std::string name = app.get_name().empty() ? std::string(argc > 0 ? argv[0] : "iires") : app.get_name();
-    std::cerr << fs::path(name).filename().string() << ": error: " << e.what() << "\n"
-              << "Run with --help for more information.\n";
+    std::string message = e.what();
+    std::replace(message.begin(), message.end(), '\n', ' ');
+    std::cerr << fs::path(name).filename().string() << ": error: " << message
+              << " (run with --help for the options)\n";
     return kBadInput;
   }
 }
@@ -93,6 +98,20 @@ void checkOutputPath(const std::string& output, const std::vector<std::string>& 
   if (::access(directory.c_str(), W_OK | X_OK) != 0)
     failWrite(output, "directory " + directory.string() + " is not writable");
   if (fs::is_directory(target, ec)) failWrite(output, "it is a directory");
+}
+
+void checkOutputPaths(const CLI::App& app, const std::vector<std::pair<std::string, std::string>>& outputs,
+                      const std::vector<std::string>& inputs) {
+  std::vector<std::pair<std::string, std::string>> given;
+  for (const auto& [option, path] : outputs) {
+    if (app.count(option) == 0) continue;
+    if (path.empty()) failWrite("\"\"", "the file name is empty (" + option + ")");
+    checkOutputPath(path, inputs);
+    for (const auto& [earlier, earlierPath] : given)
+      if (sameFile(fs::path(path), fs::path(earlierPath)))
+        failWrite(path, earlier + " and " + option + " name the same file");
+    given.emplace_back(option, path);
+  }
 }
 
 std::size_t availableMemory() {

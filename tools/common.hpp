@@ -25,7 +25,7 @@ int guardedMain(const std::string& toolName, const std::function<int()>& body);
 
 /// @brief Parse the command line with CLI11.
 /// @return kContinue when the tool should run; 0 after --help or --version (printed on stdout); 2 after a usage
-/// error, printed on stderr as "<tool>: error: <CLI11 message>" followed by "Run with --help ...".
+/// error, printed on stderr as one line "<tool>: error: <CLI11 message> (run with --help for the options)".
 int parseArgs(CLI::App& app, int argc, char** argv);
 
 /// @brief Guards on an output path, checked before any computation.
@@ -34,6 +34,14 @@ int parseArgs(CLI::App& app, int argc, char** argv);
 /// directory D does not exist" (or "is not a directory", "is not writable") for a bad directory; "cannot
 /// write OUTPUT: it is a directory" when OUTPUT itself is a directory. An empty @p output is not checked.
 void checkOutputPath(const std::string& output, const std::vector<std::string>& inputs);
+
+/// @brief Guards on every output of a run, checked before any computation: each one given on the command line
+/// (as @p app counts it) passes checkOutputPath() and is not empty, and no two of them name the same file.
+/// @param outputs pairs (option name as CLI11 knows it, e.g. "OUTPUT" or "--report"; its path)
+/// @throws InputError "cannot write P: the file name is empty (OPTION)" or "cannot write P: OPTION1 and OPTION2
+/// name the same file", and as checkOutputPath().
+void checkOutputPaths(const CLI::App& app, const std::vector<std::pair<std::string, std::string>>& outputs,
+                      const std::vector<std::string>& inputs);
 
 /// @brief Bytes of memory available to this process: MemAvailable from /proc/meminfo, else
 /// sysconf(_SC_AVPHYS_PAGES) · page size; 0 when unknown.

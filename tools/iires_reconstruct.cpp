@@ -3,6 +3,7 @@
 #include <cstdio>
 #include <iomanip>
 #include <iostream>
+#include <stdexcept>
 
 #include "common.hpp"
 #include "progress.hpp"
@@ -53,10 +54,7 @@ int main(int argc, char** argv) {
     app.set_version_flag("--version", iires::tools::versionString());
     if (const int code = iires::tools::parseArgs(app, argc, argv); code != iires::tools::kContinue) return code;
     // Everything that can be checked before the work is checked here: no output is written on failure.
-    iires::tools::checkOutputPath(output, {input, qualityOnly});
-    iires::tools::checkOutputPath(reportPath, {input, qualityOnly});
-    if (!reportPath.empty() && reportPath == output)
-      throw iires::InputError("OUTPUT_MESH and --report must be different files");
+    iires::tools::checkOutputPaths(app, {{"OUTPUT_MESH", output}, {"--report", reportPath}}, {input, qualityOnly});
     iires::tools::Progress progress("iires-reconstruct", showProgress, quiet);
     params.progress = progress.callback();  // resampling and meshing stages
 
@@ -108,9 +106,14 @@ int main(int argc, char** argv) {
       throw iires::InputError(input + ": " + e.what());
     }
     progress.update("write", 0.0);
-    iires::writeMesh(output, result.mesh);
+    if (result.mesh.triangles.empty())
+      throw std::runtime_error(input + ": the reconstruction produced no triangles (" +
+                               std::to_string(result.mesh.vertices.size()) + " vertices); nothing was written");
+    iires::OutputBatch outputs;  // the mesh and the report, or neither
+    outputs.mesh(output, result.mesh);
+    if (!reportPath.empty()) outputs.text(reportPath, result.toJson());
+    outputs.commit();
     progress.finish();
-    if (!reportPath.empty()) iires::writeTextFile(reportPath, result.toJson());
     if (!quiet) {
       std::cout << "mesh " << output << " (" << result.method << ", " << result.mesh.vertices.size()
                 << " vertices from " << result.inputPoints << " input points)\n"

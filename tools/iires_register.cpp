@@ -5,6 +5,7 @@
 #include "common.hpp"
 #include "progress.hpp"
 #include "iires/io.hpp"
+#include "iires/outliers.hpp"
 #include "iires/register/registration.hpp"
 
 namespace {
@@ -29,6 +30,10 @@ int main(int argc, char** argv) {
         ->check(CLI::IsMember({"so3", "euler"}));
     app.add_option("--overlap", params.overlap, "share of each cloud that overlaps the other, (0, 1]");
     app.add_flag("--no-scale", noScale, "rigid registration: keep the scale at 1");
+    std::string outlierMode = "pull";
+    app.add_option("--outliers", outlierMode,
+                   "outliers of both clouds (and of the -o output): pull back onto the surface, remove, or keep")
+        ->check(CLI::IsMember({"pull", "remove", "keep"}));
     app.add_option("--seed", params.seed, "seed; same seed -> same result");
     app.add_option("--threads", params.threads, "threads (0 = all cores); the result does not depend on it");
     app.add_flag("--full-resample", fullResample,
@@ -44,8 +49,9 @@ int main(int argc, char** argv) {
     params.samples = static_cast<std::size_t>(samples);
     params.grid = iires::reg::parseRotationGridType(grid);
     params.estimateScale = !noScale;
-    for (const std::string& out : {alignedPath, transformPath, reportPath})
-      iires::tools::checkOutputPath(out, {sourcePath, targetPath});
+    params.outliers.mode = iires::parseOutlierMode(outlierMode);
+    iires::tools::checkOutputPaths(app, {{"--output", alignedPath}, {"--transform", transformPath}, {"--report", reportPath}},
+                                   {sourcePath, targetPath});
     if (!alignedPath.empty() && iires::extensionOf(alignedPath) != ".ply" && iires::extensionOf(alignedPath) != ".xyz" &&
         iires::extensionOf(alignedPath) != ".xyzn")
       throw iires::InputError("cannot write " + alignedPath + ": unknown extension (use .ply, .xyz or .xyzn)");
@@ -67,9 +73,15 @@ int main(int argc, char** argv) {
       throw iires::InputError(msg);
     }
     progress.update("write", 0.0);
-    if (!alignedPath.empty()) iires::writePointCloud(alignedPath, iires::reg::transformCloud(source, result.T_target_source));
-    if (!transformPath.empty()) iires::writeTextFile(transformPath, iires::reg::formatTransform(result.T_target_source));
-    if (!reportPath.empty()) iires::writeTextFile(reportPath, result.toJson());
+    iires::OutputBatch outputs;  // all given files or none
+    if (!alignedPath.empty()) {  // the source without its outliers (pulled or removed as the run's were)
+      iires::OutlierParams op = params.outliers;
+      op.threads = params.threads;
+      outputs.pointCloud(alignedPath, iires::reg::transformCloud(iires::cleanOutliers(source, op), result.T_target_source));
+    }
+    if (!transformPath.empty()) outputs.text(transformPath, iires::reg::formatTransform(result.T_target_source));
+    if (!reportPath.empty()) outputs.text(reportPath, result.toJson());
+    outputs.commit();
     progress.finish();
     if (!quiet) {
       std::cout << iires::reg::formatTransform(result.T_target_source);

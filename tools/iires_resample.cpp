@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdio>
 #include <iostream>
+#include <stdexcept>
 
 #include "common.hpp"
 #include "progress.hpp"
@@ -60,17 +61,15 @@ int main(int argc, char** argv) {
     app.add_option("--ratios", ratios, "curvature mode: length ratios flat -> curved, e.g. 2,1.5,1,0.8,0.6")
         ->delimiter(',');
     app.add_flag("--sharp-edges", params.sharpEdges, "keep samples on sharp feature lines");
-    app.add_option("--edge-ratio", params.edgeRatio, "spacing on feature lines, in units of the target length")
-        ->check(CLI::PositiveNumber);
+    app.add_option("--edge-ratio", params.edgeRatio, "spacing on feature lines, in units of the target length (0.1-4, default 0.5)")
+        ->check(CLI::Range(0.1, 4.0));
     app.add_flag("-q,--quiet", quiet, "print nothing on success (no report, no progress)");
     app.add_flag("--progress", showProgress, "progress on stderr even when it is not a terminal");
     app.set_version_flag("--version", iires::tools::versionString());
     if (const int code = iires::tools::parseArgs(app, argc, argv); code != iires::tools::kContinue) return code;
     // Everything that can be checked before the work is checked here: no output is written on failure.
-    for (const std::string& path : {output, reportPath, geodesicPath})
-      iires::tools::checkOutputPath(path, {input});
-    if (output == reportPath || output == geodesicPath || (!reportPath.empty() && reportPath == geodesicPath))
-      throw iires::InputError("OUTPUT, --report and --export-geodesic must be different files");
+    iires::tools::checkOutputPaths(app, {{"OUTPUT", output}, {"--report", reportPath}, {"--export-geodesic", geodesicPath}},
+                                   {input});
     if (const std::string ext = iires::extensionOf(output); ext != ".ply" && ext != ".xyz" && ext != ".xyzn")
       throw iires::InputError("cannot write " + output + ": unknown point cloud extension \"" + ext +
                               "\" (supported: .ply .xyz .xyzn)");
@@ -88,8 +87,10 @@ int main(int argc, char** argv) {
       } catch (const iires::InputError& e) {
         throw iires::InputError(input + ": " + e.what());
       }
-      iires::writePointCloud(output, cleaned.cloud);
-      if (!reportPath.empty()) iires::writeTextFile(reportPath, cleaned.toJson() + "\n");
+      iires::OutputBatch outputs;
+      outputs.pointCloud(output, cleaned.cloud);
+      if (!reportPath.empty()) outputs.text(reportPath, cleaned.toJson() + "\n");
+      outputs.commit();
       if (!quiet) std::cout << cleaned.toJson() << "\n";
       return iires::tools::kOk;
     }
@@ -112,6 +113,7 @@ int main(int argc, char** argv) {
       throw iires::InputError("--export-geodesic needs intrinsic control (drop --no-intrinsic)");
     if (!geodesicPath.empty() && iires::extensionOf(geodesicPath) != ".ply")
       throw iires::InputError(geodesicPath + ": --export-geodesic writes .ply only");
+    params.validate();  // every range before the input is read
     progress.update("read", 0.0);
     iires::PointCloud cloud = iires::readPointCloud(input, columns);
     iires::ResampleResult result;
@@ -119,12 +121,16 @@ int main(int argc, char** argv) {
       result = iires::resample(std::move(cloud), params);
     } catch (const iires::InputError& e) {
       throw iires::InputError(input + ": " + e.what());
+    } catch (const std::runtime_error& e) {
+      throw std::runtime_error(input + ": " + e.what());
     }
     progress.update("write", 0.0);
-    iires::writePointCloud(output, result.cloud);
+    iires::OutputBatch outputs;  // all three files or none
+    outputs.pointCloud(output, result.cloud);
+    if (!geodesicPath.empty()) iires::writeGeodesicPly(outputs, geodesicPath, *result.geodesic);
+    if (!reportPath.empty()) outputs.text(reportPath, result.toJson());
+    outputs.commit();
     progress.finish();
-    if (!geodesicPath.empty()) iires::writeGeodesicPly(geodesicPath, *result.geodesic);
-    if (!reportPath.empty()) iires::writeTextFile(reportPath, result.toJson());
     if (!quiet) std::cout << result.toJson();
     return iires::tools::kOk;
   });

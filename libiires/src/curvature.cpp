@@ -110,6 +110,8 @@ void CurvatureParams::validate() const {
     if (i > 0 && ratios[i] > ratios[i - 1])
       throw std::invalid_argument("CurvatureParams: ratios must be non-increasing from flat to curved");
   }
+  if (ratios.front() > 100 * ratios.back())
+    throw std::invalid_argument("CurvatureParams: ratios may span at most 100x (largest / smallest)");
   if (!(uniformSpread >= 0.0)) throw std::invalid_argument("CurvatureParams: uniformSpread must be >= 0");
   if (!(minCurvature >= 0.0)) throw std::invalid_argument("CurvatureParams: minCurvature must be >= 0");
 }

@@ -1,18 +1,11 @@
 // Geodesic coordinates on a point cloud: paper §3.2 ("efficient intrinsic control"), DESIGN §3 step 6.
 #include "iires/geodesic.hpp"
 
-#include <unistd.h>
-
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <array>
-#include <atomic>
-#include <cerrno>
 #include <chrono>
 #include <cmath>
-#include <cstring>
-#include <filesystem>
-#include <fstream>
 #include <numeric>
 #include <optional>
 #include <sstream>
@@ -20,6 +13,7 @@
 #include <thread>
 
 #include "iires/disjoint_sets.hpp"
+#include "iires/io.hpp"
 #include "iires/knn.hpp"
 #include "iires/parallel.hpp"
 
@@ -618,23 +612,10 @@ std::vector<std::array<std::uint32_t, 2>> GeodesicCoordinates::edges() const {
   return out;
 }
 
-void writeGeodesicPly(const std::string& path, const GeodesicCoordinates& geo) {
-  namespace fs = std::filesystem;
-  auto fail = [&](const std::string& problem) { throw InputError("cannot write " + path + ": " + problem); };
-  const fs::path target(path);
-  std::string ext = target.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char ch) { return std::tolower(ch); });
-  if (ext != ".ply") fail("geodesic coordinates are written as .ply only");
-  const fs::path directory = target.has_parent_path() ? target.parent_path() : fs::path(".");
-  std::error_code ec;
-  if (!fs::is_directory(directory, ec)) fail("directory " + directory.string() + " does not exist");
-  if (fs::is_directory(target, ec)) fail("it is a directory");
-  static std::atomic<unsigned> counter{0};
-  const fs::path temporary = directory / ("." + target.filename().string() + ".tmp." +
-                                          std::to_string(::getpid()) + "." + std::to_string(counter++));
-  try {
-    std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
-    if (!out) fail("cannot create a file in " + directory.string() + ": " + std::strerror(errno));
+void writeGeodesicPly(OutputBatch& batch, const std::string& path, const GeodesicCoordinates& geo) {
+  if (extensionOf(path) != ".ply")
+    throw InputError("cannot write " + path + ": geodesic coordinates are written as .ply only");
+  batch.file(path, [&](std::ostream& out) {
     const bool normals = geo.normals().size() == geo.size();
     const int m = geo.dimensions();
     std::ostringstream h;
@@ -666,14 +647,13 @@ void writeGeodesicPly(const std::string& path, const GeodesicCoordinates& geo) {
       }
     }
     out.write(buffer.data(), static_cast<std::streamsize>(buffer.size()));
-    out.close();
-    if (!out) fail("write error (disk full?)");
-    fs::rename(temporary, target, ec);
-    if (ec) fail(ec.message());
-  } catch (...) {
-    fs::remove(temporary, ec);
-    throw;
-  }
+  });
+}
+
+void writeGeodesicPly(const std::string& path, const GeodesicCoordinates& geo) {
+  OutputBatch batch;
+  writeGeodesicPly(batch, path, geo);
+  batch.commit();
 }
 
 }  // namespace iires

@@ -1,5 +1,7 @@
 #include "iires/io.hpp"
 
+#include "atomic_file.hpp"
+
 #include <Eigen/Geometry>
 
 #include <unistd.h>
@@ -50,6 +52,12 @@ std::string quoteToken(std::string_view token) {
   std::string out = "\"";
   for (const char c : token.substr(0, 32)) out += std::isprint(static_cast<unsigned char>(c)) ? c : '?';
   return out + (token.size() > 32 ? "...\"" : "\"");
+}
+
+std::string lowerCase(std::string_view text) {
+  std::string lower(text);
+  for (char& c : lower) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return lower;
 }
 
 /// What a reader found: vertices, normals (empty or one per vertex), the faces, fan-triangulated, and the
@@ -375,7 +383,7 @@ Geometry parseAsciiStl(const std::string& path, std::string_view text) {
   std::vector<Vector3d> corners, loop;
   bool inSolid = false, inFacet = false, inLoop = false;
   while (lines.next()) {
-    const std::string_view keyword = lines[0];
+    const std::string keyword = lowerCase(lines[0]);  // STL keywords in any case
     bool ok = true;
     if (keyword == "solid") {
       ok = !inSolid;
@@ -438,13 +446,13 @@ Geometry parseBinaryStl(const std::string& path, std::string_view data) {
 }
 
 /// Binary when the size matches the triangle count at byte 80; otherwise ascii when the file starts with
-/// "solid" and holds no NUL byte (binary headers may start with "solid" too).
+/// "solid" (in any case) and holds no NUL byte (binary headers may start with "solid" too).
 Geometry parseStl(const std::string& path, std::string_view data) {
   const bool sizeMatches =
       data.size() >= 84 &&
       data.size() == 84 + 50 * decode(ScalarType::kUint32, data.data() + 80, !kHostLittleEndian);
   const std::size_t start = std::min(data.find_first_not_of(" \t\r\n"), data.size());
-  if (!sizeMatches && data.substr(start, 5) == "solid" && data.find('\0') == std::string_view::npos)
+  if (!sizeMatches && lowerCase(data.substr(start, 5)) == "solid" && data.find('\0') == std::string_view::npos)
     return parseAsciiStl(path, data);
   return parseBinaryStl(path, data);
 }
@@ -1016,36 +1024,65 @@ Geometry parsePcd(const std::string& path, std::string_view data) {
 // ---------------------------------------------------------------------------------------------------------
 // Reading: dispatch and file access
 
+/// What the first bytes of a file must look like, checked before the whole file is read.
+enum class Signature {
+  kPly,   ///< "ply" on the first line
+  kText,  ///< no NUL byte (a text format)
+  kAny,   ///< binary or text (PCD's binary body, STL)
+};
+
 struct ReadFormat {
   std::string_view extension;
   Geometry (*parse)(const std::string&, std::string_view);
   bool mesh;  ///< also a mesh format
+  Signature signature;
 };
 
-const ReadFormat kReadFormats[] = {{".ply", parsePly, true},  {".pcd", parsePcd, false},
-                                   {".xyz", parseXyz, false}, {".xyzn", parseXyzn, false},
-                                   {".pts", parsePts, false}, {".obj", parseObj, true},
-                                   {".off", parseOff, true},  {".stl", parseStl, true}};
+const ReadFormat kReadFormats[] = {
+    {".ply", parsePly, true, Signature::kPly},     {".pcd", parsePcd, false, Signature::kAny},
+    {".xyz", parseXyz, false, Signature::kText},   {".xyzn", parseXyzn, false, Signature::kText},
+    {".pts", parsePts, false, Signature::kText},   {".obj", parseObj, true, Signature::kText},
+    {".off", parseOff, true, Signature::kText},    {".stl", parseStl, true, Signature::kAny}};
 
-std::string readFile(const std::string& path) {
+void checkSignature(const std::string& path, std::string_view head, Signature signature) {
+  const bool plyLine = head.substr(0, 3) == "ply" && (head.size() == 3 || head[3] == '\n' || head[3] == '\r');
+  if (signature == Signature::kPly && !plyLine)
+    fail(path, "corrupted header: the file does not start with \"ply\"");
+  if (signature == Signature::kText && head.find('\0') != std::string_view::npos)
+    fail(path, "not a text file (it holds NUL bytes)");
+}
+
+/// The whole file, after checking that it is a regular file whose first bytes fit @p signature (so that a
+/// large file of the wrong kind is rejected without being read).
+/// Fails unless @p path names an existing regular file.
+void checkRegularFile(const std::string& path) {
   std::error_code ec;
   const fs::file_status status = fs::status(path, ec);
   if (ec && ec != std::errc::no_such_file_or_directory) fail(path, "cannot access: " + ec.message());
   if (!fs::exists(status)) fail(path, "no such file");
   if (fs::is_directory(status)) fail(path, "is a directory, not a file");
+  if (!fs::is_regular_file(status)) fail(path, "not a regular file (a device, pipe or socket)");
+}
+
+std::string readFile(const std::string& path, Signature signature) {
   std::ifstream in(path, std::ios::binary);
   if (!in) fail(path, std::string("cannot open for reading: ") + std::strerror(errno));
   in.seekg(0, std::ios::end);
   const std::streamoff size = in.tellg();
   in.seekg(0);
   if (size < 0) fail(path, "cannot determine the file size");
-  std::string data(static_cast<std::size_t>(size), '\0');
-  if (!in.read(data.data(), size)) fail(path, "read error");
-  if (data.empty()) fail(path, "the file is empty");
+  if (size == 0) fail(path, "the file is empty");
+  std::string data(static_cast<std::size_t>(std::min<std::streamoff>(size, 4096)), '\0');
+  if (!in.read(data.data(), static_cast<std::streamsize>(data.size()))) fail(path, "read error");
+  checkSignature(path, data, signature);
+  const std::size_t head = data.size();
+  data.resize(static_cast<std::size_t>(size));
+  if (!in.read(data.data() + head, size - static_cast<std::streamoff>(head))) fail(path, "read error");
   return data;
 }
 
 Geometry load(const std::string& path, bool mesh) {
+  checkRegularFile(path);
   const std::string extension = extensionOf(path);
   const auto format =
       std::find_if(std::begin(kReadFormats), std::end(kReadFormats),
@@ -1057,7 +1094,7 @@ Geometry load(const std::string& path, bool mesh) {
     fail(path, "unknown " + std::string(mesh ? "mesh" : "point cloud") + " extension " +
                    quoteToken(extension) + " (supported: " + supported + ")");
   }
-  Geometry geometry = format->parse(path, readFile(path));
+  Geometry geometry = format->parse(path, readFile(path, format->signature));
   if (geometry.points.empty()) fail(path, "the file holds no points");
   return geometry;
 }
@@ -1115,32 +1152,13 @@ class Writer {
   throw InputError("cannot write " + path + ": " + problem);
 }
 
-/// Writes through a temporary file in the target's directory, renamed over @p path when complete.
-void writeAtomically(const std::string& path, const std::function<void(Writer&)>& body) {
-  const fs::path target(path);
-  const fs::path directory = target.has_parent_path() ? target.parent_path() : fs::path(".");
-  std::error_code ec;
-  if (!fs::is_directory(directory, ec))
-    failWrite(path, "directory " + directory.string() +
-                        (fs::exists(directory, ec) ? " is not a directory" : " does not exist"));
-  if (fs::is_directory(target, ec)) failWrite(path, "it is a directory");
-  static std::atomic<unsigned> counter{0};
-  const fs::path temporary = directory / ("." + target.filename().string() + ".tmp." +
-                                          std::to_string(::getpid()) + "." + std::to_string(counter++));
-  try {
-    std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
-    if (!out) failWrite(path, "cannot create a file in " + directory.string() + ": " + std::strerror(errno));
+/// Stages a file written through a Writer in @p batch.
+void stage(OutputBatch& batch, const std::string& path, const std::function<void(Writer&)>& body) {
+  batch.file(path, [&](std::ostream& out) {
     Writer writer(out);
     body(writer);
     writer.flush();
-    out.close();
-    if (!out) failWrite(path, "write error (disk full?)");
-    fs::rename(temporary, target, ec);
-    if (ec) failWrite(path, ec.message());
-  } catch (...) {
-    fs::remove(temporary, ec);
-    throw;
-  }
+  });
 }
 
 void checkTriangles(const std::string& path, const TriangleMesh& mesh) {
@@ -1220,8 +1238,9 @@ PointCloud readPointCloud(const std::string& path, const std::vector<std::string
   if (columns.empty()) {
     geometry = load(path, false);
   } else {
+    checkRegularFile(path);
     if (extensionOf(path) != ".xyz") fail(path, "column names apply to .xyz files only");
-    geometry = parseXyzNamedColumns(path, readFile(path), columns);
+    geometry = parseXyzNamedColumns(path, readFile(path, Signature::kText), columns);
     if (geometry.points.empty()) fail(path, "the file holds no points");
   }
   PointCloud cloud;
@@ -1253,13 +1272,49 @@ TriangleMesh readMesh(const std::string& path) {
   return {std::move(geometry.points), std::move(geometry.triangles), std::move(geometry.attributes)};
 }
 
-void writePointCloud(const std::string& path, const PointCloud& cloud, bool ascii) {
+struct OutputBatch::Staged {
+  detail::TemporaryFile file;
+};
+
+OutputBatch::OutputBatch() = default;
+OutputBatch::~OutputBatch() = default;
+
+void OutputBatch::file(const std::string& path, const std::function<void(std::ostream&)>& write) {
+  const fs::path target(path);
+  const fs::path directory = target.has_parent_path() ? target.parent_path() : fs::path(".");
+  std::error_code ec;
+  if (path.empty()) failWrite(path, "the file name is empty");
+  if (!fs::is_directory(directory, ec))
+    failWrite(path, "directory " + directory.string() +
+                        (fs::exists(directory, ec) ? " is not a directory" : " does not exist"));
+  if (fs::is_directory(target, ec)) failWrite(path, "it is a directory");
+  const fs::path canonical = fs::weakly_canonical(fs::absolute(target, ec), ec);
+  for (const auto& s : staged_)
+    if (fs::weakly_canonical(fs::absolute(s->file.target(), ec), ec) == canonical)
+      failWrite(path, "the run writes it twice (two outputs name the same file)");
+  auto staged = std::make_unique<Staged>(Staged{detail::TemporaryFile(path)});
+  std::ofstream out(staged->file.path(), std::ios::binary | std::ios::trunc);
+  if (!out) failWrite(path, "cannot create a file in " + directory.string() + ": " + std::strerror(errno));
+  write(out);
+  out.close();
+  if (!out) failWrite(path, "write error (disk full?)");
+  staged_.push_back(std::move(staged));
+}
+
+void OutputBatch::commit() {
+  const detail::SignalBlock hold;
+  for (const auto& s : staged_)
+    if (const std::string problem = s->file.commit(); !problem.empty()) failWrite(s->file.target(), problem);
+  staged_.clear();
+}
+
+void OutputBatch::pointCloud(const std::string& path, const PointCloud& cloud, bool ascii) {
   const std::string extension = extensionOf(path);
   const bool normals = cloud.hasNormals();
   if (extension == ".ply") {
     checkAttributes(path, cloud.attributes, cloud.size());
     const bool attributes = !cloud.attributes.empty();
-    writeAtomically(path, [&](Writer& w) {
+    stage(*this, path, [&](Writer& w) {
       writePlyHeader(w, ascii, cloud.size(), normals, 0, cloud.attributes);
       for (std::size_t i = 0; i < cloud.size(); ++i) {
         if (ascii) {
@@ -1277,12 +1332,12 @@ void writePointCloud(const std::string& path, const PointCloud& cloud, bool asci
       }
     });
   } else if (extension == ".xyz") {
-    writeAtomically(path, [&](Writer& w) {
+    stage(*this, path, [&](Writer& w) {
       for (const Vector3d& p : cloud.points) w.row(p);
     });
   } else if (extension == ".xyzn") {
     if (!normals) failWrite(path, ".xyzn needs normals and the cloud has none");
-    writeAtomically(path, [&](Writer& w) {
+    stage(*this, path, [&](Writer& w) {
       for (std::size_t i = 0; i < cloud.size(); ++i) {
         w.row(cloud.points[i], false);
         w.row(cloud.normals[i]);
@@ -1294,13 +1349,13 @@ void writePointCloud(const std::string& path, const PointCloud& cloud, bool asci
   }
 }
 
-void writeMesh(const std::string& path, const TriangleMesh& mesh) {
+void OutputBatch::mesh(const std::string& path, const TriangleMesh& mesh) {
   const std::string extension = extensionOf(path);
   if (extension != ".ply" && extension != ".obj" && extension != ".off")
     failWrite(path, "unknown mesh extension " + quoteToken(extension) + " (supported: .ply .obj .off)");
   checkTriangles(path, mesh);
   if (extension == ".ply") checkAttributes(path, mesh.vertexAttributes, mesh.vertices.size());
-  writeAtomically(path, [&](Writer& w) {
+  stage(*this, path, [&](Writer& w) {
     if (extension == ".ply") {
       writePlyHeader(w, false, mesh.vertices.size(), false, mesh.triangles.size(), mesh.vertexAttributes);
       for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
@@ -1333,8 +1388,26 @@ void writeMesh(const std::string& path, const TriangleMesh& mesh) {
   });
 }
 
+void OutputBatch::text(const std::string& path, const std::string& text) {
+  stage(*this, path, [&](Writer& w) { w.text(text); });
+}
+
+void writePointCloud(const std::string& path, const PointCloud& cloud, bool ascii) {
+  OutputBatch batch;
+  batch.pointCloud(path, cloud, ascii);
+  batch.commit();
+}
+
+void writeMesh(const std::string& path, const TriangleMesh& mesh) {
+  OutputBatch batch;
+  batch.mesh(path, mesh);
+  batch.commit();
+}
+
 void writeTextFile(const std::string& path, const std::string& text) {
-  writeAtomically(path, [&](Writer& w) { w.text(text); });
+  OutputBatch batch;
+  batch.text(path, text);
+  batch.commit();
 }
 
 std::string extensionOf(const std::string& path) {

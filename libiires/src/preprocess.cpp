@@ -55,7 +55,8 @@ PreprocessResult preprocess(const PointCloud& input, const PreprocessParams& par
   result.outliersPulled = outliers.pulled;
   result.outliersRemoved = outliers.removed;
   result.outlierSeconds = outliers.seconds;
-  if (params.runDenoise) {
+  // Denoising needs k + 1 points; removed outliers can leave fewer in a tiny cloud, which then stays as it is.
+  if (params.runDenoise && outliers.cloud.size() > static_cast<std::size_t>(dp.neighbours)) {
     // eq. (1)–(3). The first sweep doubles as a noise probe: when it moves points by less than
     // cleanDisplacement input spacings on average, the cloud is already clean and further sweeps would only
     // erode tight curvature (folds, thin parts, sparse clouds) — denoise() keeps the positions then.

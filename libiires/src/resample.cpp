@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <numeric>
 #include <optional>
 #include <sstream>
@@ -919,6 +920,34 @@ std::string jsonArray(const std::vector<T>& values) {
   return out + "]";
 }
 
+/// Exit 0 promises points on the input's surface. Each axis of the working cloud's bounding box is enlarged by
+/// three output spacings, but by no more than a tenth of its own extent (a sample 20 units off a ribbon 2 wide
+/// is off the surface, however long the ribbon); a sample outside has left the surface (projection diverged
+/// on a degenerate cloud), and the run fails instead of writing it.
+void checkWithinInput(const std::vector<Eigen::Vector3d>& samples, const std::vector<Eigen::Vector3d>& input,
+                      double spacing) {
+  Eigen::AlignedBox3d box;
+  for (const Eigen::Vector3d& p : input) box.extend(p);
+  const Eigen::Vector3d extent = box.sizes();
+  const Eigen::Vector3d margin =
+      (0.1 * extent).cwiseMin(3 * spacing).array() + 1e-9 * extent.norm();  // the 1e-9: rounding
+  box.min() -= margin;
+  box.max() += margin;
+  std::size_t outside = 0;
+  double worst = 0;
+  for (const Eigen::Vector3d& p : samples) {
+    if (box.contains(p) && p.allFinite()) continue;
+    ++outside;
+    worst = std::max(worst, p.allFinite() ? box.exteriorDistance(p) : std::numeric_limits<double>::infinity());
+  }
+  if (outside > 0) {
+    std::ostringstream os;
+    os << "resampling failed: " << outside << " output points left the input's bounding box (by up to " << worst
+       << "; the output spacing is " << spacing << "): the surface could not be followed";
+    throw std::runtime_error(os.str());
+  }
+}
+
 }  // namespace
 
 void ResampleParams::validate() const {
@@ -935,7 +964,8 @@ void ResampleParams::validate() const {
   if (mls.k < 3) throw std::invalid_argument("mls.k must be >= 3");
   if (threads < 0) throw std::invalid_argument("threads must be >= 0 (0 = all cores)");
   if (mode == ResampleMode::kCurvature) curvature.validate();
-  if (sharpEdges && !(edgeRatio > 0.0)) throw std::invalid_argument("edgeRatio must be > 0");
+  if (sharpEdges && !(edgeRatio >= 0.1 && edgeRatio <= 4.0))
+    throw std::invalid_argument("edgeRatio (--edge-ratio) must be in [0.1, 4], got " + std::to_string(edgeRatio));
   if (fixedSamples.size() > targetCount)
     throw std::invalid_argument("more fixed samples than the requested point count");
 }
@@ -1121,6 +1151,7 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
   result.cloud.normals = std::move(s.nrm);
   t = clock.begin("report");
   result.spacing = spacingStats(result.cloud.points, params.threads);
+  checkWithinInput(result.cloud.points, cloud.points, result.spacing.mean);
   if (curvature) {  // points and mean spacing per level (each output point takes its nearest input's level)
     const std::size_t levels = curvature->pointsPerLevel.size();
     result.pointsPerLevel.assign(levels, 0);

@@ -108,6 +108,15 @@ ValidationReport validateCloud(PointCloud& cloud, std::size_t minPoints, const s
        << ", beyond the supported " << kMaxCoordinate << " (squared distances would overflow)";
     throw InputError(os.str());
   }
+  // A cloud whose whole extent is below kMinExtent would lose its shape to underflow below.
+  Vector3d lo = cloud.points[0], hi = cloud.points[0];
+  for (const Vector3d& p : cloud.points) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
+  if (const double extent = (hi - lo).maxCoeff(); extent < kMinExtent && extent > 0) {
+    std::ostringstream os;
+    os << what << ": the cloud spans only " << extent << " units, below the supported " << kMinExtent
+       << " (squared distances would underflow): scale the coordinates up";
+    throw InputError(os.str());
+  }
   // Denormal-scale coordinates (a fuzzer find: a cluster of points ~1e-310 apart) make differences whose
   // squares underflow to 0, and normalising them gives NaN; below kTinyCoordinate a coordinate is 0.
   parallelFor(n, threads, [&](std::size_t i) {

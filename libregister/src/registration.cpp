@@ -162,6 +162,7 @@ void RegistrationParams::validate() const {
   if (!(ambiguityTolerance >= 0.0)) throw std::invalid_argument("registration: ambiguityTolerance must be >= 0");
   search.validate();
   icp.validate();
+  outliers.validate();
 }
 
 PointCloud transformCloud(const PointCloud& cloud, const Eigen::Matrix4d& T) {
@@ -210,6 +211,10 @@ RegistrationResult registerClouds(const PointCloud& sourceIn, const PointCloud& 
   const std::size_t workingCap = params.maxInputPerSample * params.samples;
   source = randomSubset(source, workingCap, params.seed * 2 + 1);
   target = randomSubset(target, workingCap, params.seed * 2 + 2);
+  OutlierParams op = params.outliers;
+  op.threads = params.threads;
+  source = cleanOutliers(source, op, &r.outliersFound);
+  target = cleanOutliers(target, op, &r.outliersFound);
   r.sourceWorkingPoints = source.size();
   r.targetWorkingPoints = target.size();
   stage("thin", t);
@@ -392,7 +397,7 @@ std::string RegistrationResult::toJson() const {
     << ",\n  \"ambiguity_reason\": \"" << ambiguityReason << "\",\n  \"second_best_score_ratio\": "
     << num(secondBestScoreRatio) << ",\n  \"source_points\": " << sourcePoints << ",\n  \"target_points\": "
     << targetPoints << ",\n  \"source_working_points\": " << sourceWorkingPoints
-    << ",\n  \"target_working_points\": " << targetWorkingPoints << ",\n  \"stray_samples_dropped\": " << strayDropped << ",\n  \"samples\": " << samples << ",\n  \"source_radius\": " << num(sourceRadius)
+    << ",\n  \"target_working_points\": " << targetWorkingPoints << ",\n  \"stray_samples_dropped\": " << strayDropped << ",\n  \"outliers_found\": " << outliersFound << ",\n  \"samples\": " << samples << ",\n  \"source_radius\": " << num(sourceRadius)
     << ",\n  \"target_radius\": " << num(targetRadius) << ",\n  \"timings\": {";
   for (std::size_t i = 0; i < timings.size(); ++i)
     s << (i ? ", " : "") << "\"" << timings[i].name << "_s\": " << num(timings[i].seconds);

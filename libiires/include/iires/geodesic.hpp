@@ -21,6 +21,7 @@
 #include <string>
 #include <vector>
 
+#include "iires/io.hpp"
 #include "iires/knn.hpp"
 #include "iires/types.hpp"
 
@@ -151,5 +152,7 @@ class GeodesicCoordinates {
 /// @note Atomic (temporary file + rename) like writePointCloud. @throws InputError when the file cannot be
 /// written ("cannot write <path>: <problem>") or the extension is not .ply.
 void writeGeodesicPly(const std::string& path, const GeodesicCoordinates& geo);
+/// @brief The same, staged in @p batch (committed with the run's other outputs).
+void writeGeodesicPly(OutputBatch& batch, const std::string& path, const GeodesicCoordinates& geo);
 
 }  // namespace iires

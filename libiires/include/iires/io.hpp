@@ -2,6 +2,9 @@
 /// @file io.hpp
 /// @brief Reading and writing point clouds and meshes. All file access of iires goes through here.
 
+#include <functional>
+#include <iosfwd>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -53,6 +56,38 @@ void writeMesh(const std::string& path, const TriangleMesh& mesh);
 /// @brief Write a text file (reports, transforms) atomically, as writePointCloud.
 /// @throws InputError when the directory is missing or not writable.
 void writeTextFile(const std::string& path, const std::string& text);
+
+/// @brief The outputs of one run, committed together or not at all.
+///
+/// Each write goes to a temporary file in its target's directory as soon as it is staged, so a full disk or a
+/// bad path fails before anything is committed; commit() then renames every temporary over its target (with
+/// SIGINT/SIGTERM/SIGHUP held back until it is done). A batch destroyed without commit() — an exception, a
+/// failed later write — removes its temporaries and leaves every target as it was. With
+/// removeTemporariesOnSignal() installed, an interrupted run removes them too.
+/// @throws InputError from the staging calls as the single-file writers do ("cannot write <path>: ...").
+class OutputBatch {
+ public:
+  OutputBatch();
+  ~OutputBatch();
+  OutputBatch(const OutputBatch&) = delete;
+  OutputBatch& operator=(const OutputBatch&) = delete;
+
+  void pointCloud(const std::string& path, const PointCloud& cloud, bool ascii = false);  ///< as writePointCloud
+  void mesh(const std::string& path, const TriangleMesh& mesh);                           ///< as writeMesh
+  void text(const std::string& path, const std::string& text);                            ///< as writeTextFile
+  /// Any other format: @p write fills the stream (opened in binary mode); a failed stream fails the write.
+  void file(const std::string& path, const std::function<void(std::ostream&)>& write);
+  /// Renames every staged file over its target. @throws InputError when a rename fails.
+  void commit();
+
+ private:
+  struct Staged;
+  std::vector<std::unique_ptr<Staged>> staged_;
+};
+
+/// @brief Install handlers for SIGINT, SIGTERM and SIGHUP that remove the temporary files of uncommitted
+/// writes, then end the process as the signal would have (the tools call this first).
+void removeTemporariesOnSignal();
 
 /// @brief Lower-case extension of @p path including the dot (".ply"), or "" when it has none.
 std::string extensionOf(const std::string& path);

@@ -50,11 +50,13 @@ struct OutlierParams {
 
 /// @brief What processOutliers() found and did.
 struct OutlierResult {
-  PointCloud cloud;  ///< pull/keep: same size and order as the input; remove: outliers gone
+  /// keep: the input; pull: the input with each outlier moved onto the surface, or removed where it has no
+  /// surface to land on; remove: outliers gone (order kept)
+  PointCloud cloud;
   std::vector<std::uint32_t> outliers;  ///< indices (into the input) of the detected outliers, ascending
   std::size_t found = 0;                ///< outliers detected
   std::size_t pulled = 0;               ///< outliers projected back (pull)
-  std::size_t removed = 0;              ///< outliers dropped (remove)
+  std::size_t removed = 0;              ///< outliers dropped (remove; pull: those with no surface near)
   double seconds = 0;                   ///< wall time
 };
 
@@ -69,7 +71,8 @@ std::size_t outlierNeighbours(const OutlierParams& params);
 /// *trusted* (non-suspect) points exceeds planeThreshold local spacings, or its distance to the plane of the
 /// nearest of them (with its 8 nearest trusted neighbours) exceeds nearPlaneThreshold local spacings; any
 /// point beyond twice planeThreshold is an outlier too (a small cluster of outliers can be mutual among
-/// itself). The literal eq. 4 (any non-mutual neighbour) flags ordinary points where the density changes —
+/// itself), and so is an *isolated* point, whose mean distance to its 6 nearest neighbours exceeds 10 times the
+/// 90th percentile of that distance over the cloud (points scattered far from the object). The literal eq. 4 (any non-mutual neighbour) flags ordinary points where the density changes —
 /// those points are non-mutual too but lie on their neighbours' plane, so the second test clears them; an
 /// outlier moved 3–6 spacings off the surface is non-mutual (the surface points' own neighbours are all
 /// closer) and far from the plane.
@@ -78,7 +81,9 @@ std::size_t outlierNeighbours(const OutlierParams& params);
 /// (mutual and within planeThreshold of its plane; any non-outlier when fewer than planeNeighbours exist) and
 /// (a(q), n_a) the θ-weighted plane (eq. 1–2) of q and its planeNeighbours nearest trusted points (h = the
 /// distance to the farthest of them, so the plane is stable under noise); its normal becomes n_a, oriented
-/// like q's normal when the input has normals.
+/// like q's normal when the input has normals. An isolated point has no surface to land on and is removed
+/// instead, and so is an outlier whose projection lands more than 2h from a(q), beyond where the plane stands
+/// for the surface.
 /// @throws InputError when the cloud is empty, holds NaN/Inf, or has fewer than planeNeighbours + 1
 /// points; std::invalid_argument for bad parameters.
 /// @param table (optional) neighbour lists of exactly input.points with k ≥ outlierNeighbours(params),
@@ -86,5 +91,9 @@ std::size_t outlierNeighbours(const OutlierParams& params);
 /// @note O(n k log n). Deterministic for any thread count.
 OutlierResult processOutliers(const PointCloud& input, const OutlierParams& params = {},
                               const NeighbourTable* table = nullptr);
+
+/// @brief @p cloud with its outliers pulled back or removed as params.mode says: the cloud itself for kKeep or
+/// when it has too few points for the test (outlierNeighbours()). @p found, when given, adds the outliers found.
+PointCloud cleanOutliers(const PointCloud& cloud, const OutlierParams& params, std::size_t* found = nullptr);
 
 }  // namespace iires

@@ -10,8 +10,12 @@
 
 namespace iires {
 
-/// @brief Number of threads to use for a requested count (0 = all cores).
-inline int resolveThreads(int requested) { return requested > 0 ? requested : omp_get_max_threads(); }
+/// @brief Number of threads to use for a requested count (0 = all cores). Requests above four threads per
+/// core are clamped there: more only adds start-up cost (and OpenMP runtimes fail at tens of thousands).
+inline int resolveThreads(int requested) {
+  if (requested <= 0) return omp_get_max_threads();
+  return std::min(requested, 4 * std::max(1, omp_get_num_procs()));
+}
 
 /// @brief Run fn(i) for i in [0, n) on @p threads threads (0 = all cores), dynamic chunks of up to 256
 /// iterations, fewer for short loops so that every thread gets work.

@@ -33,7 +33,7 @@ struct ResampleParams {
   CurvatureParams curvature;        ///< curvature mode: eq. 8–10 (levels, ratios flat → curved)
   bool sharpEdges = false;          ///< detect sharp features and keep samples on them (`--sharp-edges`)
   FeatureParams features;           ///< the feature detector and its chains
-  double edgeRatio = 0.5;           ///< spacing of the samples on feature lines, in units of l (`--edge-ratio`)
+  double edgeRatio = 0.5;           ///< spacing of the samples on feature lines, in units of l, [0.1, 4] (`--edge-ratio`)
   int neighbours = 14;              ///< Euclidean candidates per sample for its 1-ring (≥ 6)
   double splitRatio = 1.6;          ///< split edges longer than splitRatio·l [paper 1.6; Botsch–Kobbelt 4/3]
   double collapseRatio = 0.8;       ///< collapse edges shorter than collapseRatio·l [0.8]

@@ -18,6 +18,8 @@ struct ValidationReport {
 
 /// @brief Largest coordinate magnitude validateCloud accepts: beyond it squared distances and moments overflow.
 constexpr double kMaxCoordinate = 1e30;
+/// @brief Smallest extent (largest side of the bounding box) validateCloud accepts for a cloud of distinct points.
+constexpr double kMinExtent = 1e-30;
 /// @brief Coordinates of smaller magnitude are set to 0 by validateCloud (their squares would underflow).
 constexpr double kTinyCoordinate = 1e-150;
 
@@ -25,7 +27,7 @@ constexpr double kTinyCoordinate = 1e-150;
 /// @param minPoints fewest distinct points the caller's method needs (>= 1)
 /// @param what how to name the cloud in messages (usually the file path)
 /// @throws InputError when the cloud is empty, holds NaN/Inf coordinates (the first bad index is named) or a
-/// coordinate beyond ±kMaxCoordinate,
+/// coordinate beyond ±kMaxCoordinate, spans less than kMinExtent (but more than 0),
 /// has fewer than @p minPoints distinct points, or all its points are collinear (the second eigenvalue of
 /// the covariance is at most 1e-12 times the first; one or two distinct points are collinear too).
 /// @note Normals holding NaN/Inf, or not one per point, are dropped (cleared) rather than rejected.

@@ -14,6 +14,7 @@
 #include "iires/register/icp.hpp"
 #include "iires/register/rotation_grid.hpp"
 #include "iires/register/rotation_search.hpp"
+#include "iires/outliers.hpp"
 #include "iires/resample.hpp"
 #include "iires/types.hpp"
 
@@ -40,6 +41,10 @@ struct RegistrationParams {
   /// A cloud with more than this × M points is first cut to a seeded random subset of that many (cheap; the
   /// resampler then evens out the density). 0 = never. [4: the surface stays sampled twice as finely as M]
   std::size_t maxInputPerSample = 4;
+  /// Outliers of each working cloud (after the thinning), as in the resampler: pulled back onto the surface
+  /// (default), removed, or kept. Points far from the object would otherwise move the centroid and the RMS
+  /// radius of the normalisation; they are removed in every mode but keep.
+  OutlierParams outliers;
   /// Optional progress report, called from the calling thread with a stage name ("resample source",
   /// "resample target", "search", "icp") and the fraction of that stage done, in [0, 1]. Empty = none.
   /// Does not affect the result.
@@ -88,6 +93,7 @@ struct RegistrationResult {
   /// Resampled points dropped as non-finite or far outside their input's bounding box (a failed surface
   /// projection); normally 0
   std::size_t strayDropped = 0;
+  std::size_t outliersFound = 0;  ///< outliers found in the two working clouds (RegistrationParams::outliers)
   /// Wall time per stage: validate, thin, resample_source, resample_target, normalise, search, icp, evaluate, total
   std::vector<StageTime> timings;
 

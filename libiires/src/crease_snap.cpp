@@ -1,0 +1,513 @@
+// snapToCreases(): feature samples moved exactly onto their creases (curved sheets, tips, corners).
+#include "features_internal.hpp"
+
+
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <list>
+#include <map>
+#include <numeric>
+#include <stdexcept>
+#include <string>
+#include <tuple>
+#include <unordered_map>
+
+#include "iires/knn.hpp"
+#include "iires/parallel.hpp"
+
+
+namespace iires {
+using namespace detail;
+namespace {
+
+/// The two planes of @p c refitted on @p nbr (the neighbourhood of @p y), robust to a third sheet: each point
+/// goes to the plane it is nearer to, and only if within 3·maxResidual spacings of it (the points of another
+/// sheet, as a second crease's far side, are left out), and each plane is refitted with weights exp(−d²/σ²);
+/// twice. The line point is the line's point nearest y. Returns false (and leaves @p c) when a plane keeps
+/// fewer than 5 points or fits worse than maxResidual.
+bool refitPlanesRobust(const std::vector<Eigen::Vector3d>& points, const Eigen::Vector3d& y,
+                       const std::vector<std::uint32_t>& nbr, double hl, const FeatureParams& prm,
+                       double sigma, Crease& c) {
+  Eigen::Vector3d na = c.normalA, nb = c.normalB;
+  double oa = c.offsetA, ob = c.offsetB;
+  const double tol = 3.0 * prm.maxResidual * hl;
+  std::vector<std::uint32_t> pa, pb;
+  for (int it = 0; it < 2; ++it) {
+    pa.clear();
+    pb.clear();
+    for (std::uint32_t j : nbr) {
+      const double da = std::abs(na.dot(points[j]) - oa), db = std::abs(nb.dot(points[j]) - ob);
+      if (std::min(da, db) <= tol) (da <= db ? pa : pb).push_back(j);
+    }
+    if (pa.size() < 5 || pb.size() < 5) return false;
+    Eigen::Vector3d ta, tb;
+    double toa = 0, tob = 0;
+    if (fitPlane(points, pa, y, sigma, na, ta, toa) > prm.maxResidual * hl ||
+        fitPlane(points, pb, y, sigma, nb, tb, tob) > prm.maxResidual * hl)
+      return false;
+    na = ta, nb = tb, oa = toa, ob = tob;
+  }
+  const Eigen::Vector3d dir = na.cross(nb);
+  if (dir.norm() < 1e-6) return false;
+  c.point = lineNearest(na, oa, nb, ob, y);
+  c.direction = dir.normalized();
+  c.normalA = na, c.normalB = nb, c.offsetA = oa, c.offsetB = ob;
+  return true;
+}
+
+/// A sheet curving along a crease, as a height field over its plane: the points x with n·(x − o) = h(u, v),
+/// (u, v) = (e1·(x − o), e2·(x − o)), e1 along the crease, h = c0 + c1 u + c2 v + c3 u². The one curvature
+/// term is the bend along the crease (a cylinder meeting a plate at its foot); terms across it would let a
+/// sheet bend onto a stray point next to the crease.
+struct CreaseSheet {
+  Eigen::Vector3d o, e1, e2, n;
+  Eigen::Vector4d c = Eigen::Vector4d::Zero();
+  /// n·(x − o) − h(u, v) (about the signed distance near the sheet) and, if @p grad, its gradient.
+  double value(const Eigen::Vector3d& x, Eigen::Vector3d* grad = nullptr) const {
+    const Eigen::Vector3d d = x - o;
+    const double u = e1.dot(d), v = e2.dot(d);
+    if (grad) *grad = n - (c(1) + 2 * c(3) * u) * e1 - c(2) * e2;
+    return n.dot(d) - (c(0) + c(1) * u + c(2) * v + c(3) * u * u);
+  }
+  /// Fitted by least squares to @p idx, idx[t] weighted rw[t]·exp(−|idx[t] − o|²/σ²); returns the weighted
+  /// RMS residual (infinity with fewer than 10 points).
+  double fit(const std::vector<Eigen::Vector3d>& points, const std::vector<std::uint32_t>& idx,
+             const std::vector<double>& rw, double sigma) {
+    if (idx.size() < 10) return std::numeric_limits<double>::infinity();
+    Eigen::Matrix4d ata = Eigen::Matrix4d::Zero();
+    Eigen::Vector4d atb = Eigen::Vector4d::Zero();
+    std::vector<double> w(idx.size());
+    for (std::size_t t = 0; t < idx.size(); ++t) {
+      const Eigen::Vector3d d = points[idx[t]] - o;
+      w[t] = rw[t] * std::exp(-d.squaredNorm() / (sigma * sigma));
+      const double u = e1.dot(d) / sigma, v = e2.dot(d) / sigma;  // in units of σ: well conditioned
+      const Eigen::Vector4d a(1, u, v, u * u);
+      ata += w[t] * a * a.transpose();
+      atb += w[t] * a * n.dot(d);
+    }
+    c = ata.ldlt().solve(atb).cwiseQuotient(Eigen::Vector4d(1, sigma, sigma, sigma * sigma));
+    if (!c.allFinite()) return std::numeric_limits<double>::infinity();
+    double r2 = 0, sum = 0;
+    for (std::size_t t = 0; t < idx.size(); ++t) r2 += w[t] * std::pow(value(points[idx[t]]), 2), sum += w[t];
+    return std::sqrt(r2 / sum);
+  }
+};
+
+constexpr std::size_t kSheetFitPoints = 40;  // the curved sheets are fitted on this many nearest points
+
+/// The crease point near @p c.point on the intersection of its two sheets fitted as CreaseSheets (over the
+/// planes of @p c, bending along c.direction): a plane fitted to a sheet that curves along the crease lies off
+/// it, and so does the planes' line. The kSheetFitPoints input points nearest c.point, Gaussian weights of
+/// width 0.6 × their radius; four rounds of: each point to the sheet it is nearer to (the planes, then the
+/// fitted sheets), left out beyond 3·maxResidual local spacings @p hl of both and weighted 1/(1 + (d/τ)²),
+/// τ = maxResidual·hl, by its distance d (a third sheet's points, stray points); then Gauss-Newton from
+/// c.point onto both sheets. Returns false where a sheet keeps under 10 points, the last round leaves out 10 %
+/// of the points or more (a third sheet: a corner) or its fits leave a residual over maxResidual·hl.
+bool curvedCreasePoint(const PointCloud& cloud, const KnnIndex& index, double hl, const FeatureParams& prm,
+                       const Crease& c, Eigen::Vector3d& x) {
+  std::vector<std::uint32_t> nbr;
+  std::vector<double> d2;
+  const Eigen::Vector3d x0 = c.point;
+  if (index.knn(x0, kSheetFitPoints, nbr, d2) < kSheetFitPoints) return false;
+  const double sigma = 0.6 * std::sqrt(d2.back());
+  CreaseSheet sheet[2];
+  const Eigen::Vector3d normal[2] = {c.normalA, c.normalB};
+  const double offset[2] = {c.offsetA, c.offsetB};
+  for (int s = 0; s < 2; ++s) {  // start: the planes
+    CreaseSheet& q = sheet[s];
+    q.o = x0, q.n = normal[s];
+    q.e1 = (c.direction - q.n * q.n.dot(c.direction)).normalized();
+    q.e2 = q.n.cross(q.e1);
+    q.c(0) = offset[s] - q.n.dot(x0);
+  }
+  std::vector<std::uint32_t> part[2];
+  std::vector<double> rw[2];
+  const double tau = prm.maxResidual * hl;
+  for (int it = 0; it < 4; ++it) {
+    for (int s = 0; s < 2; ++s) part[s].clear(), rw[s].clear();
+    for (std::uint32_t j : nbr) {
+      const double da = std::abs(sheet[0].value(cloud.points[j])), db = std::abs(sheet[1].value(cloud.points[j]));
+      const double d = std::min(da, db);
+      if (d > 3.0 * tau) continue;
+      const int s = da <= db ? 0 : 1;
+      part[s].push_back(j);
+      rw[s].push_back(1.0 / (1.0 + (d / tau) * (d / tau)));
+    }
+    if (it == 3 && 10 * (part[0].size() + part[1].size()) < 9 * nbr.size()) return false;  // a third sheet
+    for (int s = 0; s < 2; ++s) {
+      const double r = sheet[s].fit(cloud.points, part[s], rw[s], sigma);
+      if (!std::isfinite(r) || (it == 3 && r > tau)) return false;
+    }
+  }
+  x = x0;
+  for (int it = 0; it < 10; ++it) {  // the minimum-norm step onto both: x ← x − Jᵀ(JJᵀ)⁻¹f
+    Eigen::Matrix<double, 2, 3> j;
+    Eigen::Vector2d f;
+    for (int s = 0; s < 2; ++s) {
+      Eigen::Vector3d g;
+      f(s) = sheet[s].value(x, &g);
+      j.row(s) = g.transpose();
+    }
+    const Eigen::Vector3d dx = -j.transpose() * (j * j.transpose()).inverse() * f;
+    if (!dx.allFinite()) return false;
+    x += dx;
+    if (dx.norm() < 1e-9 * hl) break;
+  }
+  return true;
+}
+
+/// Step 6 of snapToCreases(): each sample where the snap fit with the loose thresholds (looseParams; a sample
+/// the tracing placed where the strict fit fails) puts the planes' line within maxLineDistance/2 local spacings
+/// of it (the planes describe the crease the sample is on, not a corner or another crease near it) moves onto
+/// the two sheets' curved crease (curvedCreasePoint), where that lies within maxLineDistance local spacings.
+/// Each sample on its own: deterministic, in parallel.
+void refineOnCurvedSheets(const PointCloud& cloud, const KnnIndex& index, double h, const FeatureParams& params,
+                          std::vector<Eigen::Vector3d>& out) {
+  const FeatureParams loose = looseParams(params);
+  parallelFor(out.size(), params.threads, [&](std::size_t i) {
+    std::vector<std::uint32_t> idx;
+    std::vector<double> d2;
+    const double hl = localSpacing(index, out[i], h);
+    Crease c;
+    Eigen::Vector3d x;
+    if (snapFit(cloud, index, out[i], hl, params, loose, c, idx, d2) &&
+        (c.point - out[i]).norm() <= 0.5 * params.maxLineDistance * hl &&
+        curvedCreasePoint(cloud, index, hl, params, c, x) && (x - out[i]).norm() <= params.maxLineDistance * hl)
+      out[i] = x;
+  });
+}
+
+/// Step 3b of snapToCreases(): tips. Two creases that share a sheet and run into one point at a small angle
+/// (8°–maxChainTurn; a step in a surface fading out, as fandisk's wedge at (0.072 0.035 −0.046), 18°) end
+/// there without a third crease. Within a few spacings of the tip both creases lie in every fit's
+/// neighbourhood, so the traces stop about a neighbourhood apart, and step 4's end lines (through the last
+/// two samples, bent by the other crease) meet short of the tip. Here each open end's crease is the last fit
+/// that holds at the end sample or up to 3 samples back (the full ball, else the half-ball behind), its
+/// planes refitted without the points off both (refitPlanesRobust: the other crease's far sheet). Two ends
+/// whose lines converge, share a plane (each end within maxLineDistance of one of the other's planes) and
+/// meet (within half a spacing) ahead of both (within 6·radius local spacings) have their tip there, refined
+/// as the common point of the shared plane and the two other sheets' planes refitted (Gaussian-weighted) on
+/// the points around it, up to 4 times while a refit moves it by 0.1–1 spacing. Both ends are continued to
+/// the tip on the straight line at their step (the second one's samples within half a step of the first's
+/// left out, close to the tip) unless a placed sample lies on the way (within half a step: another crease
+/// between them) or the tip is farther than maxOffCrease from the input. The samples are inserted after their
+/// ends, so the runs end at the tip and step 4 adds no corner there. Ends are paired greedily in order:
+/// deterministic.
+void placeCreaseTips(const PointCloud& cloud, const KnnIndex& index, double h, const FeatureParams& params,
+                     std::vector<Eigen::Vector3d>& out, std::vector<std::uint32_t>& owner) {
+  struct TipEnd {
+    std::size_t run;
+    bool back;                         // the run's last sample (else its first)
+    Eigen::Vector3d point, direction;  // on the fitted line, nearest the end sample; forward, off the end
+    double step, hl;
+    Crease crease;
+  };
+  const auto runs = ownerRuns(owner);
+  const double cosTurn = std::cos(params.maxChainTurn * kDeg);
+  std::vector<TipEnd> ends;
+  std::vector<std::uint32_t> idx, behind;
+  std::vector<double> d2;
+  for (std::size_t r = 0; r < runs.size(); ++r) {
+    const auto [a, b] = runs[r];
+    if (b == a) continue;
+    for (int side = 0; side < 2; ++side) {
+      const Eigen::Vector3d& tip = side ? out[b] : out[a];
+      const Eigen::Vector3d& prev = side ? out[b - 1] : out[a + 1];
+      const double step = (tip - prev).norm();
+      if (!(step > 1e-9 * h)) continue;
+      const Eigen::Vector3d forward = (tip - prev) / step;
+      Crease c;
+      double hl = h;
+      bool ok = false;
+      for (std::size_t k = 0; k <= 3 && k <= b - a && !ok; ++k) {
+        const Eigen::Vector3d& y = side ? out[b - k] : out[a + k];
+        hl = localSpacing(index, y, h);
+        bool oneSided = false;
+        ok = creaseAlong(cloud, index, y, forward, hl, params, c, idx, d2, behind, oneSided);
+        Crease robust = c;
+        if (ok && refitPlanesRobust(cloud.points, y, idx, hl, params, params.snapSigma * hl, robust) &&
+            std::abs(robust.direction.dot(forward)) >= cosTurn)
+          c = robust;
+      }
+      if (!ok) continue;
+      const Eigen::Vector3d dir = c.direction.dot(forward) < 0 ? -c.direction : c.direction;
+      ends.push_back({r, side == 1, c.point + dir * (tip - c.point).dot(dir), dir, step, hl, c});
+    }
+  }
+  const double cosMin = std::cos(8.0 * kDeg);  // closer to parallel: no tip within reach
+  std::vector<char> used(ends.size(), 0);
+  std::vector<std::vector<Eigen::Vector3d>> extension(ends.size());
+  std::vector<Eigen::Vector3d> placed(out);
+  auto nearPlaced = [&](const Eigen::Vector3d& y, double r) {
+    for (const auto& q : placed)
+      if ((q - y).squaredNorm() < r * r) return true;
+    return false;
+  };
+  auto planeDistance = [](const Crease& k, const Eigen::Vector3d& q, bool& isA) {
+    const double da = std::abs(k.normalA.dot(q) - k.offsetA), db = std::abs(k.normalB.dot(q) - k.offsetB);
+    isA = da <= db;
+    return std::min(da, db);
+  };
+  for (std::size_t a = 0; a < ends.size(); ++a)
+    for (std::size_t b = a + 1; b < ends.size() && !used[a]; ++b) {
+      if (used[b] || ends[a].run == ends[b].run) continue;
+      const TipEnd &ea = ends[a], &eb = ends[b];
+      const double hl = std::max(ea.hl, eb.hl), reach = 6.0 * params.radius * hl;
+      if ((ea.point - eb.point).norm() > reach) continue;
+      const double c = ea.direction.dot(eb.direction);
+      if (c > cosMin || c < cosTurn) continue;  // not converging at a small angle
+      bool sharedA = false, sharedB = false;    // which plane of each end is the shared sheet
+      if (planeDistance(ea.crease, eb.point, sharedA) > params.maxLineDistance * hl ||
+          planeDistance(eb.crease, ea.point, sharedB) > params.maxLineDistance * hl)
+        continue;
+      // Closest points of the two lines: ea.point + sa·da and eb.point + tb·db, both ahead.
+      const Eigen::Vector3d w = ea.point - eb.point;
+      const double d = ea.direction.dot(w), e = eb.direction.dot(w);
+      const double sa = (c * e - d) / (1.0 - c * c), tb = (e - c * d) / (1.0 - c * c);
+      if (sa <= 0 || tb <= 0 || sa > reach || tb > reach) continue;
+      const Eigen::Vector3d pa = ea.point + sa * ea.direction, pb = eb.point + tb * eb.direction;
+      if ((pa - pb).norm() > 0.5 * hl) continue;  // the two lines must (nearly) meet
+      Eigen::Vector3d tip = 0.5 * (pa + pb);
+      {
+        // The tip as the three sheets' common point: the shared plane (from the ends' fits: the shared sheet
+        // narrows to nothing at the tip) and the two other sheets' planes, refitted on the points around the
+        // tip that lie nearest to them (within 3·maxResidual).
+        Eigen::Vector3d pn[3] = {sharedA ? ea.crease.normalA : ea.crease.normalB,
+                                 sharedA ? ea.crease.normalB : ea.crease.normalA,
+                                 sharedB ? eb.crease.normalB : eb.crease.normalA};
+        double po[3] = {sharedA ? ea.crease.offsetA : ea.crease.offsetB,
+                        sharedA ? ea.crease.offsetB : ea.crease.offsetA,
+                        sharedB ? eb.crease.offsetB : eb.crease.offsetA};
+        const double tolc = 3.0 * params.maxResidual * hl;
+        std::vector<std::uint32_t> part[3];
+        for (int it = 0; it < 4; ++it) {
+          index.radius(tip, params.radius * hl, idx, d2);
+          partitionByPlanes(cloud.points, idx, pn, po, tolc, part);
+          Eigen::Vector3d tn[3] = {pn[0], pn[1], pn[2]};
+          double to[3] = {po[0], po[1], po[2]};
+          bool fitted = true;
+          for (int k = 1; k < 3 && fitted; ++k)
+            fitted = part[k].size() >= 5 && fitPlane(cloud.points, part[k], tip, params.snapSigma * hl, pn[k],
+                                                     tn[k], to[k]) <= 2.0 * params.maxResidual * hl;
+          if (!fitted) break;
+          Eigen::Matrix3d m;
+          m << tn[0].transpose(), tn[1].transpose(), tn[2].transpose();
+          if (std::abs(m.determinant()) < 0.1) break;
+          const Eigen::Vector3d k3 = m.inverse() * Eigen::Vector3d(to[0], to[1], to[2]);
+          const double moved = (k3 - tip).norm();
+          if (moved > hl) break;
+          for (int k = 1; k < 3; ++k) pn[k] = tn[k], po[k] = to[k];
+          tip = k3;
+          if (moved < 0.1 * hl) break;
+        }
+      }
+      double nearest = 0;
+      index.nearest(tip, &nearest);
+      if (std::sqrt(nearest) > params.maxOffCrease * hl) continue;  // off the surface
+      std::vector<Eigen::Vector3d> fill[2];
+      bool clear = true;
+      for (int side = 0; side < 2 && clear; ++side) {
+        const TipEnd& ek = side ? eb : ea;
+        const double gap = (tip - ek.point).norm();
+        const int pieces = std::max(1, static_cast<int>(std::ceil(gap / ek.step - 0.25)));
+        for (int t = 1; t <= pieces && clear; ++t) {
+          const Eigen::Vector3d q = ek.point + (tip - ek.point) * (static_cast<double>(t) / pieces);
+          clear = !nearPlaced(q, 0.5 * ek.step);
+          fill[side].push_back(q);
+        }
+      }
+      if (!clear) continue;
+      used[a] = used[b] = 1;
+      extension[a] = fill[0];
+      for (const auto& q : fill[1]) {
+        bool near = false;
+        for (const auto& p : extension[a]) near = near || (p - q).norm() < 0.5 * eb.step;
+        if (!near) extension[b].push_back(q);
+      }
+      placed.insert(placed.end(), extension[a].begin(), extension[a].end());
+      placed.insert(placed.end(), extension[b].begin(), extension[b].end());
+    }
+  std::vector<const std::vector<Eigen::Vector3d>*> before(runs.size(), nullptr), after(runs.size(), nullptr);
+  for (std::size_t k = 0; k < ends.size(); ++k)
+    if (!extension[k].empty()) (ends[k].back ? after : before)[ends[k].run] = &extension[k];
+  std::vector<Eigen::Vector3d> result;
+  std::vector<std::uint32_t> resultOwner;
+  for (std::size_t r = 0; r < runs.size(); ++r) {
+    const auto [a, b] = runs[r];
+    if (before[r])
+      for (std::size_t t = before[r]->size(); t-- > 0;)
+        result.push_back((*before[r])[t]), resultOwner.push_back(owner[a]);
+    for (std::size_t t = a; t <= b; ++t) result.push_back(out[t]), resultOwner.push_back(owner[a]);
+    if (after[r])
+      for (const auto& q : *after[r]) result.push_back(q), resultOwner.push_back(owner[a]);
+  }
+  out = std::move(result);
+  owner = std::move(resultOwner);
+}
+
+
+}  // namespace
+
+std::vector<Eigen::Vector3d> snapToCreases(const PointCloud& cloud, const std::vector<Eigen::Vector3d>& samples,
+                                           const std::vector<std::uint32_t>& chainOfSample, double spacing,
+                                           const FeatureParams& params, std::vector<std::uint32_t>* chainOut) {
+  params.validate();
+  if (!(spacing > 0)) throw std::invalid_argument("snapToCreases: spacing must be > 0");
+  if (!cloud.hasNormals()) throw std::invalid_argument("snapToCreases: the cloud needs one normal per point");
+  if (chainOfSample.size() != samples.size())
+    throw std::invalid_argument("snapToCreases: one chain index per sample is needed");
+  const double h = spacing;
+  const std::size_t n = samples.size();
+  const KnnIndex index(cloud.points);
+  // 1. Each sample onto the intersection of its two sheets' local planes (the detector's thresholds).
+  std::vector<Eigen::Vector3d> moved(samples);
+  std::vector<char> good(n, 0);
+  std::vector<Eigen::Vector3d> creaseDir(n, Eigen::Vector3d::Zero());  // of the fit that placed each good sample
+  parallelFor(n, params.threads, [&](std::size_t i) {
+    std::vector<std::uint32_t> idx;
+    std::vector<double> d2;
+    // A chain may run beside its crease (its points come from the detector's unweighted fits): when the crease
+    // is not within maxLineDistance, the sample may jump to it from up to 0.8·radius away.
+    FeatureParams far = params;
+    far.maxLineDistance = std::max(params.maxLineDistance, 0.8 * params.radius);
+    const std::size_t before = i > 0 && chainOfSample[i - 1] == chainOfSample[i] ? i - 1 : i;
+    const std::size_t after = i + 1 < n && chainOfSample[i + 1] == chainOfSample[i] ? i + 1 : i;
+    Eigen::Vector3d along = samples[after] - samples[before];
+    if (along.norm() > 0) along.normalize();  // stays 0 for a lone sample: no jump then
+    bool onCrease = false;
+    const double hl = localSpacing(index, samples[i], h);
+    for (const FeatureParams* prm : {&params, static_cast<const FeatureParams*>(&far)}) {
+      moved[i] = samples[i];
+      onCrease = true;
+      for (int it = 0; it < 2 && onCrease; ++it) {  // re-centred once: the second fit is centred on the crease
+        Crease c;
+        onCrease = snapFit(cloud, index, moved[i], hl, params, it == 0 ? *prm : params, c, idx, d2);
+        // A jump must land on a crease running along the chain (not on another crease meeting it at a corner).
+        if (onCrease && prm == &far && std::abs(c.direction.dot(along)) < std::cos(params.maxChainTurn * kDeg))
+          onCrease = false;
+        if (onCrease) moved[i] = c.point, creaseDir[i] = c.direction;
+      }
+      if (onCrease) break;
+    }
+    if (!onCrease) moved[i] = samples[i];
+    good[i] = onCrease ? 1 : 0;
+    if (onCrease) return;
+    // The looser thresholds of the VCM detector's lines (the chain already says a crease is here), trusted
+    // only for a small correction: a sample extended past the feature would be pulled far.
+    Crease c;
+    if (snapFit(cloud, index, samples[i], hl, params, looseParams(params), c, idx, d2) &&
+        (c.point - samples[i]).norm() <= 0.25 * hl) {
+      moved[i] = c.point;
+      creaseDir[i] = c.direction;
+      good[i] = 1;
+    }
+  });
+  // 2. A sample where no crease fits but whose chain neighbours (≤ 3 samples either way) do goes onto the
+  // chord between them; the others (chain ends past the feature, corners where three sheets meet) are dropped.
+  std::vector<char> keep(good);
+  for (std::size_t i = 0; i < n; ++i) {
+    if (good[i]) continue;
+    std::size_t prev = n, next = n;
+    for (std::size_t j = i; j-- > 0 && i - j <= 3 && chainOfSample[j] == chainOfSample[i];)
+      if (good[j]) {
+        prev = j;
+        break;
+      }
+    for (std::size_t j = i + 1; j < n && j - i <= 3 && chainOfSample[j] == chainOfSample[i]; ++j)
+      if (good[j]) {
+        next = j;
+        break;
+      }
+    if (prev == n || next == n) continue;
+    const Eigen::Vector3d ab = moved[next] - moved[prev];
+    // On a curved crease the chord cuts inside: its sagitta ≈ L·θ/8 (θ the turn between the two ends' crease
+    // directions) must stay below the detector's residual bound.
+    const double cosTurn = std::min(1.0, std::abs(creaseDir[prev].dot(creaseDir[next])));
+    if (ab.norm() * std::acos(cosTurn) / 8.0 > params.maxResidual * h) continue;
+    const double t = std::clamp((samples[i] - moved[prev]).dot(ab) / std::max(ab.squaredNorm(), 1e-300), 0.0, 1.0);
+    const Eigen::Vector3d onChord = moved[prev] + t * ab;
+    if ((onChord - samples[i]).norm() > params.maxLineDistance * h) continue;  // the neighbours disagree
+    moved[i] = onChord;
+    keep[i] = 1;
+  }
+  std::vector<Eigen::Vector3d> out;
+  std::vector<std::uint32_t> owner;
+  for (std::size_t i = 0; i < n; ++i)
+    if (keep[i]) out.push_back(moved[i]), owner.push_back(chainOfSample[i]);
+  traceChainEnds(cloud, index, h, params, out, owner);
+  placeCreaseTips(cloud, index, h, params, out, owner);
+  // 3. Corners: two chain ends whose crease lines, continued forward, meet within a few spacings of both get
+  // a sample where they meet (the end samples of chains stop short of a corner, where the two-plane fit fails).
+  struct End {
+    Eigen::Vector3d point, direction;  // direction: forward, off the end of the chain
+    double step;                       // the chain's sample spacing there
+    std::uint32_t chain;
+    bool filled;                       // already linked to a corner
+  };
+  std::vector<End> ends;
+  for (const auto& [a, b] : ownerRuns(owner))
+    if (b > a) {
+      ends.push_back({out[a], (out[a] - out[a + 1]).normalized(), (out[a] - out[a + 1]).norm(), owner[a], false});
+      ends.push_back({out[b], (out[b] - out[b - 1]).normalized(), (out[b] - out[b - 1]).norm(), owner[a], false});
+    }
+  const double reach = 3.0 * params.radius * h;
+  std::vector<Eigen::Vector3d> corners, cornerPoints;  // all added samples; the corners alone
+  std::vector<std::uint32_t> cornerOwner;
+  // The gap between a chain end and its corner gets samples at the chain's spacing, on the straight line.
+  auto fill = [&](End& e, const Eigen::Vector3d& corner) {
+    if (e.filled) return;
+    e.filled = true;
+    const double gap = (corner - e.point).norm();
+    const int pieces = static_cast<int>(std::ceil(gap / std::max(e.step, 1e-300) - 0.25));
+    for (int k = 1; k < pieces; ++k) {
+      corners.push_back(e.point + (corner - e.point) * (static_cast<double>(k) / pieces));
+      cornerOwner.push_back(e.chain);
+    }
+  };
+  for (std::size_t a = 0; a < ends.size(); ++a)
+    for (std::size_t b = a + 1; b < ends.size(); ++b) {
+      End &ea = ends[a], &eb = ends[b];
+      if (ea.chain == eb.chain || (ea.point - eb.point).norm() > reach) continue;
+      // Closest points of the two lines: ea.point + s·da and eb.point + t·db.
+      const double c = ea.direction.dot(eb.direction);
+      if (1.0 - c * c < 0.05) continue;  // nearly parallel (under 13°): no corner between them
+      const Eigen::Vector3d w = ea.point - eb.point;
+      const double d = ea.direction.dot(w), e = eb.direction.dot(w);
+      const double sa = (c * e - d) / (1.0 - c * c), tb = (e - c * d) / (1.0 - c * c);
+      if (sa < -0.5 * h || tb < -0.5 * h || sa > reach || tb > reach) continue;
+      const Eigen::Vector3d pa = ea.point + sa * ea.direction, pb = eb.point + tb * eb.direction;
+      if ((pa - pb).norm() > 0.5 * h) continue;  // the two lines must (nearly) meet
+      Eigen::Vector3d corner = 0.5 * (pa + pb);
+      double nearest = 0;
+      index.nearest(corner, &nearest);
+      if (std::sqrt(nearest) > params.maxOffCrease * h) continue;  // the lines meet off the surface
+      // A corner the tracing already placed (or any sample there): nothing to add.
+      bool taken = false;
+      for (const auto& q : out)
+        if ((q - corner).norm() < 0.5 * std::min(ea.step, eb.step)) taken = true;
+      if (taken) continue;
+      bool dup = false;
+      for (const auto& q : cornerPoints)
+        if ((q - corner).norm() < h) dup = true, corner = q;
+      if (!dup) {
+        cornerPoints.push_back(corner);
+        corners.push_back(corner);
+        cornerOwner.push_back(ea.chain);
+      }
+      fill(ea, corner);
+      fill(eb, corner);
+    }
+  owner.insert(owner.end(), cornerOwner.begin(), cornerOwner.end());
+  out.insert(out.end(), corners.begin(), corners.end());
+  fillCreaseGaps(cloud, index, h, params, out, owner);
+  refineOnCurvedSheets(cloud, index, h, params, out);
+  if (chainOut) *chainOut = std::move(owner);
+  return out;
+}
+
+}  // namespace iires

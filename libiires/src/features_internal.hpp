@@ -1,0 +1,119 @@
+#pragma once
+// The pieces the feature pipeline's units share (detection, chains, crease tracing and snapping): the local
+// two-plane crease fit and its helpers. Internal to libiires.
+
+#include <Eigen/Core>
+#include <cmath>
+#include <cstdint>
+#include <utility>
+#include <vector>
+
+#include "iires/features.hpp"
+#include "iires/knn.hpp"
+#include "iires/types.hpp"
+
+namespace iires::detail {
+
+constexpr double kDeg = M_PI / 180.0;
+constexpr std::size_t kMaxFitPoints = 200;  // a snap fit uses at most this many input points, the nearest
+
+/// The crease at a point: the intersection line of two fitted planes.
+struct Crease {
+  bool valid = false;
+  Eigen::Vector3d point = Eigen::Vector3d::Zero();  ///< the query point projected onto the line
+  Eigen::Vector3d direction = Eigen::Vector3d::Zero();
+  Eigen::Vector3d normalA = Eigen::Vector3d::Zero(), normalB = Eigen::Vector3d::Zero();  ///< the two planes
+  double offsetA = 0, offsetB = 0;                                                      ///< normal·x = offset
+};
+
+/// The spacing the fits at @p y work with: the global spacing @p h, or the local one (mean distance to the 6
+/// nearest points) where the sampling is sparser, so a neighbourhood of `radius` spacings always holds about
+/// the same number of points (non-uniform scans: a fixed radius leaves the sparse parts with too few).
+double localSpacing(const KnnIndex& index, const Eigen::Vector3d& y, double h);
+
+/// Plane through the (weighted) centroid of @p pts (indices into @p points) by PCA; returns the (weighted) RMS
+/// residual. @p sigma > 0: point q has weight exp(−|q − p|²/σ²); 0 = all weights 1.
+double fitPlane(const std::vector<Eigen::Vector3d>& points, const std::vector<std::uint32_t>& idx,
+                const Eigen::Vector3d& p, double sigma, const Eigen::Vector3d& hint, Eigen::Vector3d& normal,
+                double& offset);
+
+/// The point of the line {x : na·x = oa, nb·x = ob} (unit normals) nearest @p p: x = p + α na + β nb.
+Eigen::Vector3d lineNearest(const Eigen::Vector3d& na, double oa, const Eigen::Vector3d& nb, double ob,
+                            const Eigen::Vector3d& p);
+
+/// Two-plane fit of the neighbourhood @p nbr of the point @p p (the normal-variation test). Returns whether the
+/// point is on a crease by the thresholds in @p prm; fills @p crease. @p sigma > 0: the plane fits weight each
+/// point by exp(−d²/σ²), d its distance to p (local planes: less bias from curved sheets); 0 = unweighted.
+bool twoPlaneTest(const std::vector<Eigen::Vector3d>& points, const std::vector<Eigen::Vector3d>& normals,
+                  const Eigen::Vector3d& p, const std::vector<std::uint32_t>& nbr, double h, const FeatureParams& prm,
+                  Crease& crease, double sigma = 0);
+
+/// The snap fit at @p y: twoPlaneTest() with thresholds @p prm on the input points within params.radius local
+/// spacings @p hl of y (the kMaxFitPoints nearest), weighted at params.snapSigma·hl. @p idx keeps that
+/// neighbourhood for a caller that refits part of it; @p d2 is scratch.
+bool snapFit(const PointCloud& cloud, const KnnIndex& index, const Eigen::Vector3d& y, double hl,
+             const FeatureParams& params, const FeatureParams& prm, Crease& c, std::vector<std::uint32_t>& idx,
+             std::vector<double>& d2);
+
+/// The looser thresholds of the VCM detector's lines, for a snap fit where a chain already says a crease is:
+/// any angle over 1°, twice the residual, half the cluster share.
+FeatureParams looseParams(const FeatureParams& params);
+
+/// The crease at @p y running along ±@p dir (within params.maxChainTurn): the snap fit, else two planes fitted
+/// on the points behind y only (an end where the crease stops ahead, or another crease crowds the ball ahead);
+/// @p oneSided says the second held. @p idx keeps the ball, @p d2 and @p behind are scratch.
+bool creaseAlong(const PointCloud& cloud, const KnnIndex& index, const Eigen::Vector3d& y,
+                 const Eigen::Vector3d& dir, double hl, const FeatureParams& params, Crease& c,
+                 std::vector<std::uint32_t>& idx, std::vector<double>& d2, std::vector<std::uint32_t>& behind,
+                 bool& oneSided);
+
+/// Each of @p idx to the nearest of three planes (n·x = o), if within @p tol of it: @p part[k] for plane k.
+void partitionByPlanes(const std::vector<Eigen::Vector3d>& points, const std::vector<std::uint32_t>& idx,
+                       const Eigen::Vector3d (&n)[3], const double (&o)[3], double tol,
+                       std::vector<std::uint32_t> (&part)[3]);
+
+/// [first, last] of each run of consecutive samples with the same @p owner (one chain's samples), in order.
+std::vector<std::pair<std::size_t, std::size_t>> ownerRuns(const std::vector<std::uint32_t>& owner);
+
+/// Chains (paths of crease points, finished: fitted, trimmed, joined, extended to their corners) from the
+/// feature points @p x0 with crease directions @p d0.
+std::vector<FeatureChain> buildChains(const std::vector<Eigen::Vector3d>& x0,
+                                      const std::vector<Eigen::Vector3d>& d0, double h, const FeatureParams& prm);
+
+/// Continue every open run of chain samples (@p out, consecutive samples of one chain in @p owner) along its
+/// crease: from the end sample, step forward by the run's end spacing, fit the two sheets' local planes there
+/// (the snap fit) and put the next sample on their intersection, while the fit passes the detector's thresholds,
+/// its crease runs along the run (within maxChainTurn) and the new sample is not within 0.75 steps of a sample
+/// already placed (then the gap to another chain, or to the run's own other end, is bridged). Where the full
+/// ball fails, the two sheets are fitted on the half-ball behind the prediction; if the points ahead that
+/// neither plane explains fit a third plane, the crease ends at a corner on it: the gap to the corner is filled,
+/// a corner sample placed, and the corner's two other creases (the third plane's intersections with the two
+/// sheets, on the side where each sheet lies) are followed as new runs: along the known planes while the points
+/// around stay explained by them, handing over to the stepped fit once it holds. Fills the stretches of a crease
+/// the detector missed, brings the ends into their corners and recovers short creases between corners.
+/// New runs get chain indices after the existing ones. Sequential in a fixed order (each trace sees the
+/// samples placed before it): deterministic.
+void traceChainEnds(const PointCloud& cloud, const KnnIndex& index, double h, const FeatureParams& params,
+                    std::vector<Eigen::Vector3d>& out, std::vector<std::uint32_t>& owner);
+
+/// Step 5 of snapToCreases(): fill the gaps the tracing and the corners leave between neighbouring samples.
+/// Two samples a, b more than 1.5 × the chains' median spacing (`step`) and at most 6 steps apart, with no other
+/// sample within 0.45 × their distance of their midpoint and half a step of the line a–b (nothing lies between
+/// them), get samples at ≤ step on the crease between them, each
+///  - at the snap fit's crease point near its chord point (the fitted crease running along a→b within
+///    maxChainTurn, its point within 0.3 step of the chord), else
+///  - on the fitted crease line of a or b where that line runs along a→b and passes within 0.1 step of the
+///    chord point, else
+///  - on the chord itself where the samples run on in line through a and b: a sample 0.5–1.6 steps behind a
+///    (and one behind b) lies within 20° (or 0.15 step) of the line a–b (both for gaps over 4.5 steps; one of
+///    them suffices for shorter ones, as next to a corner, where the corner sample has no neighbour in line).
+///    This fills the holes where no two-plane fit holds (a plane beside a small-radius cylinder, a corner's
+///    neighbourhood), which the tracing cannot step through.
+/// A gap where one new sample has none of these is left open (two creases meeting, not one). Each new sample
+/// lies within 1.5·maxOffCrease (local) spacings of an input point (an edge point of a random sampling may have
+/// none within one spacing). Sequential in sample order, each gap seeing the samples added before it:
+/// deterministic. The new samples are appended, owned by a's chain.
+void fillCreaseGaps(const PointCloud& cloud, const KnnIndex& index, double h, const FeatureParams& params,
+                    std::vector<Eigen::Vector3d>& out, std::vector<std::uint32_t>& owner);
+
+}  // namespace iires::detail
