@@ -18,6 +18,9 @@ using Clock = std::chrono::steady_clock;
 constexpr std::size_t kSpacingNeighbours = 6;  // l = mean distance to the 6 nearest neighbours (paper §6.1)
 constexpr std::size_t kNearPlaneSheets = 4;  // a flagged point's trusted neighbours whose planes are tried
 constexpr std::size_t kNearPlanePoints = 9;     // the nearest trusted point and its 8 nearest trusted neighbours
+/// A point whose spacing exceeds this many times the cloud's 90th-percentile spacing is an outlier, whatever its
+/// neighbours: sparse parts of real scans stay well within it, a point diagonals away from the object does not.
+constexpr double kIsolation = 10.0;
 
 void checkCloud(const PointCloud& cloud, std::size_t minPoints) {
   if (cloud.empty()) throw InputError("processOutliers: the cloud is empty");
@@ -50,6 +53,85 @@ double median(std::vector<double>& v) {
   const auto mid = v.begin() + static_cast<long>(v.size() / 2);
   std::nth_element(v.begin(), mid, v.end());
   return *mid;
+}
+
+/// The q-quantile of @p values (a copy is partially sorted).
+double quantile(std::vector<double> values, double q) {
+  const auto at = values.begin() + static_cast<long>(q * static_cast<double>(values.size() - 1));
+  std::nth_element(values.begin(), at, values.end());
+  return *at;
+}
+
+
+/// Drops the points flagged in @p drop (and their normals and attributes) from @p input into @p result.cloud.
+void removeOutliers(const PointCloud& input, const std::vector<std::uint8_t>& drop, OutlierResult& result) {
+  const bool normals = input.hasNormals();
+  result.cloud = PointCloud{};
+  std::vector<const PointAttribute*> carried;  // those with one value per point
+  for (const PointAttribute& a : input.attributes)
+    if (a.values.size() == input.size()) {
+      carried.push_back(&a);
+      result.cloud.attributes.push_back({a.name, a.kind, a.type, {}});
+    }
+  for (std::size_t i = 0; i < input.size(); ++i) {
+    if (drop[i]) continue;
+    result.cloud.points.push_back(input.points[i]);
+    if (normals) result.cloud.normals.push_back(input.normals[i]);
+    for (std::size_t a = 0; a < carried.size(); ++a) result.cloud.attributes[a].values.push_back(carried[a]->values[i]);
+  }
+  result.removed = input.size() - result.cloud.size();
+}
+
+/// eq. (5): projects each outlier onto the MLS plane of its nearest trusted point q's neighbourhood. Points
+/// flagged in @p isolated (far from the object) have no surface to land on and are removed instead; so is an
+/// outlier whose projection lands more than twice the fit's support radius h from a(q), where the plane no
+/// longer stands for the surface.
+void pullOutliers(const PointCloud& input, const OutlierParams& params, const std::vector<std::uint8_t>& trusted,
+                  const std::vector<std::uint8_t>& isolated, OutlierResult& result) {
+  const std::size_t n = input.size();
+  const auto& P = input.points;
+  const std::size_t fitK = static_cast<std::size_t>(std::max(params.planeNeighbours, params.k)) + 1;
+  std::vector<std::uint8_t> outlier(n, 0);
+  for (std::uint32_t o : result.outliers) outlier[o] = 1;
+  // Pull targets are *trusted* points (mutual, not outliers): an undetected outlier never serves as q.
+  std::size_t trustedCount = 0;
+  for (std::size_t i = 0; i < n; ++i) trustedCount += trusted[i];
+  const bool useTrusted = trustedCount >= fitK;
+  const bool normals = input.hasNormals();
+  std::vector<Eigen::Vector3d> cleanPoints, cleanNormals;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (useTrusted ? !trusted[i] : outlier[i]) continue;
+    cleanPoints.push_back(P[i]);
+    if (normals) cleanNormals.push_back(input.normals[i]);
+  }
+  result.cloud = input;
+  std::vector<std::uint8_t> unsupported = isolated;
+  const std::optional<KnnIndex> cleanTree =
+      cleanPoints.size() >= 3 ? std::optional<KnnIndex>(std::in_place, cleanPoints) : std::nullopt;
+  parallelFor(cleanTree ? result.found : 0, params.threads, [&](std::size_t a) {
+    const std::uint32_t o = result.outliers[a];
+    if (isolated[o]) return;
+    const auto q = static_cast<std::size_t>(cleanTree->nearest(P[o]));
+    std::vector<std::uint32_t> idx;
+    std::vector<double> d2;
+    const std::size_t f = cleanTree->knn(cleanPoints[q], fitK, idx, d2);
+    const double h = std::sqrt(d2[f - 1]) > 0 ? std::sqrt(d2[f - 1]) : 1.0;
+    const Eigen::Vector3d qn = normals ? cleanNormals[q] : Eigen::Vector3d(Eigen::Vector3d::Zero());
+    const MlsPlane plane = fitMlsPlane(cleanPoints[q], cleanPoints, idx.data(), f, h, nullptr, qn);
+    const Eigen::Vector3d pulled = projectOntoPlane(P[o], plane);
+    if (!((pulled - plane.centre).norm() <= 2 * h)) {
+      unsupported[o] = 1;
+      return;
+    }
+    result.cloud.points[o] = pulled;
+    if (normals) result.cloud.normals[o] = plane.normal;
+  });
+  const std::size_t dropped = static_cast<std::size_t>(std::count(unsupported.begin(), unsupported.end(), 1));
+  result.pulled = cleanTree ? result.found - dropped : 0;
+  if (dropped > 0) {
+    const PointCloud pulledCloud = std::move(result.cloud);
+    removeOutliers(pulledCloud, unsupported, result);
+  }
 }
 
 }  // namespace
@@ -154,6 +236,11 @@ OutlierResult processOutliers(const PointCloud& input, const OutlierParams& para
   // outliers can be mutual among itself). Trusted = mutual and near its plane.
   std::vector<std::uint8_t> outlier(n, 0), trusted(n, 0);
   std::vector<double> localSpacing(n, 0.0);
+  // Isolated points: every local test above compares a point with its neighbours, and points scattered far from
+  // the object (and from each other) are each other's neighbours. Against the whole cloud they stand out: their
+  // spacing is many times the spacing of the sparsest tenth of the cloud.
+  const double isolation = kIsolation * quantile(spacing, 0.9);
+  std::vector<std::uint8_t> isolated(n, 0);
   forEachPoint([&](std::size_t i) {
     const std::uint32_t* ri = row(i);
     const std::size_t ki = std::min<std::size_t>(planeK + 1, count[i]);
@@ -177,7 +264,8 @@ OutlierResult processOutliers(const PointCloud& input, const OutlierParams& para
         if (!suspect[rq[a]]) near.push_back(rq[a]);
       off = near.size() >= 3 && planeDistance(P[i], P, near) / local > params.nearPlaneThreshold;
     }
-    outlier[i] = (suspect[i] && off) || ratio > 2 * params.planeThreshold;
+    isolated[i] = spacing[i] > isolation;
+    outlier[i] = (suspect[i] && off) || ratio > 2 * params.planeThreshold || isolated[i];
     trusted[i] = !suspect[i] && ratio <= params.planeThreshold;
     localSpacing[i] = local;
   });
@@ -212,58 +300,18 @@ OutlierResult processOutliers(const PointCloud& input, const OutlierParams& para
     if (outlier[i]) result.outliers.push_back(static_cast<std::uint32_t>(i));
   result.found = result.outliers.size();
 
-  if (params.mode == OutlierMode::kRemove) {
-    result.cloud.points.reserve(n - result.found);
-    const bool normals = input.hasNormals();
-    for (std::size_t i = 0; i < n; ++i) {
-      if (outlier[i]) continue;
-      result.cloud.points.push_back(P[i]);
-      if (normals) result.cloud.normals.push_back(input.normals[i]);
-    }
-    result.removed = result.found;
-  } else {
-    result.cloud = input;
-    // Pull targets are *trusted* points (mutual, not outliers): an undetected outlier never serves as q.
-    std::size_t trustedCount = 0;
-    for (std::size_t i = 0; i < n; ++i) trustedCount += trusted[i];
-    const bool useTrusted = trustedCount >= std::max(planeK, k) + 1;
-    auto target = [&](std::size_t i) { return useTrusted ? trusted[i] != 0 : !outlier[i]; };
-    const std::size_t clean = useTrusted ? trustedCount : n - result.found;
-    // The pull fit uses q's planeNeighbours nearest non-outliers with h = the distance to the farthest of
-    // them, so all of them count: a stable plane under noise (eq. 5's MLS plane at a(q)).
-    const std::size_t fitK = std::max(planeK, k) + 1;
-    if (params.mode == OutlierMode::kPull && result.found > 0 && clean >= 3) {
-      // eq. (5): project each outlier onto the MLS plane of its nearest non-outlier's neighbourhood.
-      std::vector<Eigen::Vector3d> cleanPoints;
-      std::vector<Eigen::Vector3d> cleanNormals;
-      cleanPoints.reserve(clean);
-      const bool normals = input.hasNormals();
-      for (std::size_t i = 0; i < n; ++i) {
-        if (!target(i)) continue;
-        cleanPoints.push_back(P[i]);
-        if (normals) cleanNormals.push_back(input.normals[i]);
-      }
-      if (!normals) result.cloud.normals.clear();
-      const KnnIndex cleanTree(cleanPoints);
-      parallelFor(result.found, params.threads, [&](std::size_t a) {
-        const std::uint32_t o = result.outliers[a];
-        const std::int64_t q = cleanTree.nearest(P[o]);
-        std::vector<std::uint32_t> idx;
-        std::vector<double> d2;
-        const std::size_t f = cleanTree.knn(cleanPoints[static_cast<std::size_t>(q)], fitK, idx, d2);
-        const double h = std::sqrt(d2[f - 1]);
-        const Eigen::Vector3d qn =
-            normals ? cleanNormals[static_cast<std::size_t>(q)] : Eigen::Vector3d(Eigen::Vector3d::Zero());
-        const MlsPlane plane = fitMlsPlane(cleanPoints[static_cast<std::size_t>(q)], cleanPoints, idx.data(),
-                                           f, h > 0 ? h : 1.0, nullptr, qn);
-        result.cloud.points[o] = projectOntoPlane(P[o], plane);
-        if (normals) result.cloud.normals[o] = plane.normal;
-      });
-      result.pulled = result.found;
-    }
-  }
+  if (params.mode == OutlierMode::kPull) pullOutliers(input, params, trusted, isolated, result);
+  if (params.mode == OutlierMode::kRemove) removeOutliers(input, outlier, result);
+  if (params.mode == OutlierMode::kKeep) result.cloud = input;
   result.seconds = std::chrono::duration<double>(Clock::now() - start).count();
   return result;
+}
+
+PointCloud cleanOutliers(const PointCloud& cloud, const OutlierParams& params, std::size_t* found) {
+  if (params.mode == OutlierMode::kKeep || cloud.size() <= outlierNeighbours(params)) return cloud;
+  OutlierResult cleaned = processOutliers(cloud, params);
+  if (found) *found += cleaned.found;
+  return std::move(cleaned.cloud);
 }
 
 }  // namespace iires
