@@ -11,7 +11,9 @@
 #include <iterator>
 
 #include "iires/io.hpp"
+#include "iires/outliers.hpp"
 #include "iires/reconstruct/reconstruct.hpp"
+#include "iires/register/registration.hpp"
 #include "iires/resample.hpp"
 #include "iires/sampling.hpp"
 #include "shapes.hpp"
@@ -182,6 +184,42 @@ TEST(Attributes, ColoursDoNotBleedAcrossAThinGap) {
   EXPECT_LE(kept.mixed, kept.checked / 100);
   EXPECT_LE(kept.wrongLabel, kept.checked / 100);
   EXPECT_GT(mixed.mixed, mixed.checked / 3);
+}
+
+TEST(Attributes, AlignedCloudKeepsItsAttributes) {
+  PointCloud cloud;
+  cloud.points = {{0, 0, 0}, {1, 0, 0}};
+  cloud.attributes.push_back({"label", AttributeKind::kLabel, "int", {4, 5}});
+  Eigen::Matrix4d T = Eigen::Matrix4d::Identity();
+  T(0, 3) = 2;
+  const PointCloud moved = iires::reg::transformCloud(cloud, T);
+  EXPECT_EQ(moved.points[1].x(), 3.0);
+  ASSERT_EQ(moved.attributes.size(), 1u);
+  EXPECT_EQ(moved.attributes[0].values, (std::vector<double>{4, 5}));
+}
+
+// iires-register -o writes the source without its outliers: the points that stay keep their own values.
+TEST(Attributes, RemovedOutliersTakeTheirValuesAlong) {
+  PointCloud cloud = iires::test::sphereCloud(4000, 1.0, 8);
+  for (int i = 0; i < 5; ++i) cloud.points.emplace_back(50.0 + 10 * i, 40.0, -30.0);  // far points
+  cloud.normals.clear();
+  PointAttribute id{"id", AttributeKind::kLabel, "int", {}};
+  for (std::size_t i = 0; i < cloud.size(); ++i) id.values.push_back(static_cast<double>(i));
+  cloud.attributes = {id};
+  for (const iires::OutlierMode mode : {iires::OutlierMode::kRemove, iires::OutlierMode::kPull}) {
+    iires::OutlierParams params;
+    params.mode = mode;
+    const PointCloud cleaned = iires::cleanOutliers(cloud, params);
+    ASSERT_LE(cleaned.size(), 4000u);
+    ASSERT_EQ(cleaned.attributes.size(), 1u);
+    ASSERT_EQ(cleaned.attributes[0].values.size(), cleaned.size());
+    std::size_t same = 0;  // kept points (not pulled) carry their own id
+    for (std::size_t i = 0; i < cleaned.size(); ++i) {
+      const auto original = static_cast<std::size_t>(cleaned.attributes[0].values[i]);
+      same += (cleaned.points[i] - cloud.points[original]).norm() == 0.0;
+    }
+    EXPECT_GT(same, 3900u);
+  }
 }
 
 TEST(Attributes, NoAttributesNoStage) {

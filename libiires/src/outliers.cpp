@@ -63,14 +63,21 @@ double quantile(std::vector<double> values, double q) {
 }
 
 
-/// Drops the points flagged in @p drop (and their normals) from @p input into @p result.cloud.
+/// Drops the points flagged in @p drop (and their normals and attributes) from @p input into @p result.cloud.
 void removeOutliers(const PointCloud& input, const std::vector<std::uint8_t>& drop, OutlierResult& result) {
   const bool normals = input.hasNormals();
   result.cloud = PointCloud{};
+  std::vector<const PointAttribute*> carried;  // those with one value per point
+  for (const PointAttribute& a : input.attributes)
+    if (a.values.size() == input.size()) {
+      carried.push_back(&a);
+      result.cloud.attributes.push_back({a.name, a.kind, a.type, {}});
+    }
   for (std::size_t i = 0; i < input.size(); ++i) {
     if (drop[i]) continue;
     result.cloud.points.push_back(input.points[i]);
     if (normals) result.cloud.normals.push_back(input.normals[i]);
+    for (std::size_t a = 0; a < carried.size(); ++a) result.cloud.attributes[a].values.push_back(carried[a]->values[i]);
   }
   result.removed = input.size() - result.cloud.size();
 }

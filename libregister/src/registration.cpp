@@ -298,6 +298,7 @@ PointCloud transformCloud(const PointCloud& cloud, const Eigen::Matrix4d& T) {
     out.normals.reserve(cloud.normals.size());
     for (const auto& v : cloud.normals) out.normals.push_back((n * v).normalized());
   }
+  out.attributes = cloud.attributes;  // colours, intensities, labels do not depend on the frame
   return out;
 }
 

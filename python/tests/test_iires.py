@@ -162,12 +162,12 @@ def test_bad_parameters():
 
 
 def test_gil_is_released_while_computing():
-    p = sphere(60000, seed=9)
+    p = sphere(30000, seed=9)
     done = threading.Event()
     ticks = []
 
     def work():
-        iires.resample(p, 20000, threads=1)
+        iires.resample(p, 6000, threads=1)
         done.set()
 
     worker = threading.Thread(target=work)
