@@ -170,9 +170,9 @@ struct SheetState {
     return sameSheet(points[i], normals[i], points[j], normals[j], tolerance, minDot);
   }
   bool loose(std::size_t i, std::size_t j) const { return same(i, j, params.heightSpacings); }
-  /// The final rule: two points whose whole rows lie on their planes are on one sheet.
+  /// The final rule: a point whose whole row lies on its plane has only its sheet's points in it.
   bool final(std::size_t i, std::size_t j) const {
-    return (plain[i] && plain[j]) || same(i, j, params.finalHeightSpacings);
+    return plain[i] || plain[j] || same(i, j, params.finalHeightSpacings);
   }
   /// PCA normal of point i over its first pcaK same-sheet (loose) neighbours, or its normal when too few.
   Eigen::Vector3d sheetFit(std::size_t i) const {
