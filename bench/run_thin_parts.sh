@@ -13,4 +13,5 @@ export THIN_PARTS_NO_DENOISE_ONLY=1
 "$B" plate 100000 3 0 2000
 "$B" spheres 100000 2.5 0 2000
 "$B" nested 100000 3 0 2000
+unset THIN_PARTS_NO_DENOISE_ONLY
 "$B" sheets 50000 2.5 0.2 1000  # with the --denoise-only line
