@@ -20,7 +20,10 @@
 //                  [--partial (= --cut 0.25)] [--outliers F] [--overlap F] [--symmetric knot1,...] [--seed S]
 //                  [--threads T] [--methods iires,iires-euler,o3d-fpfh,o3d-fpfh-norm,o3d-icp]
 //                  [--source-count N] [--target-count N] [--samples M] [--so3-count K] [--thin F] [--icp-candidates C]
-//                  [--resample preprocess=0,intrinsic=0,maxPasses=4,...] [--verbose]
+//                  [--resample preprocess=0,intrinsic=0,maxPasses=4,...]
+//                  [--search coarsePoints=96,coarseKeep=48,fullKeep=48,keep=12,minSeparationDeg=25,refineLevels=0,
+//                            screenIterations=8,searchOverlaps=1:0.8:0.6,searchOverlapExponent=2,fitOverlapExponent=2.5]
+//                  [--verbose]
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <chrono>
