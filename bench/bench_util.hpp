@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
 /// @file bench_util.hpp
 /// @brief Small helpers shared by the benchmark executables (not part of the library).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // denoise_bench: iires pre-processing (outliers eq. 4–5 + MLS denoising eq. 1–3) against CGAL's
 // jet_smooth_point_set and bilateral_smooth_point_set, side by side on the same inputs (paper §6.1 protocol).
 //

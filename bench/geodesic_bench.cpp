@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // Benchmark: geodesic coordinates (paper §3.2) of a 1M-point dense sampling of armadillo. Prints key=value.
 // Usage: geodesic_bench [MESH.off] [POINTS] [THREADS]
 #include <chrono>

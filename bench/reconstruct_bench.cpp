@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // reconstruct_bench: the side-by-side reconstruction table (issues 7 and 20). For each model: a dense sampling of
 // the true mesh (area-uniform, or with a density gradient along the longest axis) without normals, like a scan —
 // or a real point set of the corpus as it is — → isotropic resampling to N (iires) → the same N points meshed by

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // register_bench: the registration acceptance trials (issues 6 and 21), iires-register vs Open3D baselines on
 // the same inputs.
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // Resampling benchmark: iires vs Open3D farthest-point and voxel down-sampling on the same non-uniform dense
 // sampling of a CGAL model, in one run. Prints one key=value line per (model, input, N, method).
 // Usage: resample_bench MESH INPUT_COUNT N [N ...] [--density-ratio R] [--fps-limit X] [--threads T] [--no-peers]

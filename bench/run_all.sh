@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: GPL-3.0-or-later
 # Run the benchmark suite and regenerate BENCHMARKS.md (not part of CI).
 # Usage: bash bench/run_all.sh [quick|full]   (quick: ≈ 20–30 min on 2 cores; full adds the 5M-point grid)
 # Raw key=value lines, the grid plot and the generated tables go to bench/results/.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // Sharp-edge benchmark (issue 5; the paper's Table 4 protocol): iires isotropic and --sharp-edges against CGAL
 // WLOP and an EAR-style CGAL pipeline (WLOP → bilateral smoothing → edge-aware upsampling) on the same dense
 // sampling of a CAD mesh, N = 10k and 20k. Prints one key=value line per (model, input, N, method):

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 # Warnings and sanitizer flags for this project's own targets only.
 # IIRES_SANITIZE: AddressSanitizer + UndefinedBehaviorSanitizer; every UBSan finding aborts the program
 # (-fno-sanitize-recover=all), so a test that triggers one fails instead of passing with a printed report.

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: GPL-3.0-or-later
 # Extract models of CGAL's data archive into datasets/cache/ (see datasets/README.md).
 #
 #   bash datasets/fetch.sh                  the default set used by the tests and benchmarks

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: GPL-3.0-or-later
 """From an Open3D point cloud to iires and back (not run in CI: Open3D's Python package, Debian's
 python3-open3d, is optional).
 

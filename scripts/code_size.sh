@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: GPL-3.0-or-later
 # Report source files over 800 lines and functions over 150 lines in the libraries, tools and tests (the
 # project's size limits, CONVENTIONS.md). Prints a warning list; exits 0 (CI shows it, nothing fails on it).
 # Usage: bash scripts/code_size.sh [--max-file N] [--max-function N]

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: GPL-3.0-or-later
 # Set everything up, then resample a real scan: a dense, deliberately non-uniform 200k-point sampling of
 # the Stanford bunny (CGAL's bunny00) to exactly 10,000 isotropic points, written to out/bunny_10k.ply.
 set -euo pipefail

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: GPL-3.0-or-later
 # Install the given Debian packages that are not installed yet (root, or sudo).
 # Usage: bash scripts/install_packages.sh PACKAGE...
 set -euo pipefail

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Turn reconstruct_bench's key=value lines (stdin) into the Markdown table of BENCHMARKS.md (issue 7)."""
 import re
 import sys

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: GPL-3.0-or-later
 # Install the Debian packages iires needs (only those missing), then configure and build into build/ with the
 # Python module (-DIIRES_PYTHON=ON, built for Debian's /usr/bin/python3, which has the python3-* packages).
 # Usage: bash scripts/setup.sh [extra cmake -D options]

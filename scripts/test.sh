@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: GPL-3.0-or-later
 # Set everything up, fetch the real test data, build the tests and run the whole suite (with iires-render's
 # tests, which need matplotlib).
 set -euo pipefail

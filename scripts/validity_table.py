@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Turn reconstruct_bench's key=value lines (files or stdin) into issue 20's Markdown table: validity, topology,
 shape, both Hausdorff directions, uncovered input, time; then a summary of the acceptance checks per method."""
 import fileinput

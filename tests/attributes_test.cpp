@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // Per-point attributes: interpolation onto new points, through resample() and reconstruct(), and in and out
 // of the file formats and the tools.
 #include "iires/attributes.hpp"

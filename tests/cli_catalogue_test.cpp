@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // The bad-input catalogue (DESIGN §6, issue 9): every tool that reads a cloud, every entry. A rejected input
 // must give exit code 2, a message naming the file and the problem, no output file (not even a temporary one)
 // and an untouched input. The degenerate-but-valid entries (a planar cloud, a small object far from the origin)

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // Regression tests for inputs the libFuzzer targets (tests/fuzz/) found. Each test rebuilds the crashing input
 // the way the harness decodes it and checks the fixed behaviour.
 #include <gtest/gtest.h>

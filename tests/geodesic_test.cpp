@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // Tests for geodesic.hpp: graph distances against exact geodesics, components and satellites, thin gaps,
 // determinism, validation, export.
 #include "iires/geodesic.hpp"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // Hostile inputs and flags (DESIGN §6, issue 26): far outliers never reach an output, every numeric flag is
 // range-checked, a run's outputs are committed together or not at all, and the messages say what is wrong.
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // Tests for intrinsic.hpp: the intrinsic neighbour rule alone and inside the resampler (issue 3 acceptance).
 #include "iires/intrinsic.hpp"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // Tests of mesh_quality.hpp: the formulas on known triangles, topology counts on known meshes, distances.
 #include <gtest/gtest.h>
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // Tests of triangulate.hpp, mesh_repair.hpp, advancing_front.hpp and reconstruct.hpp (+ the CLI).
 #include <gtest/gtest.h>
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // End-to-end acceptance of the isotropic resampler on CGAL's real models (issue: foundation).
 #include <gtest/gtest.h>
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // Tests of self_intersections.hpp: known pairs on small meshes (a piercing triangle, a fold over a common edge,
 // a face through a neighbour's vertex), none on closed convex meshes, degenerate faces apart.
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
 // Synthetic shapes with known answers for the tests.
 #include <Eigen/Core>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
 // Shared plumbing of the iires command-line tools: error → exit-code mapping, argument parsing, the
 // input/output guards every tool runs before any work, and the version string.

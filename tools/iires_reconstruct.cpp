@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // iires-reconstruct: a triangle mesh of near-equilateral triangles from a point cloud, with a quality report.
 #include <CLI/CLI.hpp>
 #include <cstdio>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // iires-register: align SOURCE to TARGET (any rotation, scale, translation, density) without features.
 #include <CLI/CLI.hpp>
 #include <iostream>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // iires-resample: resample a point cloud to exactly N points, uniformly spaced on its surface.
 #include <CLI/CLI.hpp>
 #include <cmath>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // iires-sample-mesh: draw a (noisy, non-uniform, outlier-ridden) test cloud from a mesh (DESIGN §7).
 #include <CLI/CLI.hpp>
 #include <cmath>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
 // A small progress reporter for the tools: "<tool>: <stage> 42%" on stderr.
 #include <chrono>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
 // Temporary files that become outputs only when a run commits them (io's OutputBatch), and their removal
 // when the process is interrupted. Internal to libiires.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // The local crease fit: two planes fitted to a neighbourhood, the crease as their intersection line.
 #include "features_internal.hpp"
 

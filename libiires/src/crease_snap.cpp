@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // snapToCreases(): feature samples moved exactly onto their creases (curved sheets, tips, corners).
 #include "features_internal.hpp"
 

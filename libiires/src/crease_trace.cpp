@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // Crease tracing: continuing chain ends along the crease, into corners and across the detector's gaps.
 #include "features_internal.hpp"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // Feature chains: crease points linked into finished polylines, and their sampling by arc length.
 #include "features_internal.hpp"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // Scoring detected features and sampled edges against the sharp edges of a reference mesh (tests, bench).
 #include "iires/features.hpp"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // Feature detection: the Voronoi covariance measure flags crease candidates, the two-plane fit confirms them.
 #include "iires/features.hpp"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
 // The pieces the feature pipeline's units share (detection, chains, crease tracing and snapping): the local
 // two-plane crease fit and its helpers. Internal to libiires.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // Geodesic coordinates on a point cloud: paper §3.2 ("efficient intrinsic control"), DESIGN §3 step 6.
 #include "iires/geodesic.hpp"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // The intrinsic neighbour rule: paper §3.2 ("efficient intrinsic control"), DESIGN §3 step 6.
 #include "iires/intrinsic.hpp"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
 /// @file quadric_fit.hpp
 /// @brief (internal) The normal equations of the weighted least-squares quadric height field

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 #include "iires/reconstruct/advancing_front.hpp"
 
 #include <CGAL/Advancing_front_surface_reconstruction.h>

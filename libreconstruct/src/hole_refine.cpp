@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // fillLargeHoles(): boundary loops too long for fillSmallHoles() but small next to their component, closed with
 // new vertices (CGAL: refined and faired hole filling, then isotropic remeshing of the patch); remeshBadRegions():
 // isotropic remeshing around the triangles repairBadTriangles() could not raise. CGAL stays in this file.

@@ -1,4 +1,7 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 #include "iires/reconstruct/mesh_quality.hpp"
+
+#include "vertex_faces.hpp"
 
 #include <Eigen/Geometry>
 #include <algorithm>
@@ -316,16 +319,8 @@ void topologyStats(const TriangleMesh& mesh, MeshQuality& q) {
   const std::vector<EdgeRun> edges = edgeStats(mesh, he, boundary, onBoundary, q);
 
   // Vertex → faces (CSR), referenced vertices, components.
-  std::vector<std::uint32_t> start(nv + 1, 0);
-  for (const auto& t : mesh.triangles)
-    for (int c = 0; c < 3; ++c) ++start[static_cast<std::size_t>(t[c]) + 1];
-  for (std::size_t v = 0; v < nv; ++v) start[v + 1] += start[v];
-  std::vector<std::uint32_t> incident(start[nv]);
-  {
-    std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
-    for (std::uint32_t f = 0; f < nf; ++f)
-      for (int c = 0; c < 3; ++c) incident[fill[static_cast<std::size_t>(mesh.triangles[f][c])]++] = f;
-  }
+  const detail::VertexFaces vf = detail::vertexFaces(mesh);
+  const std::vector<std::uint32_t>&start = vf.start, &incident = vf.incident;
   DisjointSets comp(nv);
   for (const auto& t : mesh.triangles) {
     comp.unite(static_cast<std::uint32_t>(t[0]), static_cast<std::uint32_t>(t[1]));

@@ -1,4 +1,7 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 #include "iires/reconstruct/mesh_repair.hpp"
+
+#include "vertex_faces.hpp"
 
 #include <Eigen/Geometry>
 #include <algorithm>
@@ -509,16 +512,8 @@ std::size_t removeExtraFans(TriangleMesh& mesh) {
   auto& T = mesh.triangles;
   const std::size_t nv = mesh.vertices.size();
   // Vertex → faces (CSR).
-  std::vector<std::uint32_t> start(nv + 1, 0);
-  for (const auto& t : T)
-    for (int c = 0; c < 3; ++c) ++start[vtx(t, c) + 1];
-  for (std::size_t v = 0; v < nv; ++v) start[v + 1] += start[v];
-  std::vector<std::uint32_t> incident(start[nv]);
-  {
-    std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
-    for (std::uint32_t f = 0; f < T.size(); ++f)
-      for (int c = 0; c < 3; ++c) incident[fill[vtx(T[f], c)]++] = f;
-  }
+  const detail::VertexFaces vf = detail::vertexFaces(mesh);
+  const std::vector<std::uint32_t>&start = vf.start, &incident = vf.incident;
   std::vector<char> removed(T.size(), 0);
   std::size_t count = 0;
   std::vector<std::uint32_t> faces, parent, size;

@@ -1,4 +1,7 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 #include "iires/reconstruct/self_intersections.hpp"
+
+#include "vertex_faces.hpp"
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/box_intersection_d.h>
@@ -59,16 +62,8 @@ bool facesIntersect(const Eigen::Vector3i& f, const Eigen::Vector3i& g, const st
 std::vector<char> separatedFans(const TriangleMesh& mesh) {
   constexpr double kMargin = 1e-9, kMinLean = 0.5;  // cos 60°
   const std::size_t nv = mesh.vertices.size(), nf = mesh.triangles.size();
-  std::vector<std::uint32_t> start(nv + 1, 0);
-  for (const auto& t : mesh.triangles)
-    for (int c = 0; c < 3; ++c) ++start[static_cast<std::size_t>(t[c]) + 1];
-  for (std::size_t v = 0; v < nv; ++v) start[v + 1] += start[v];
-  std::vector<std::uint32_t> incident(start[nv]);
-  {
-    std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
-    for (std::uint32_t f = 0; f < nf; ++f)
-      for (int c = 0; c < 3; ++c) incident[fill[static_cast<std::size_t>(mesh.triangles[f][c])]++] = f;
-  }
+  const detail::VertexFaces vf = detail::vertexFaces(mesh);
+  const std::vector<std::uint32_t>&start = vf.start, &incident = vf.incident;
   std::vector<char> good(nv, 0);
   struct Wedge {
     double from, to, length;  // angles of its spokes, and the angle between them

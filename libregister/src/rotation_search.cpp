@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 #include "iires/register/rotation_search.hpp"
 
 #include <Eigen/Geometry>

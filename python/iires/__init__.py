@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """iires: exactly-N isotropic resampling, registration and meshing of 3-D point clouds, on numpy arrays.
 
 Every function takes (n, 3) coordinate arrays and keyword parameters named after the command-line tools'

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // The compiled part of the `iires` Python package (python/iires/__init__.py wraps it): numpy arrays in and
 // out, keyword parameters named after the command-line flags, the GIL released while the library computes.
 #include <pybind11/numpy.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 #include "params.hpp"
 
 #include <pybind11/stl.h>
@@ -121,14 +122,14 @@ reg::RegistrationParams registrationParams(const py::dict& kwargs) {
   args.take("m", samples);
   args.take("grid", grid);
   checkChoice("grid", grid, {"so3", "euler"});
-  args.take("overlap", params.overlap);
+  const bool overlapGiven = args.take("overlap", params.overlap);  // not given: estimated (0)
   args.take("no_scale", noScale);
   args.take("full_resample", fullResample);
   args.take("seed", params.seed);
   args.take("threads", params.threads);
   args.finish();
   if (samples < 50) throw py::value_error("samples must be at least 50 (got " + std::to_string(samples) + ")");
-  if (!(params.overlap > 0.0 && params.overlap <= 1.0))
+  if (overlapGiven && !(params.overlap > 0.0 && params.overlap <= 1.0))
     throw py::value_error("overlap must be in (0, 1] (got " + std::to_string(params.overlap) + ")");
   params.samples = static_cast<std::size_t>(samples);
   params.grid = reg::parseRotationGridType(grid);

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
 // Keyword parameters of the Python functions → the libraries' Params structs. Names are the command-line
 // flags with dashes as underscores (mode, sharp_edges, outliers, no_denoise, seed, threads, ...); an unknown

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Tests of the iires Python package (run by ctest as python_tests; PYTHONPATH=build/python)."""
 
 import os

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 """Tests of tools/iires-render (headless pictures, histogram, colour-coded PLY)."""
 
 import os

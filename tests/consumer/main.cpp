@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // Uses the installed iires libraries: resample a sphere to exactly 200 points, mesh it, measure the mesh,
 // compare two clouds with the Hausdorff distance. Exits 0 and prints "consumer ok" when all is as expected.
 #include <cmath>

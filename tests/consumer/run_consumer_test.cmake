@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
 # ctest driver (cmake -P): install the current build into a fresh prefix, then configure, build and run the
 # consumer project against it. Variables: BUILD_DIR, SOURCE_DIR (this directory), WORK_DIR, BUILD_TYPE,
 # CXX_COMPILER, CXX_FLAGS (e.g. the sanitizer flags the installed libraries need).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // libFuzzer target: the cloud and mesh readers on arbitrary bytes, under every supported extension.
 // The only acceptable failure is iires::InputError; anything else (another exception, a crash, a sanitizer
 // report) is a bug. Build and run with tests/fuzz/run.sh.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 // libFuzzer target: iires::resample, the resampler's entry point, on small adversarial clouds (duplicates,
 // coplanar, collinear, huge and tiny coordinates, NaN) with parameters decoded from the input: N ≤ 500, at most
 // 2,000 points, one thread. The pipeline's iteration counts are decoded small (they only repeat the same code),

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: GPL-3.0-or-later
 # Build the libFuzzer targets with clang (-fsanitize=fuzzer,address,undefined), compiling libiires' sources
 # directly (not through the main CMake build), then run each target for SECONDS seconds.
 #

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
 /// @file attributes.hpp
 /// @brief Per-point attributes (colours, intensities, labels) carried from a cloud to new points: the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
 /// @file curvature.hpp
 /// @brief Curvature field and size levels for adaptively isotropic resampling (paper §4.2, eq. 8–10;

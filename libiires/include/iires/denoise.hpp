@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
 /// @file denoise.hpp
 /// @brief MLS projection denoising (paper §3.1, eq. 1–3; DESIGN §3 step 3).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
 /// @file disjoint_sets.hpp
 /// @brief Union-find over indices, deterministic: the smaller index always becomes the root, so component ids

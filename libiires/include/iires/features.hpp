@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
 /// @file features.hpp
 /// @brief Sharp-feature detection, feature polylines and their samples (DESIGN §3 step 9): the samples

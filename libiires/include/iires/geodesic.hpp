@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
 /// @file geodesic.hpp
 /// @brief Geodesic coordinates of a point cloud (paper §3.2, "efficient intrinsic control"; DESIGN §3 step 6):

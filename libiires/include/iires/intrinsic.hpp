@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
 /// @file intrinsic.hpp
 /// @brief The intrinsic neighbour rule (paper §3.2; DESIGN §3 step 6): two samples may be neighbours only

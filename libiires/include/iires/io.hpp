@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
 /// @file io.hpp
 /// @brief Reading and writing point clouds and meshes. All file access of iires goes through here.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
 /// @file knn.hpp
 /// @brief k-nearest-neighbour and radius search over a fixed set of 3-D points (nanoflann behind a PImpl).

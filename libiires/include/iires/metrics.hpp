@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
 /// @file metrics.hpp
 /// @brief The measures DESIGN §7 defines, computed one way everywhere: uniformity, geometric error, coverage.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
 /// @file mls.hpp
 /// @brief The moving-least-squares surface of a dense cloud: the surface every resampled point lies on.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
 /// @file neighbourhood.hpp
 /// @brief The neighbour rule: which of a sample's Euclidean candidates count as its neighbours.

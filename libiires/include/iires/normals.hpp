@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
 /// @file normals.hpp
 /// @brief PCA normals with consistent orientation (DESIGN §3 step 4).

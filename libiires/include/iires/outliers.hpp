@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
 /// @file outliers.hpp
 /// @brief Outlier detection from non-mutual k-NN relations and pull-back onto the MLS surface

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
 /// @file parallel.hpp
 /// @brief Deterministic parallel loops: every iteration writes only its own slot, so results do not depend

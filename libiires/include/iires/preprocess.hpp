@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
 /// @file preprocess.hpp
 /// @brief The paper's pre-processing in one call (§3.1): outliers (eq. 4–5), then MLS denoising (eq. 1–3).

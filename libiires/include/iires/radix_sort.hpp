@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
 /// @file radix_sort.hpp
 /// @brief Stable least-significant-digit radix sort of (64-bit key, 32-bit index) pairs: the cell, Morton and

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
 /// @file resample.hpp
 /// @brief Isotropic resampling to exactly N points on the MLS surface of a cloud (paper §4.1, DESIGN §3).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
 /// @file sampling.hpp
 /// @brief Make dense test clouds from a mesh (DESIGN §7): uniform or deliberately non-uniform surface

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
 /// @file tangent_cell.hpp
 /// @brief A sample's cell in its tangent plane: a convex polygon around the origin (the sample) clipped by the

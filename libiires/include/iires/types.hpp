@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
 /// @file types.hpp
 /// @brief Basic containers shared by every iires library: point clouds, triangle meshes, errors.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
 /// @file validate.hpp
 /// @brief Input validation (DESIGN §3 step 1): the checks every algorithm runs before it starts.

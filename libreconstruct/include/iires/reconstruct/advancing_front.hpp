@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
 /// @file advancing_front.hpp
 /// @brief CGAL's advancing-front surface reconstruction (Cohen-Steiner & Da 2004; the paper's ref. [60]),

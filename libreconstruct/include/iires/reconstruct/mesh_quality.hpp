@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
 /// @file mesh_quality.hpp
 /// @brief Quality report of any triangle mesh (DESIGN §5.3): triangle shape, topology, and the distance to a

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
 /// @file mesh_repair.hpp
 /// @brief Post-processing shared by the reconstruction methods: closing small holes, Delaunay edge flips,

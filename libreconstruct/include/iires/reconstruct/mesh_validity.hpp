@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
 /// @file mesh_validity.hpp
 /// @brief Making a mesh valid where triangulation or hole filling left it invalid: self-intersecting faces

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
 /// @file reconstruct.hpp
 /// @brief The reconstruction pipeline (DESIGN §5): cloud → (isotropic resampling to N) → triangulation

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
 /// @file self_intersections.hpp
 /// @brief Self-intersecting face pairs of any triangle mesh (also non-manifold ones, or a soup), with the

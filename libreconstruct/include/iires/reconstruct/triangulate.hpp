@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
 /// @file triangulate.hpp
 /// @brief The local method (DESIGN §5.2): a triangle mesh over a cloud's points from each point's

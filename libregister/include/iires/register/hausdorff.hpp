@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
 /// @file hausdorff.hpp
 /// @brief Directed, symmetric and trimmed (partial) Hausdorff distances between point sets — the energy of

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
 /// @file icp.hpp
 /// @brief Trimmed point-to-point ICP with optional scale (Umeyama's closed form in every iteration;

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
 /// @file registration.hpp
 /// @brief Scale-free registration without features (paper §5, eq. 11–12; DESIGN §4): resample both clouds to

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
 /// @file rotation_grid.hpp
 /// @brief Candidate rotations for the registration search (paper eq. 12): the paper's Euler-angle grid and a

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
 /// @file rotation_search.hpp
 /// @brief The global rotation search of the registration (paper eq. 11–12, DESIGN §4 step 3): over a grid of
