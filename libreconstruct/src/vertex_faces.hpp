@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
 // The faces around each vertex of a triangle mesh, as one flat (CSR) index. Internal to libreconstruct.
 #include <cstdint>
