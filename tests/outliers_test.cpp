@@ -169,6 +169,21 @@ TEST(Outliers, ScatteredFarPointsAreFoundAndNeverPulledOffTheSurface) {
   }
 }
 
+// The isolation rule must not take a scan's sparse far field for outliers: a plane whose density falls as 1/r²
+// from r = 1 to 100 (a terrestrial scanner's fall-off; spacing 20× wider at the rim than at the centre) has none.
+TEST(Outliers, DensityFallOffOfAScannerIsNotIsolation) {
+  std::mt19937_64 rng(22);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  PointCloud cloud;
+  for (int i = 0; i < 30000; ++i) {
+    const double r = std::exp(u(rng) * std::log(100.0)), t = 2 * M_PI * u(rng);  // radial density ∝ 1/r
+    cloud.points.emplace_back(r * std::cos(t), r * std::sin(t), 0.0);
+  }
+  OutlierParams p;
+  p.mode = OutlierMode::kRemove;
+  EXPECT_EQ(iires::processOutliers(cloud, p).found, 0u);
+}
+
 TEST(Outliers, RemoveDropsThem) {
   const Noisy data = noisyPlane(20000, 1.0, 0.33, 0.03, 14);
   OutlierParams p;

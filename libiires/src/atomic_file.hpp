@@ -10,7 +10,7 @@
 namespace iires::detail {
 
 /// @brief A temporary file next to @p target, registered for removal on SIGINT/SIGTERM/SIGHUP until
-/// release() is called. The name is short (".iires.<pid>.<n>.tmp") whatever the target's length.
+/// commit() renames it (or the destructor removes it). The name is short (".iires.<pid>.<n>.tmp") whatever the target's length.
 class TemporaryFile {
  public:
   explicit TemporaryFile(const std::string& target);

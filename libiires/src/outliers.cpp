@@ -115,6 +115,8 @@ void pullOutliers(const PointCloud& input, const OutlierParams& params, const st
     const auto q = static_cast<std::size_t>(cleanTree->nearest(P[o]));
     std::vector<std::uint32_t> idx;
     std::vector<double> d2;
+    // q's fitK nearest with h = the distance to the farthest of them, so all of them count: a stable plane under
+    // noise (eq. 5's MLS plane at a(q)).
     const std::size_t f = cleanTree->knn(cleanPoints[q], fitK, idx, d2);
     const double h = std::sqrt(d2[f - 1]) > 0 ? std::sqrt(d2[f - 1]) : 1.0;
     const Eigen::Vector3d qn = normals ? cleanNormals[q] : Eigen::Vector3d(Eigen::Vector3d::Zero());
