@@ -135,14 +135,17 @@ struct RotationSearch::Impl {
     for (double scale : params.translationScales) {
       Offset o;
       o.scale = scale;
-      if (scale != 1.0) {
-        const double v = offsetEnergy(r, o, e);
-        if (v < e) e = v, best = o;
-      }
+      auto consider = [&](const Offset& candidate) {
+        const double v = offsetEnergy(r, candidate, e);
+        if (v < e) {
+          e = v;
+          best = candidate;
+        }
+      };
+      if (scale != 1.0) consider(o);  // the origin at scale 1 is the starting point
       for (const auto& t : lattice) {
         o.translation = t;
-        const double v = offsetEnergy(r, o, e);
-        if (v < e) e = v, best = o;
+        consider(o);
       }
     }
     double h = params.translationStep;
@@ -155,7 +158,10 @@ struct RotationSearch::Impl {
             Offset o = best;
             o.translation += sign * h * Eigen::Vector3d::Unit(axis);
             const double v = offsetEnergy(r, o, e);
-            if (v < e) e = v, next = o;
+            if (v < e) {
+              e = v;
+              next = o;
+            }
           }
         if (next.translation == best.translation) break;
         best = next;

@@ -3,8 +3,10 @@
 /// @file rotation_search.hpp
 /// @brief The global rotation search of the registration (paper eq. 11–12, DESIGN §4 step 3): over a grid of
 /// candidate rotations R, minimise the (trimmed) Hausdorff energy E(R) = max(h(R·S → T), h(Rᵀ·T → S))
-/// between two normalised clouds S and T. With one overlap f, h = h_f is the trimmed Hausdorff distance; with
-/// several (unknown overlap), each direction takes min_f (f_max / f)^λ · h_f — its own overlap estimate.
+/// between two normalised clouds S and T; the best rotations are recentred by a small search over a
+/// translation t (E(R, t)), since partial clouds normalise on biased centroids. With one overlap f,
+/// h = h_f is the trimmed Hausdorff distance; with several (unknown overlap), each direction takes
+/// min_f (f_max / f)^λ · h_f — its own overlap estimate.
 
 #include <Eigen/Core>
 #include <cstddef>
@@ -59,7 +61,7 @@ struct RotationSearchParams {
 struct RotationCandidate {
   std::size_t gridIndex = 0;                               ///< index in the grid
   Eigen::Matrix3d gridRotation = Eigen::Matrix3d::Identity();  ///< the grid rotation
-  double gridEnergy = 0;                                   ///< E at the grid rotation
+  double gridEnergy = 0;                                   ///< E at the grid rotation and its offset
   Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();  ///< after local refinement
   double energy = 0;                                       ///< E after local refinement (≤ gridEnergy)
   Eigen::Vector3d translation = Eigen::Vector3d::Zero();   ///< offset t of the pose s·R·S + t (translation search)
