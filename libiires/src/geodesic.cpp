@@ -15,6 +15,7 @@
 
 #include "iires/disjoint_sets.hpp"
 #include "iires/io.hpp"
+#include "io_format.hpp"
 #include "iires/knn.hpp"
 #include "iires/parallel.hpp"
 
@@ -616,39 +617,13 @@ std::vector<std::array<std::uint32_t, 2>> GeodesicCoordinates::edges() const {
 void writeGeodesicPly(OutputBatch& batch, const std::string& path, const GeodesicCoordinates& geo) {
   if (extensionOf(path) != ".ply")
     throw InputError("cannot write " + path + ": geodesic coordinates are written as .ply only");
-  batch.file(path, [&](std::ostream& out) {
-    const bool normals = geo.normals().size() == geo.size();
-    const int m = geo.dimensions();
-    std::ostringstream h;
-    h << "ply\nformat binary_little_endian 1.0\ncomment geodesic coordinates (iires, paper 3.2)\n"
-      << "element vertex " << geo.size() << "\nproperty double x\nproperty double y\nproperty double z\n";
-    if (normals) h << "property double nx\nproperty double ny\nproperty double nz\n";
-    for (int s = 0; s < m; ++s) h << "property float g" << (s + 1) << "\n";
-    h << "property uint component\nend_header\n";
-    out << h.str();
-    std::vector<char> buffer;
-    const std::size_t record = (normals ? 48 : 24) + 4 * static_cast<std::size_t>(m) + 4;
-    buffer.reserve(record * 4096);
-    auto put = [&](const void* p, std::size_t bytes) {
-      const char* c = static_cast<const char*>(p);
-      buffer.insert(buffer.end(), c, c + bytes);
-    };
-    for (std::size_t i = 0; i < geo.size(); ++i) {
-      put(geo.points()[i].data(), 24);
-      if (normals) put(geo.normals()[i].data(), 24);
-      for (int s = 0; s < m; ++s) {
-        const float g = geo.coordinate(i, s);
-        put(&g, 4);
-      }
-      const std::uint32_t c = geo.component(i);
-      put(&c, 4);
-      if (buffer.size() >= record * 4096) {
-        out.write(buffer.data(), static_cast<std::streamsize>(buffer.size()));
-        buffer.clear();
-      }
-    }
-    out.write(buffer.data(), static_cast<std::streamsize>(buffer.size()));
-  });
+  detail::io::PlyContent content{geo.points(), geo.normals().size() == geo.size() ? &geo.normals() : nullptr, {}};
+  for (int s = 0; s < geo.dimensions(); ++s)
+    content.properties.push_back(
+        {"g" + std::to_string(s + 1), "float", [&geo, s](std::size_t i) { return geo.coordinate(i, s); }});
+  content.properties.push_back({"component", "uint", [&geo](std::size_t i) { return geo.component(i); }});
+  content.comment = "geodesic coordinates (iires, paper 3.2)";
+  detail::io::stagePly(batch, path, content, false);
 }
 
 void writeGeodesicPly(const std::string& path, const GeodesicCoordinates& geo) {
