@@ -9,10 +9,10 @@
 #include <cmath>
 #include <numeric>
 #include <optional>
-#include <sstream>
 #include <stdexcept>
 #include <thread>
 
+#include "iires/detail/json.hpp"
 #include "iires/disjoint_sets.hpp"
 #include "iires/io.hpp"
 #include "io_format.hpp"
@@ -189,14 +189,12 @@ void GeodesicParams::validate() const {
 }
 
 std::string GeodesicReport::toJson() const {
-  std::ostringstream o;
-  o.precision(6);
-  o << "{\"points\": " << points << ", \"edges\": " << edges << ", \"components\": " << components
-    << ", \"attached_components\": " << attachedComponents << ", \"spacing\": " << spacing
-    << ", \"graph_s\": " << graphSeconds << ", \"components_s\": " << componentSeconds
-    << ", \"satellites_s\": " << satelliteSeconds << ", \"fields_s\": " << fieldSeconds
-    << ", \"time_s\": " << totalSeconds << "}";
-  return o.str();
+  detail::JsonWriter j(6);
+  j.beginObject().member("points", points).member("edges", edges).member("components", components);
+  j.member("attached_components", attachedComponents).member("spacing", spacing);
+  j.member("graph_s", graphSeconds).member("components_s", componentSeconds);
+  j.member("satellites_s", satelliteSeconds).member("fields_s", fieldSeconds).member("time_s", totalSeconds);
+  return j.endObject().str();
 }
 
 struct GeodesicCoordinates::Impl {

@@ -5,11 +5,10 @@
 
 #include <chrono>
 #include <cmath>
-#include <iomanip>
-#include <sstream>
 #include <stdexcept>
 
 #include "iires/attributes.hpp"
+#include "iires/detail/json.hpp"
 #include "iires/intrinsic.hpp"
 #include "iires/normals.hpp"
 #include "iires/reconstruct/mesh_validity.hpp"
@@ -19,24 +18,6 @@ namespace iires {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-std::string num(double x) {
-  if (!std::isfinite(x)) return "null";
-  std::ostringstream os;
-  os << std::setprecision(10) << x;
-  return os.str();
-}
-
-/// Indent every line after the first of a JSON block by two spaces and drop its trailing newline.
-std::string nested(std::string json) {
-  while (!json.empty() && json.back() == '\n') json.pop_back();
-  std::string out;
-  for (char c : json) {
-    out += c;
-    if (c == '\n') out += "  ";
-  }
-  return out;
-}
 
 }  // namespace
 
@@ -82,37 +63,41 @@ double ReconstructResult::meshingSeconds() const {
 }
 
 std::string ReconstructResult::toJson() const {
-  std::ostringstream os;
-  os << "{\n  \"method\": \"" << method << "\",\n  \"input_points\": " << inputPoints
-     << ",\n  \"resampled\": " << (resampled ? "true" : "false") << ",\n  \"samples\": " << samples.size()
-     << ",\n  \"mesh_vertices\": " << mesh.vertices.size() << ",\n  \"mesh_faces\": " << mesh.triangles.size()
-     << ",\n  \"unused_samples\": " << unusedVertices << ",\n  \"small_component_faces_removed\": " << smallComponentFaces;
-  if (resampled) os << ",\n  \"resampling\": " << nested(resampling.toJson());
-  if (method == "local")
-    os << ",\n  \"triangulation\": {\"candidates\": " << triangulation.candidates
-       << ", \"proposed_by_3\": " << triangulation.proposedBy3 << ", \"proposed_by_2\": " << triangulation.proposedBy2
-       << ", \"kept\": " << triangulation.kept << ", \"rejected_conflicts\": " << triangulation.rejectedConflicts
-       << ", \"removed_fan_faces\": " << triangulation.removedFans << ", \"flips\": " << triangulation.flips << ", \"flips_after_filling\": " << flipsAfterFilling << "}";
-  os << ",\n  \"bad_triangles\": {\"vertices_moved\": " << badTriangles.moved << ", \"vertices_removed\": " << badTriangles.removed
-     << ", \"remeshed_vertices\": " << remeshedVertices << "}";
-  os << ",\n  \"holes\": {\"loops\": " << holes.loops << ", \"filled\": " << holes.filled
-     << ", \"kept\": " << holes.kept << ", \"faces_added\": " << holes.facesAdded << ", \"vertices_added\": " << holes.verticesAdded << "}"
-     << ",\n  \"large_holes\": {\"loops\": " << largeHoles.loops << ", \"filled\": " << largeHoles.filled
-     << ", \"kept\": " << largeHoles.kept << ", \"faces_added\": " << largeHoles.facesAdded
-     << ", \"vertices_added\": " << largeHoles.verticesAdded << ", \"skipped\": " << (largeHoles.skipped ? "true" : "false") << "}"
-     << ",\n  \"validity_repair\": {\"intersecting_pairs_found\": " << validity.intersectingPairs
-     << ", \"non_manifold_edges_found\": " << validity.nonManifoldEdges << ", \"rounds\": " << validity.rounds
-     << ", \"faces_removed\": " << validity.facesRemoved << ", \"faces_added\": " << validity.facesAdded
-     << ", \"vertices_added\": " << validity.verticesAdded
-     << ", \"removed_without_fill\": " << validity.removedWithoutFill << "}"
-     << ",\n  \"orientation\": {\"components\": " << orientation.components
-     << ", \"faces_flipped\": " << orientation.facesFlipped << ", \"conflicts\": " << orientation.conflicts << "}"
-     << ",\n  \"quality\": " << nested(quality.toJson()) << ",\n  \"meshing_time_s\": " << num(meshingSeconds())
-     << ",\n  \"time_s\": {";
-  for (std::size_t i = 0; i < timings.size(); ++i)
-    os << (i ? ", " : "") << "\"" << timings[i].name << "\": " << num(timings[i].seconds);
-  os << "}\n}\n";
-  return os.str();
+  detail::JsonWriter j;
+  j.beginObject(true).member("method", method).member("input_points", inputPoints).member("resampled", resampled);
+  j.member("samples", samples.size()).member("mesh_vertices", mesh.vertices.size());
+  j.member("mesh_faces", mesh.triangles.size()).member("unused_samples", unusedVertices);
+  j.member("small_component_faces_removed", smallComponentFaces);
+  if (resampled) j.key("resampling").embed(resampling.toJson());
+  if (method == "local") {
+    j.key("triangulation").beginObject().member("candidates", triangulation.candidates);
+    j.member("proposed_by_3", triangulation.proposedBy3).member("proposed_by_2", triangulation.proposedBy2);
+    j.member("kept", triangulation.kept).member("rejected_conflicts", triangulation.rejectedConflicts);
+    j.member("removed_fan_faces", triangulation.removedFans).member("flips", triangulation.flips);
+    j.member("flips_after_filling", flipsAfterFilling).endObject();
+  }
+  j.key("bad_triangles").beginObject().member("vertices_moved", badTriangles.moved);
+  j.member("vertices_removed", badTriangles.removed).member("remeshed_vertices", remeshedVertices).endObject();
+  const auto holeCounts = [&](std::string_view name, const auto& h) {
+    j.key(name).beginObject().member("loops", h.loops).member("filled", h.filled).member("kept", h.kept);
+    j.member("faces_added", h.facesAdded).member("vertices_added", h.verticesAdded);
+  };
+  holeCounts("holes", holes);
+  j.endObject();
+  holeCounts("large_holes", largeHoles);
+  j.member("skipped", largeHoles.skipped).endObject();
+  j.key("validity_repair").beginObject().member("intersecting_pairs_found", validity.intersectingPairs);
+  j.member("non_manifold_edges_found", validity.nonManifoldEdges).member("rounds", validity.rounds);
+  j.member("faces_removed", validity.facesRemoved).member("faces_added", validity.facesAdded);
+  j.member("vertices_added", validity.verticesAdded).member("removed_without_fill", validity.removedWithoutFill);
+  j.endObject();
+  j.key("orientation").beginObject().member("components", orientation.components);
+  j.member("faces_flipped", orientation.facesFlipped).member("conflicts", orientation.conflicts).endObject();
+  j.key("quality").embed(quality.toJson()).member("meshing_time_s", meshingSeconds());
+  j.key("time_s").beginObject();
+  for (const StageTime& t : timings) j.member(t.name, t.seconds);
+  j.endObject().endObject();
+  return j.str() + "\n";
 }
 
 namespace {

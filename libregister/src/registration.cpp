@@ -12,6 +12,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "iires/detail/json.hpp"
 #include "iires/knn.hpp"
 #include "iires/metrics.hpp"
 #include "iires/parallel.hpp"
@@ -466,41 +467,48 @@ RegistrationResult registerClouds(const PointCloud& sourceIn, const PointCloud& 
 }
 
 std::string RegistrationResult::toJson() const {
-  std::ostringstream s;
-  auto vec = [&](const Eigen::Vector3d& v) { return "[" + num(v.x()) + ", " + num(v.y()) + ", " + num(v.z()) + "]"; };
-  auto matrix = [](const Eigen::Matrix4d& T) {
-    std::string m = "[";
-    for (int i = 0; i < 4; ++i) {
-      m += i ? ", [" : "[";
-      for (int j = 0; j < 4; ++j) m += (j ? ", " : "") + num(T(i, j));
-      m += "]";
-    }
-    return m + "]";
+  detail::JsonWriter j(12);
+  const auto vector = [&](const Eigen::Vector3d& v) {
+    j.beginArray();
+    for (int k = 0; k < 3; ++k) j.value(v[k]);
+    j.endArray();
   };
-  s << "{\n  \"transform\": " << matrix(T_target_source) << ",\n  \"scale\": " << num(scale) << ",\n  \"rotation\": [";
-  for (int i = 0; i < 3; ++i) s << (i ? ", " : "") << vec(rotation.row(i).transpose());
-  s << "],\n  \"rotation_angle_deg\": " << num(rotationAngleDeg) << ",\n  \"rotation_axis\": " << vec(rotationAxis)
-    << ",\n  \"translation\": " << vec(translation) << ",\n  \"rmse\": " << num(rmse)
-    << ",\n  \"hausdorff\": " << num(hausdorff) << ",\n  \"hausdorff_trimmed\": " << num(hausdorffTrimmed)
-    << ",\n  \"overlap_share\": " << num(overlapShare) << ",\n  \"source_overlap\": " << num(sourceOverlap)
-    << ",\n  \"target_overlap\": " << num(targetOverlap) << ",\n  \"score\": " << num(score)
-    << ",\n  \"runner_up_transform\": " << matrix(runnerUpTransform) << ",\n  \"runner_up_score\": "
-    << num(runnerUpScore)
-    << ",\n  \"normalised_energy\": " << num(normalisedEnergy) << ",\n  \"grid\": \"" << grid
-    << "\",\n  \"grid_size\": " << gridSize << ",\n  \"best_candidate\": " << bestCandidate
-    << ",\n  \"candidate_rank\": " << candidateRank << ",\n  \"icp_iterations\": " << icpIterations
-    << ",\n  \"icp_converged\": " << (icpConverged ? "true" : "false")
-    << ",\n  \"exact_evaluations\": " << exactEvaluations << ",\n  \"point_queries\": " << pointQueries
-    << ",\n  \"ambiguous\": " << (ambiguous ? "true" : "false") << ",\n  \"planar\": " << (planar ? "true" : "false")
-    << ",\n  \"ambiguity_reason\": \"" << ambiguityReason << "\",\n  \"second_best_score_ratio\": "
-    << num(secondBestScoreRatio) << ",\n  \"source_points\": " << sourcePoints << ",\n  \"target_points\": "
-    << targetPoints << ",\n  \"source_working_points\": " << sourceWorkingPoints
-    << ",\n  \"target_working_points\": " << targetWorkingPoints << ",\n  \"stray_samples_dropped\": " << strayDropped << ",\n  \"outliers_found\": " << outliersFound << ",\n  \"samples\": " << samples << ",\n  \"samples_requested\": " << samplesRequested << ",\n  \"source_radius\": " << num(sourceRadius)
-    << ",\n  \"target_radius\": " << num(targetRadius) << ",\n  \"timings\": {";
-  for (std::size_t i = 0; i < timings.size(); ++i)
-    s << (i ? ", " : "") << "\"" << timings[i].name << "_s\": " << num(timings[i].seconds);
-  s << "}\n}\n";
-  return s.str();
+  const auto matrix = [&](std::string_view name, const Eigen::Matrix4d& T) {
+    j.key(name).beginArray();
+    for (int i = 0; i < 4; ++i) {
+      j.beginArray();
+      for (int k = 0; k < 4; ++k) j.value(T(i, k));
+      j.endArray();
+    }
+    j.endArray();
+  };
+  j.beginObject(true);
+  matrix("transform", T_target_source);
+  j.member("scale", scale).key("rotation").beginArray();
+  for (int i = 0; i < 3; ++i) vector(rotation.row(i).transpose());
+  j.endArray().member("rotation_angle_deg", rotationAngleDeg).key("rotation_axis");
+  vector(rotationAxis);
+  j.key("translation");
+  vector(translation);
+  j.member("rmse", rmse).member("hausdorff", hausdorff).member("hausdorff_trimmed", hausdorffTrimmed);
+  j.member("overlap_share", overlapShare).member("source_overlap", sourceOverlap);
+  j.member("target_overlap", targetOverlap).member("score", score);
+  matrix("runner_up_transform", runnerUpTransform);
+  j.member("runner_up_score", runnerUpScore).member("normalised_energy", normalisedEnergy).member("grid", grid);
+  j.member("grid_size", gridSize).member("best_candidate", bestCandidate).member("candidate_rank", candidateRank);
+  j.member("icp_iterations", icpIterations).member("icp_converged", icpConverged);
+  j.member("exact_evaluations", exactEvaluations).member("point_queries", pointQueries);
+  j.member("ambiguous", ambiguous).member("planar", planar).member("ambiguity_reason", ambiguityReason);
+  j.member("second_best_score_ratio", secondBestScoreRatio);
+  j.member("source_points", sourcePoints).member("target_points", targetPoints);
+  j.member("source_working_points", sourceWorkingPoints).member("target_working_points", targetWorkingPoints);
+  j.member("stray_samples_dropped", strayDropped).member("outliers_found", outliersFound);
+  j.member("samples", samples).member("samples_requested", samplesRequested);
+  j.member("source_radius", sourceRadius).member("target_radius", targetRadius);
+  j.key("timings").beginObject();
+  for (const StageTime& t : timings) j.member(t.name + "_s", t.seconds);
+  j.endObject().endObject();
+  return j.str() + "\n";
 }
 
 }  // namespace iires::reg
