@@ -13,11 +13,11 @@
 #include <thread>
 
 #include "iires/detail/json.hpp"
-#include "iires/disjoint_sets.hpp"
+#include "iires/detail/disjoint_sets.hpp"
 #include "iires/io.hpp"
 #include "io_format.hpp"
 #include "iires/knn.hpp"
-#include "iires/parallel.hpp"
+#include "iires/detail/parallel.hpp"
 
 namespace iires {
 

@@ -19,9 +19,9 @@
 
 #include "iires/detail/json.hpp"
 #include "iires/knn.hpp"
-#include "iires/parallel.hpp"
-#include "iires/radix_sort.hpp"
-#include "iires/tangent_cell.hpp"
+#include "iires/detail/parallel.hpp"
+#include "iires/detail/radix_sort.hpp"
+#include "iires/detail/tangent_cell.hpp"
 #include "iires/validate.hpp"
 
 namespace iires {

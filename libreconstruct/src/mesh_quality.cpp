@@ -13,10 +13,10 @@
 #include <stdexcept>
 
 #include "iires/detail/json.hpp"
-#include "iires/disjoint_sets.hpp"
+#include "iires/detail/disjoint_sets.hpp"
 #include "iires/knn.hpp"
 #include "iires/metrics.hpp"
-#include "iires/parallel.hpp"
+#include "iires/detail/parallel.hpp"
 #include "iires/reconstruct/self_intersections.hpp"
 #include "iires/sampling.hpp"
 

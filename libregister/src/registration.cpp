@@ -15,7 +15,7 @@
 #include "iires/detail/json.hpp"
 #include "iires/knn.hpp"
 #include "iires/metrics.hpp"
-#include "iires/parallel.hpp"
+#include "iires/detail/parallel.hpp"
 #include "iires/register/hausdorff.hpp"
 #include "iires/validate.hpp"
 
