@@ -21,6 +21,7 @@
 #include "iires/knn.hpp"
 #include "iires/detail/parallel.hpp"
 #include "iires/detail/radix_sort.hpp"
+#include "iires/detail/stage_clock.hpp"
 #include "iires/detail/tangent_cell.hpp"
 #include "iires/validate.hpp"
 

@@ -9,6 +9,7 @@
 
 #include "iires/attributes.hpp"
 #include "iires/detail/json.hpp"
+#include "iires/detail/stage_clock.hpp"
 #include "iires/intrinsic.hpp"
 #include "iires/normals.hpp"
 #include "iires/reconstruct/mesh_validity.hpp"
