@@ -114,25 +114,11 @@ std::vector<Eigen::Vector3d> vertexNormals(const TriangleMesh& mesh) {
     if (v.squaredNorm() > 0) v.normalize();
   return n;
 }
-}  // namespace
 
-ReconstructResult reconstruct(const PointCloud& input, const ReconstructParams& params) {
-  params.validate();
-  const auto start = Clock::now();
-  ReconstructResult result;
-  result.method = toString(params.method);
-  result.inputPoints = input.size();
-  const StageClock clock(result.timings, params.progress);  // the resampler reports its own stages
-
-  auto t = clock.begin("validate");
-  PointCloud cloud;  // positions and normals; the attributes are carried to the vertices at the end
-  cloud.points = input.points;
-  cloud.normals = input.normals;
-  validateCloud(cloud, 4, "input");
-  clock.end("validate", t);
-
+/// The samples: the input resampled to params.targetCount (result.resampling), else the input points as they
+/// are, with PCA normals when it has none.
+void takeSamples(const PointCloud& cloud, const ReconstructParams& params, ReconstructResult& result) {
   if (params.resample) {
-    t = Clock::now();
     ResampleParams rp = params.resampling;
     rp.targetCount = params.targetCount;
     rp.seed = params.seed;
@@ -143,20 +129,20 @@ ReconstructResult reconstruct(const PointCloud& input, const ReconstructParams& 
     result.samples = std::move(result.resampling.cloud);
     result.resampling.cloud = PointCloud{};
     result.resampled = true;
-    clock.end("resample", t);
-  } else {
-    t = clock.begin("normals");
-    result.samples = cloud;
-    if (!result.samples.hasNormals()) {
-      NormalParams np = params.resampling.normals;
-      np.threads = params.threads;
-      result.samples.normals = estimateNormals(result.samples.points, np);
-    }
-    for (auto& n : result.samples.normals) n.normalize();
-    clock.end("normals", t);
+    return;
   }
+  result.samples = cloud;
+  if (!result.samples.hasNormals()) {
+    NormalParams np = params.resampling.normals;
+    np.threads = params.threads;
+    result.samples.normals = estimateNormals(result.samples.points, np);
+  }
+  for (auto& n : result.samples.normals) n.normalize();
+}
 
-  t = clock.begin("triangulate");
+/// The mesh of the samples: local Delaunay 1-rings (with the resampler's intrinsic rule unless a neighbour
+/// rule is given) or CGAL's advancing front.
+void triangulateSamples(const ReconstructParams& params, ReconstructResult& result) {
   if (params.method == ReconstructMethod::kLocal) {
     TriangulateParams tp = params.local;
     tp.threads = params.threads;
@@ -174,11 +160,13 @@ ReconstructResult reconstruct(const PointCloud& input, const ReconstructParams& 
   } else {
     result.mesh = advancingFront(result.samples, params.advancingFront).mesh;
   }
-  clock.end("triangulate", t);
+}
 
-  std::size_t flippedEarlier = 0;  // by the orientation passes that large holes and remeshing need first
-  t = clock.begin("holes");
-  std::vector<Eigen::Vector3d> normals = result.samples.normals;  // grows with any vertex hole filling adds
+/// Small components removed, small holes closed (again after removing the fans a fill pinched together), large
+/// holes closed, edges flipped back to Delaunay, bad triangles repaired. Returns the faces flipped by the
+/// orientation passes that large holes and remeshing need first.
+std::size_t closeHoles(const ReconstructParams& params, ReconstructResult& result, std::vector<Eigen::Vector3d>& normals) {
+  std::size_t flipped = 0;
   if (params.minComponentFaces > 1) result.smallComponentFaces = removeSmallComponents(result.mesh, params.minComponentFaces);
   if (params.fillHoles) {
     result.holes = fillSmallHoles(result.mesh, normals, params.holes);
@@ -195,7 +183,7 @@ ReconstructResult reconstruct(const PointCloud& input, const ReconstructParams& 
     }
     if (params.holes.maxRefinedExtent > 0 && result.holes.kept > 0) {
       // What is left open: a gap small next to its part gets a refined fill (it needs an oriented 2-manifold).
-      flippedEarlier += orientConsistently(result.mesh, normals).facesFlipped;
+      flipped += orientConsistently(result.mesh, normals).facesFlipped;
       result.largeHoles = fillLargeHoles(result.mesh, normals, params.holes);
     }
     if (params.method == ReconstructMethod::kLocal && params.local.flipMaxDihedral > 0 &&
@@ -205,38 +193,92 @@ ReconstructResult reconstruct(const PointCloud& input, const ReconstructParams& 
   if (params.repairQuality > 0) {
     result.badTriangles = repairBadTriangles(result.mesh, normals, params.repairQuality, params.repairDeviation);
     if (params.remeshBadRegions) {
-      flippedEarlier += orientConsistently(result.mesh, normals).facesFlipped;  // remeshing needs it oriented
+      flipped += orientConsistently(result.mesh, normals).facesFlipped;  // remeshing needs it oriented
       result.remeshedVertices = remeshBadRegions(result.mesh, normals, params.repairQuality);
     }
   }
+  return flipped;
+}
+
+/// Self-intersecting faces and non-manifold parts removed (and refilled); the fills' poor triangles repaired,
+/// then checked again. Returns the faces flipped by the orientation passes remeshing needs first.
+std::size_t repairMeshValidity(const ReconstructParams& params, ReconstructResult& result,
+                               std::vector<Eigen::Vector3d>& normals) {
+  std::size_t flipped = 0;
+  ValidityParams vp = params.validity;
+  vp.holes = params.holes;
+  vp.refill = params.fillHoles && vp.refill;
+  vp.minComponentFaces = params.minComponentFaces;
+  vp.threads = params.threads;
+  result.validity = repairValidity(result.mesh, normals, vp);
+  if (result.validity.facesAdded > 0 && params.repairQuality > 0) {
+    // The fills can hold poor triangles: the same quality repairs as above, then the check again (a repair that
+    // made something intersect is undone by removal there).
+    const BadTriangleReport again = repairBadTriangles(result.mesh, normals, params.repairQuality, params.repairDeviation);
+    result.badTriangles.moved += again.moved;
+    result.badTriangles.removed += again.removed;
+    if (params.remeshBadRegions) {
+      flipped += orientConsistently(result.mesh, normals).facesFlipped;
+      result.remeshedVertices += remeshBadRegions(result.mesh, normals, params.repairQuality);
+    }
+    vp.rounds = 1;
+    const ValidityReport check = repairValidity(result.mesh, normals, vp);
+    result.validity.rounds += check.rounds;
+    result.validity.facesRemoved += check.facesRemoved;
+    result.validity.facesAdded += check.facesAdded;
+    result.validity.verticesAdded += check.verticesAdded;
+    result.validity.removedWithoutFill += check.removedWithoutFill;
+  }
+  return flipped;
+}
+
+/// The input's attributes interpolated at the mesh vertices, from input points on the same sheet.
+void carryAttributes(const PointCloud& input, const ReconstructParams& params, ReconstructResult& result) {
+  SameSheet sameSheet;  // the resampler's intrinsic rule: vertices take values from input points on their sheet
+  std::shared_ptr<const IntrinsicRule> rule;
+  if (result.resampling.geodesic) {
+    rule = std::make_shared<IntrinsicRule>(result.resampling.geodesic, params.resampling.intrinsicRule);
+    sameSheet = [&rule](const Eigen::Vector3d& a, const Eigen::Vector3d& b) { return rule->acceptPoints(a, b); };
+  }
+  AttributeParams ap;
+  ap.threads = params.threads;
+  result.mesh.vertexAttributes =
+      interpolateAttributes(input, result.mesh.vertices, vertexNormals(result.mesh), sameSheet, ap);
+}
+
+}  // namespace
+
+ReconstructResult reconstruct(const PointCloud& input, const ReconstructParams& params) {
+  params.validate();
+  const auto start = Clock::now();
+  ReconstructResult result;
+  result.method = toString(params.method);
+  result.inputPoints = input.size();
+  const StageClock clock(result.timings, params.progress);  // the resampler reports its own stages
+
+  auto t = clock.begin("validate");
+  PointCloud cloud;  // positions and normals; the attributes are carried to the vertices at the end
+  cloud.points = input.points;
+  cloud.normals = input.normals;
+  validateCloud(cloud, 4, "input");
+  clock.end("validate", t);
+
+  t = params.resample ? Clock::now() : clock.begin("normals");
+  takeSamples(cloud, params, result);
+  clock.end(params.resample ? "resample" : "normals", t);
+
+  t = clock.begin("triangulate");
+  triangulateSamples(params, result);
+  clock.end("triangulate", t);
+
+  t = clock.begin("holes");
+  std::vector<Eigen::Vector3d> normals = result.samples.normals;  // grows with any vertex hole filling adds
+  std::size_t flippedEarlier = closeHoles(params, result, normals);  // by orientation passes needed first
   clock.end("holes", t);
 
   if (params.repairValidity) {
     t = clock.begin("validity");
-    ValidityParams vp = params.validity;
-    vp.holes = params.holes;
-    vp.refill = params.fillHoles && vp.refill;
-    vp.minComponentFaces = params.minComponentFaces;
-    vp.threads = params.threads;
-    result.validity = repairValidity(result.mesh, normals, vp);
-    if (result.validity.facesAdded > 0 && params.repairQuality > 0) {
-      // The fills can hold poor triangles: the same quality repairs as above, then the check again (a repair that
-      // made something intersect is undone by removal there).
-      const BadTriangleReport again = repairBadTriangles(result.mesh, normals, params.repairQuality, params.repairDeviation);
-      result.badTriangles.moved += again.moved;
-      result.badTriangles.removed += again.removed;
-      if (params.remeshBadRegions) {
-        flippedEarlier += orientConsistently(result.mesh, normals).facesFlipped;
-        result.remeshedVertices += remeshBadRegions(result.mesh, normals, params.repairQuality);
-      }
-      vp.rounds = 1;
-      const ValidityReport check = repairValidity(result.mesh, normals, vp);
-      result.validity.rounds += check.rounds;
-      result.validity.facesRemoved += check.facesRemoved;
-      result.validity.facesAdded += check.facesAdded;
-      result.validity.verticesAdded += check.verticesAdded;
-      result.validity.removedWithoutFill += check.removedWithoutFill;
-    }
+    flippedEarlier += repairMeshValidity(params, result, normals);
     clock.end("validity", t);
   }
 
@@ -250,16 +292,7 @@ ReconstructResult reconstruct(const PointCloud& input, const ReconstructParams& 
 
   if (!input.attributes.empty()) {
     t = clock.begin("attributes");
-    SameSheet sameSheet;  // the resampler's intrinsic rule: vertices take values from input points on their sheet
-    std::shared_ptr<const IntrinsicRule> rule;
-    if (result.resampling.geodesic) {
-      rule = std::make_shared<IntrinsicRule>(result.resampling.geodesic, params.resampling.intrinsicRule);
-      sameSheet = [&rule](const Eigen::Vector3d& a, const Eigen::Vector3d& b) { return rule->acceptPoints(a, b); };
-    }
-    AttributeParams ap;
-    ap.threads = params.threads;
-    result.mesh.vertexAttributes =
-        interpolateAttributes(input, result.mesh.vertices, vertexNormals(result.mesh), sameSheet, ap);
+    carryAttributes(input, params, result);
     clock.end("attributes", t);
   }
 

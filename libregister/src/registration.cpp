@@ -257,6 +257,56 @@ std::string num(double v) {
   return s.str();
 }
 
+/// The runner-up (the best refined candidate at least 10 degrees away from the result), the score ratio, and
+/// the ambiguity flags (another pose within the tolerance; a planar cloud). Needs r.score and r.planar.
+void setRunnerUp(RegistrationResult& r, const Refined& refined, const Frame& fs, const Frame& ft,
+                 const RegistrationParams& params) {
+  const IcpResult& icp = refined.icp[refined.best];
+  const Eigen::Matrix3d Rbest = icp.T_target_source.topLeftCorner<3, 3>() / icp.scale;
+  double second = std::numeric_limits<double>::infinity();
+  for (std::size_t c = 0; c < refined.icp.size(); ++c) {
+    if (c == refined.best) continue;
+    const Eigen::Matrix3d Rc = refined.icp[c].T_target_source.topLeftCorner<3, 3>() / refined.icp[c].scale;
+    if (rotationAngle(Rbest, Rc) >= 10.0 * M_PI / 180.0 && refined.score[c].score < second) {
+      second = refined.score[c].score;
+      r.runnerUpScore = second;
+      r.runnerUpTransform = toOriginalUnits(refined.icp[c].T_target_source, refined.icp[c].scale, fs, ft);
+    }
+  }
+  r.secondBestScoreRatio = std::isfinite(second) && r.score > 0 ? second / r.score : 0.0;
+  if (std::isfinite(second) && second <= r.score * (1.0 + params.ambiguityTolerance)) {
+    r.ambiguous = true;
+    r.ambiguityReason = "another pose fits within " + num(100 * params.ambiguityTolerance) +
+                        "% (symmetric shape?)";
+  }
+  if (r.planar) {
+    r.ambiguous = true;
+    r.ambiguityReason = r.ambiguityReason.empty() ? std::string("planar cloud: mirrored poses fit equally well")
+                                                  : r.ambiguityReason + "; planar cloud";
+  }
+}
+
+/// Distances between the aligned source samples (@p source mapped by r.T_target_source) and the target's:
+/// Hausdorff, Hausdorff trimmed to the overlaps, and the overlap share.
+void measureAlignment(RegistrationResult& r, const std::vector<Eigen::Vector3d>& source,
+                      const std::vector<Eigen::Vector3d>& target, int threads) {
+  const std::vector<Eigen::Vector3d> aligned = applied(source, r.T_target_source);
+  r.hausdorff = hausdorffDistance(aligned, target, 1.0, threads);
+  // trimmed to the overlaps (estimated or given), each direction its own
+  const KnnIndex alignedTree(aligned), targetSamples(target);
+  r.hausdorffTrimmed = std::max(directedHausdorff(aligned, targetSamples, r.sourceOverlap, threads),
+                                directedHausdorff(target, alignedTree, r.targetOverlap, threads));
+  // overlap share: aligned source samples with a target sample within one sample spacing
+  const double l = spacingStats(target, threads).mean;
+  std::vector<char> near(aligned.size());
+  parallelFor(aligned.size(), threads, [&](std::size_t i) {
+    double d2 = 0;
+    targetSamples.nearest(aligned[i], &d2);
+    near[i] = d2 <= l * l;
+  });
+  r.overlapShare = static_cast<double>(std::count(near.begin(), near.end(), 1)) / static_cast<double>(near.size());
+}
+
 }  // namespace
 
 ResampleParams RegistrationParams::defaultResample() {
@@ -407,31 +457,10 @@ RegistrationResult registerClouds(const PointCloud& sourceIn, const PointCloud& 
   const std::size_t best = refined.best;
   const IcpResult& icp = refined.icp[best];
   const Eigen::Matrix4d& Tn = icp.T_target_source;
-  const Eigen::Matrix3d Rbest = Tn.topLeftCorner<3, 3>() / icp.scale;
   r.score = refined.score[best].score;
   r.sourceOverlap = refined.score[best].sourceOverlap;
   r.targetOverlap = refined.score[best].targetOverlap;
-  double second = std::numeric_limits<double>::infinity();
-  for (std::size_t c = 0; c < refined.icp.size(); ++c) {
-    if (c == best) continue;
-    const Eigen::Matrix3d Rc = refined.icp[c].T_target_source.topLeftCorner<3, 3>() / refined.icp[c].scale;
-    if (rotationAngle(Rbest, Rc) >= 10.0 * M_PI / 180.0 && refined.score[c].score < second) {
-      second = refined.score[c].score;
-      r.runnerUpScore = second;
-      r.runnerUpTransform = toOriginalUnits(refined.icp[c].T_target_source, refined.icp[c].scale, fs, ft);
-    }
-  }
-  r.secondBestScoreRatio = std::isfinite(second) && r.score > 0 ? second / r.score : 0.0;
-  if (std::isfinite(second) && second <= r.score * (1.0 + params.ambiguityTolerance)) {
-    r.ambiguous = true;
-    r.ambiguityReason = "another pose fits within " + num(100 * params.ambiguityTolerance) +
-                        "% (symmetric shape?)";
-  }
-  if (r.planar) {
-    r.ambiguous = true;
-    r.ambiguityReason = r.ambiguityReason.empty() ? std::string("planar cloud: mirrored poses fit equally well")
-                                                  : r.ambiguityReason + "; planar cloud";
-  }
+  setRunnerUp(r, refined, fs, ft, params);
   r.T_target_source = toOriginalUnits(Tn, icp.scale, fs, ft);
   r.scale = icp.scale * ft.radius / fs.radius;
   r.rotation = r.T_target_source.topLeftCorner<3, 3>() / r.scale;
@@ -445,22 +474,7 @@ RegistrationResult registerClouds(const PointCloud& sourceIn, const PointCloud& 
   r.bestCandidate = found.candidates[best].gridIndex;
   r.candidateRank = best;
   r.normalisedEnergy = found.candidates[best].energy;
-  const std::vector<Eigen::Vector3d> aligned = applied(rs.cloud.points, r.T_target_source);
-  r.hausdorff = hausdorffDistance(aligned, rt.cloud.points, 1.0, params.threads);
-  {  // trimmed to the overlaps (estimated or given), each direction its own
-    const KnnIndex alignedTree(aligned), targetSamples(rt.cloud.points);
-    r.hausdorffTrimmed = std::max(directedHausdorff(aligned, targetSamples, r.sourceOverlap, params.threads),
-                                  directedHausdorff(rt.cloud.points, alignedTree, r.targetOverlap, params.threads));
-    // overlap share: aligned source samples with a target sample within one sample spacing
-    const double l = spacingStats(rt.cloud.points, params.threads).mean;
-    std::vector<char> near(aligned.size());
-    parallelFor(aligned.size(), params.threads, [&](std::size_t i) {
-      double d2 = 0;
-      targetSamples.nearest(aligned[i], &d2);
-      near[i] = d2 <= l * l;
-    });
-    r.overlapShare = static_cast<double>(std::count(near.begin(), near.end(), 1)) / static_cast<double>(near.size());
-  }
+  measureAlignment(r, rs.cloud.points, rt.cloud.points, params.threads);
   stage("evaluate", t);
   stage("total", tTotal);
   return r;
