@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // The reports' JSON writer: layout, escaping, non-finite numbers, embedding another report.
 #include "iires/detail/json.hpp"
+#include "iires/preprocess.hpp"
+#include "iires/register/registration.hpp"
 
 #include <gtest/gtest.h>
 
@@ -48,4 +50,17 @@ TEST(Json, EmbeddedReportIsIndentedToItsLevel) {
   JsonWriter outer;
   outer.beginObject(true).key("inner").embed(inner.str() + "\n").member("b", 2).endObject();
   EXPECT_EQ(outer.str(), "{\n  \"inner\": {\n    \"a\": 1\n  },\n  \"b\": 2\n}");
+}
+
+// The reports written by hand before were not JSON for a NaN (written nan) or a string with a quote.
+TEST(Json, ReportsWriteNullForNaNAndEscapeStrings) {
+  iires::PreprocessResult p;
+  p.meanDisplacement = std::nan("");
+  EXPECT_NE(p.toJson().find("\"mean_displacement\": null"), std::string::npos) << p.toJson();
+  iires::reg::RegistrationResult r;
+  r.ambiguityReason = "a \"quoted\" reason";
+  r.rmse = std::numeric_limits<double>::infinity();
+  const std::string json = r.toJson();
+  EXPECT_NE(json.find(R"("ambiguity_reason": "a \"quoted\" reason")"), std::string::npos) << json;
+  EXPECT_NE(json.find("\"rmse\": null"), std::string::npos) << json;
 }
