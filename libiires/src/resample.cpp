@@ -17,10 +17,12 @@
 
 #include <Eigen/Geometry>
 
+#include "iires/detail/json.hpp"
 #include "iires/knn.hpp"
-#include "iires/parallel.hpp"
-#include "iires/radix_sort.hpp"
-#include "iires/tangent_cell.hpp"
+#include "iires/detail/parallel.hpp"
+#include "iires/detail/radix_sort.hpp"
+#include "iires/detail/stage_clock.hpp"
+#include "iires/detail/tangent_cell.hpp"
 #include "iires/validate.hpp"
 
 namespace iires {
@@ -905,22 +907,6 @@ std::vector<PointAttribute> carryAttributes(const PointCloud& input, const std::
   return interpolateAttributes(input, output, normals, sameSheet, ap);
 }
 
-std::string jsonNumber(double x) {
-  if (!std::isfinite(x)) return "null";
-  std::ostringstream os;
-  os.precision(10);
-  os << x;
-  return os.str();
-}
-
-template <typename T>
-std::string jsonArray(const std::vector<T>& values) {
-  std::string out = "[";
-  for (std::size_t i = 0; i < values.size(); ++i)
-    out += (i ? ", " : "") + jsonNumber(static_cast<double>(values[i]));
-  return out + "]";
-}
-
 /// Exit 0 promises points on the input's surface. Each axis of the working cloud's bounding box is enlarged by
 /// three output spacings, but by no more than a tenth of its own extent (a sample 20 units off a ribbon 2 wide
 /// is off the surface, however long the ribbon); a sample outside has left the surface (projection diverged
@@ -972,23 +958,21 @@ void ResampleParams::validate() const {
 }
 
 std::string ResampleResult::toJson() const {
-  std::ostringstream os;
-  os << "{\n  \"input_points\": " << inputPoints << ",\n  \"duplicates_merged\": " << duplicatesMerged
-     << ",\n  \"requested_points\": " << requestedPoints << ",\n  \"output_points\": " << cloud.size()
-     << ",\n  \"working_points\": " << thinnedPoints << ",\n  \"initial_samples\": " << initialSamples << ",\n  \"passes\": " << passes
-     << ",\n  \"relax_iterations\": " << relaxIterations << ",\n  \"splits\": " << splits
-     << ",\n  \"collapses\": " << collapses << ",\n  \"target_length\": " << jsonNumber(targetLength)
-     << ",\n  \"components\": " << components << ",\n  \"satellites\": " << satellites
-     << ",\n  \"feature_points\": " << featurePoints << ",\n  \"feature_samples\": " << featureSamples
-     << ",\n  \"points_per_level\": " << jsonArray(pointsPerLevel)
-     << ",\n  \"spacing_per_level\": " << jsonArray(spacingPerLevel)
-     << ",\n  \"preprocess\": " << preprocessing.toJson()
-     << ",\n  \"spacing\": {\"mean\": " << jsonNumber(spacing.mean) << ", \"min\": " << jsonNumber(spacing.min)
-     << ", \"max\": " << jsonNumber(spacing.max) << ", \"cv\": " << jsonNumber(spacing.cv) << "},\n  \"time_s\": {";
-  for (std::size_t i = 0; i < timings.size(); ++i)
-    os << (i ? ", " : "") << "\"" << timings[i].name << "\": " << jsonNumber(timings[i].seconds);
-  os << "}\n}\n";
-  return os.str();
+  detail::JsonWriter j;
+  j.beginObject(true).member("input_points", inputPoints).member("duplicates_merged", duplicatesMerged);
+  j.member("requested_points", requestedPoints).member("output_points", cloud.size());
+  j.member("working_points", thinnedPoints).member("initial_samples", initialSamples).member("passes", passes);
+  j.member("relax_iterations", relaxIterations).member("splits", splits).member("collapses", collapses);
+  j.member("target_length", targetLength).member("components", components).member("satellites", satellites);
+  j.member("feature_points", featurePoints).member("feature_samples", featureSamples);
+  j.array("points_per_level", pointsPerLevel).array("spacing_per_level", spacingPerLevel);
+  j.key("preprocess").embed(preprocessing.toJson());
+  j.key("spacing").beginObject().member("mean", spacing.mean).member("min", spacing.min);
+  j.member("max", spacing.max).member("cv", spacing.cv).endObject();
+  j.key("time_s").beginObject();
+  for (const StageTime& t : timings) j.member(t.name, t.seconds);
+  j.endObject().endObject();
+  return j.str() + "\n";
 }
 
 ResampleResult resample(PointCloud cloud, const ResampleParams& params) {

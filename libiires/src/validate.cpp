@@ -8,8 +8,8 @@
 #include <sstream>
 #include <vector>
 
-#include "iires/parallel.hpp"
-#include "iires/radix_sort.hpp"
+#include "iires/detail/parallel.hpp"
+#include "iires/detail/radix_sort.hpp"
 
 namespace iires {
 namespace {
