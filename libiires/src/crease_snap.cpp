@@ -440,8 +440,54 @@ void addCorners(const KnnIndex& index, double h, const FeatureParams& params, st
   owner.insert(owner.end(), cornerOwner.begin(), cornerOwner.end());
   out.insert(out.end(), corners.begin(), corners.end());
 }
+
 }  // namespace
 
+// The steps of snapToCreases():
+//  1. At each sample x, the neighbours within params.radius spacings are split into two sheets as in the
+//     normal-variation test, a plane is fitted to each with weights exp(−d²/σ²) (d the distance to x, σ =
+//     params.snapSigma spacings: local planes, so curved sheets bias the line less than the detector's
+//     unweighted fit), and x moves to the nearest point of the two planes' intersection; once more from there.
+//     Where no crease lies within maxLineDistance, x may jump to one up to 0.8·radius away that runs along
+//     its chain (within maxChainTurn); failing that, a looser fit (any angle, 2× residual, half the cluster
+//     share) may correct it by at most h/4.
+//  2. A sample where that fit fails the detector's thresholds goes onto the chord between the nearest fitted
+//     samples of its chain (at most 3 away on each side) if the chord's sagitta, L·θ/8 (θ the turn between the
+//     two fits' crease directions), is below maxResidual spacings; otherwise it is dropped (a chain end
+//     extended past the feature would sit off the surface; a chord across a bend would cut inside it).
+//  3. Tracing: each chain's samples are split where samples were dropped (gaps over 1.6 × the chain's median
+//     spacing), and every piece's ends (a lone sample: both ways along its own crease) are continued along the
+//     crease: step one spacing along the last crease direction, fit the two sheets there (the snap fit; on the
+//     half-ball behind the prediction where the full ball fails), place the sample one step on along the fitted
+//     line; stop where the fit fails (over one or two failed steps the trace may resume), where the fit lands
+//     more than half a step (+ h/4) off the prediction, or where a sample is already within 0.75 steps (the gap
+//     is bridged). Near a corner the points ahead that neither plane explains (3·maxResidual off both, a normal
+//     unlike both) fit a third plane: the corner is the three planes' intersection (refined by reassigning the
+//     points around it to the nearest plane, twice), the gap to it is filled, and the corner's two other creases
+//     (the third plane with each sheet, on the side where the sheet lies) are followed along those planes while
+//     the points around stay explained by them, handing over to the stepped fit once it holds. Traced
+//     branches get chain indices after the given ones. Sequential in a fixed order: deterministic.
+//  3b. Tips: two open ends whose crease lines (each the last fit that holds within 3 samples of the end,
+//     its planes refitted without the points off both) share a plane and converge at 8°–maxChainTurn,
+//     meeting ahead of both within 6·radius spacings, are continued on those lines to the tip: the common
+//     point of the shared plane and the two other sheets' planes, refitted on the points around it (a step
+//     in a surface fading out, as fandisk's wedge: two creases end at one point without a third crease).
+//  4. Where two chains' end lines (at least 13° apart), continued, meet within 3·radius spacings of both ends and within
+//     params.maxOffCrease spacings of an input point, and no sample is within half a spacing of it (tracing
+//     placed most corners already), a corner sample is added there, and the gap from each of those chain ends
+//     to the corner gets samples at the chain's spacing on the straight line.
+//  5. Gaps: two samples 1.5–6 × the chains' median spacing apart with no sample between them (within 0.45 × their
+//     distance of the midpoint and half a spacing of their line) get samples at ≤ that spacing between them: on
+//     the snap fit's crease where it runs along them and near their chord, else on the fitted crease line of
+//     either, else on the chord where the samples on either side run on in line with it (within 20°; one side
+//     suffices up to 4.5 spacings); a gap where none holds (two creases meeting) stays open.
+//  6. Curved sheets: a plane fitted to a sheet that curves along the crease (a plate meeting a cylinder) lies
+//     off it, and so does the planes' line. Every sample whose looser snap fit (as in 1) puts the planes'
+//     line within maxLineDistance/2 local spacings of it moves to the crease of the two sheets fitted as
+//     height fields over those planes, bending along the crease (h = c0 + c1·u + c2·v + c3·u², u along it),
+//     on the 40 nearest input points (each to the nearer sheet; points over 3·maxResidual off both left out,
+//     the others weighted down by their distance), if both fit within maxResidual, under 10 % of the points
+//     are left out (more: a third sheet, as at a corner) and the move is at most maxLineDistance local spacings.
 std::vector<Eigen::Vector3d> snapToCreases(const PointCloud& cloud, const std::vector<Eigen::Vector3d>& samples,
                                            const std::vector<std::uint32_t>& chainOfSample, double spacing,
                                            const FeatureParams& params, std::vector<std::uint32_t>* chainOut) {
