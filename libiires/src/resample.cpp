@@ -84,6 +84,63 @@ void checkWithinInput(const std::vector<Eigen::Vector3d>& samples, const std::ve
   }
 }
 
+/// The cloud the stages work on: voxel-thinned first when it is far denser than the output (so every O(n)
+/// stage works on ≈ maxInputPerSample·N points, never fewer than kMinWorkingPoints: small N keep a fine
+/// surface), then in Morton order (every stage loops over the points querying their neighbours: in that order
+/// those stay in cache).
+PointCloud workingCloud(PointCloud cloud, const ResampleParams& params, const StageClock& clock) {
+  constexpr std::size_t kMinWorkingPoints = 60000;
+  const std::size_t workingTarget = std::max(kMinWorkingPoints, params.maxInputPerSample * params.targetCount);
+  if (params.maxInputPerSample > 0 && cloud.size() > workingTarget) {
+    const auto t = clock.begin("thin");
+    const std::size_t target = workingTarget;
+    cloud = select(cloud, voxelThin(cloud.points, cloud.normals, target,
+                                    bboxDiagonal(cloud.points) / std::sqrt(static_cast<double>(target)), 0,
+                                    params.threads));
+    clock.end("thin", t);
+  }
+  return select(cloud, mortonOrder(cloud.points, params.threads));
+}
+
+/// The samples `--sharp-edges` holds: the feature chains sampled at edgeRatio × the output spacing (coarser when
+/// they would take over half of N) and put exactly on the creases; sets featurePoints and featureSamples (how
+/// many of them fit beside the caller's fixed samples).
+std::vector<Eigen::Vector3d> creaseSamples(const PointCloud& cloud, double area, const ResampleParams& params,
+                                           ResampleResult& result) {
+  FeatureParams fp = params.features;
+  fp.threads = params.threads;
+  const FeatureResult features = detectFeatures(cloud, fp);
+  const double l0 = std::sqrt(2.0 * area / (std::sqrt(3.0) * static_cast<double>(params.targetCount)));
+  std::vector<std::uint32_t> chainOf;
+  std::vector<Eigen::Vector3d> onEdges = sampleFeatureChains(features.chains, params.edgeRatio * l0, &chainOf);
+  if (onEdges.size() + params.fixedSamples.size() > params.targetCount / 2)  // never let edges take over N
+    onEdges = sampleFeatureChains(features.chains, params.edgeRatio * l0 * 2.0 *
+                                                       static_cast<double>(onEdges.size()) /
+                                                       static_cast<double>(params.targetCount), &chainOf);
+  onEdges = snapToCreases(cloud, onEdges, chainOf, features.spacing, fp);  // exactly on the creases
+  result.featurePoints = features.featureIndices.size();
+  result.featureSamples = std::min(onEdges.size(), params.targetCount - params.fixedSamples.size());
+  return onEdges;
+}
+
+/// Curvature mode's report: output points and mean spacing per level (each output point takes the level of
+/// its nearest working-cloud point, found in @p working).
+void reportLevels(const CurvatureResult& curvature, const KnnIndex& working, ResampleResult& result) {
+  const std::size_t levels = curvature.pointsPerLevel.size();
+  result.pointsPerLevel.assign(levels, 0);
+  result.spacingPerLevel.assign(levels, 0.0);
+  const KnnIndex out(result.cloud.points);
+  std::vector<std::uint32_t> idx;
+  std::vector<double> d2;
+  for (const Eigen::Vector3d& p : result.cloud.points) {
+    const auto level = static_cast<std::size_t>(curvature.level[working.nearest(p)]);
+    ++result.pointsPerLevel[level];
+    if (out.knn(p, 2, idx, d2) == 2) result.spacingPerLevel[level] += std::sqrt(d2[1]);
+  }
+  for (std::size_t q = 0; q < levels; ++q)
+    if (result.pointsPerLevel[q]) result.spacingPerLevel[q] /= static_cast<double>(result.pointsPerLevel[q]);
+}
+
 }  // namespace
 
 void ResampleParams::validate() const {
@@ -145,20 +202,8 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
   result.duplicatesMerged = report.duplicatesMerged;
   clock.end("validate", t);
 
-  constexpr std::size_t kMinWorkingPoints = 60000;  // thinning never goes below this: small N keep a fine surface
-  const std::size_t workingTarget = std::max(kMinWorkingPoints, params.maxInputPerSample * params.targetCount);
-  if (params.maxInputPerSample > 0 && cloud.size() > workingTarget) {
-    // Far denser than the output: thin first, so every O(n) stage below works on ≈ maxInputPerSample·N points.
-    t = clock.begin("thin");
-    const std::size_t target = workingTarget;
-    cloud = select(cloud, voxelThin(cloud.points, cloud.normals, target,
-                                    bboxDiagonal(cloud.points) / std::sqrt(static_cast<double>(target)), 0,
-                                    params.threads));
-    clock.end("thin", t);
-  }
+  cloud = workingCloud(std::move(cloud), params, clock);
   result.thinnedPoints = cloud.size();
-  // Every stage below loops over the points querying their neighbours: in Morton order those stay in cache.
-  cloud = select(cloud, mortonOrder(cloud.points, params.threads));
 
   constexpr std::size_t kPreprocessMinPoints = 25;
   const bool preprocessing = params.preprocess && cloud.size() >= kPreprocessMinPoints;
@@ -250,20 +295,7 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
   ResampleParams local = params;  // sharp edges add fixed samples
   if (params.sharpEdges) {
     t = clock.begin("features");
-    FeatureParams fp = params.features;
-    fp.threads = params.threads;
-    const FeatureResult features = detectFeatures(cloud, fp);
-    const double l0 =
-        std::sqrt(2.0 * surface->area() / (std::sqrt(3.0) * static_cast<double>(params.targetCount)));
-    std::vector<std::uint32_t> chainOf;
-    std::vector<Eigen::Vector3d> onEdges = sampleFeatureChains(features.chains, params.edgeRatio * l0, &chainOf);
-    if (onEdges.size() + params.fixedSamples.size() > params.targetCount / 2)  // never let edges take over N
-      onEdges = sampleFeatureChains(features.chains, params.edgeRatio * l0 * 2.0 *
-                                                         static_cast<double>(onEdges.size()) /
-                                                         static_cast<double>(params.targetCount), &chainOf);
-    onEdges = snapToCreases(cloud, onEdges, chainOf, features.spacing, fp);  // exactly on the creases
-    result.featurePoints = features.featureIndices.size();
-    result.featureSamples = std::min(onEdges.size(), params.targetCount - params.fixedSamples.size());
+    const std::vector<Eigen::Vector3d> onEdges = creaseSamples(cloud, surface->area(), params, result);
     local.fixedSamples.insert(local.fixedSamples.end(), onEdges.begin(),
                               onEdges.begin() + static_cast<long>(result.featureSamples));
     clock.end("features", t);
@@ -286,21 +318,7 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
   t = clock.begin("report");
   result.spacing = spacingStats(result.cloud.points, params.threads);
   checkWithinInput(result.cloud.points, cloud.points, result.spacing.mean);
-  if (curvature) {  // points and mean spacing per level (each output point takes its nearest input's level)
-    const std::size_t levels = curvature->pointsPerLevel.size();
-    result.pointsPerLevel.assign(levels, 0);
-    result.spacingPerLevel.assign(levels, 0.0);
-    const KnnIndex out(result.cloud.points);
-    std::vector<std::uint32_t> idx;
-    std::vector<double> d2;
-    for (const Eigen::Vector3d& p : result.cloud.points) {
-      const auto level = static_cast<std::size_t>(curvature->level[surface->index().nearest(p)]);
-      ++result.pointsPerLevel[level];
-      if (out.knn(p, 2, idx, d2) == 2) result.spacingPerLevel[level] += std::sqrt(d2[1]);
-    }
-    for (std::size_t q = 0; q < levels; ++q)
-      if (result.pointsPerLevel[q]) result.spacingPerLevel[q] /= static_cast<double>(result.pointsPerLevel[q]);
-  }
+  if (curvature) reportLevels(*curvature, surface->index(), result);
   clock.end("report", t);
   if (!attributeSource.attributes.empty()) {
     t = clock.begin("attributes");
