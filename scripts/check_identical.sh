@@ -51,7 +51,7 @@ run "$G" torus_moved.xyz torus.xyz --no-scale -m 400 --grid euler --report rigid
 # reconstruct: meshes in three formats, holes, quality of an existing mesh, mesh files read back as clouds
 run "$C" torus.xyz mesh.ply -n 1200 --report mesh.json --uncovered uncovered.xyz
 run "$C" box.xyz mesh.obj -n 900 --report mesh_box.json
-# (not --method advancing-front: its mesh differs from run to run, even on one thread)
+# (not --method advancing-front: CGAL orders equal-priority edges by address, so its mesh varies with --threads 2)
 run "$C" torus_moved.xyz mesh.off -n 800 --report mesh_moved.json
 run "$C" torus.xyz --quality-only mesh.off --report quality.json
 run "$C" torus_attr.xyz mesh_attr.ply -n 600 --columns x,y,z,red,green,blue,intensity,label:int
