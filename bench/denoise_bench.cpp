@@ -36,7 +36,7 @@
 #include "iires/metrics.hpp"
 #include "iires/normals.hpp"
 #include "iires/outliers.hpp"
-#include "iires/parallel.hpp"
+#include "iires/detail/parallel.hpp"
 #include "iires/preprocess.hpp"
 #include "iires/sampling.hpp"
 

@@ -24,7 +24,7 @@ function(iires_add_dependent_library short)
   target_include_directories(iires_${short} PUBLIC
     $<BUILD_INTERFACE:${CMAKE_CURRENT_SOURCE_DIR}/include>
     $<INSTALL_INTERFACE:${CMAKE_INSTALL_INCLUDEDIR}>)
-  target_link_libraries(iires_${short} PUBLIC iires::iires PRIVATE ${ARGN})
+  target_link_libraries(iires_${short} PUBLIC iires::iires PRIVATE OpenMP::OpenMP_CXX ${ARGN})
   iires_target_options(iires_${short})
   install(TARGETS iires_${short} EXPORT iiresTargets
     ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR} LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR})

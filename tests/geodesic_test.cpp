@@ -284,6 +284,17 @@ TEST(Geodesic, ExportsPlyWithCoordinates) {
   const PointCloud back = readPointCloud(path);  // any PLY reader skips the extra properties
   ASSERT_EQ(back.size(), 500u);
   EXPECT_EQ(back.points[17], c.points[17]);
+  // The coordinates and component ids come back as the reader's attributes, in their types.
+  ASSERT_EQ(back.attributes.size(), 4u);
+  for (int s = 0; s < 3; ++s) {
+    EXPECT_EQ(back.attributes[static_cast<std::size_t>(s)].name, "g" + std::to_string(s + 1));
+    EXPECT_EQ(back.attributes[static_cast<std::size_t>(s)].type, "float");
+    for (std::size_t i : {0u, 17u, 499u})
+      EXPECT_EQ(back.attributes[static_cast<std::size_t>(s)].values[i], g.coordinate(i, s));
+  }
+  EXPECT_EQ(back.attributes[3].name, "component");
+  EXPECT_EQ(back.attributes[3].type, "uint");
+  EXPECT_EQ(back.attributes[3].values[17], g.component(17));
   EXPECT_THROW(writeGeodesicPly(dir + "/missing/geo.ply", g), InputError);
   EXPECT_THROW(writeGeodesicPly(dir + "/geo.xyz", g), InputError);
   EXPECT_FALSE(std::filesystem::exists(dir + "/geo.xyz"));

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // Tests for radix_sort.hpp: the same order as a stable comparison sort, for keys that use few or all bits.
-#include "iires/radix_sort.hpp"
+#include "iires/detail/radix_sort.hpp"
 
 #include <gtest/gtest.h>
 

@@ -215,9 +215,9 @@ TEST(SharpEdges, HeldOnTheCreasesAndCloserToTheMeshThanIsotropic) {
   const iires::MeshDistance distance(mesh);
   const auto err = distance.distances(r.cloud.points), isoErr = distance.distances(iso.cloud.points);
   EXPECT_LT(err.mean, isoErr.mean);
-  // Issue 5 asks for a max error not worse than isotropic mode's. Met on this input since the chain ends are
-  // traced into their corners (h5, 2026-12-01: 0.71 × isotropic's max; before: 1.44 ×, from samples held near a
-  // corner). Not met in every bench/sharp_edge_bench row (see BENCHMARKS.md / the h5 report).
+  // Issue 5 asks for a max error not worse than isotropic mode's: met on this input because the chain ends are
+  // traced into their corners (samples held short of a corner set the max otherwise). Not met in every
+  // bench/sharp_edge_bench row.
   EXPECT_LE(err.max, isoErr.max);
   const auto edges = iires::sampleSegments(iires::sharpMeshEdges(mesh, 45.0), 0.01 * r.spacing.mean);
   const auto cover = iires::coverage(edges, r.cloud.points), isoCover = iires::coverage(edges, iso.cloud.points);

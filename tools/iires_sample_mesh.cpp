@@ -12,7 +12,7 @@
 #include "iires/metrics.hpp"
 #include "iires/io.hpp"
 #include "iires/knn.hpp"
-#include "iires/parallel.hpp"
+#include "iires/detail/parallel.hpp"
 #include "iires/sampling.hpp"
 
 namespace {

@@ -8,7 +8,7 @@
 #include <utility>
 
 #include "iires/knn.hpp"
-#include "iires/parallel.hpp"
+#include "iires/detail/parallel.hpp"
 
 namespace iires {
 namespace {

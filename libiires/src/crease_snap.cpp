@@ -19,7 +19,7 @@
 #include <unordered_map>
 
 #include "iires/knn.hpp"
-#include "iires/parallel.hpp"
+#include "iires/detail/parallel.hpp"
 
 
 namespace iires {
@@ -183,36 +183,24 @@ void refineOnCurvedSheets(const PointCloud& cloud, const KnnIndex& index, double
   });
 }
 
-/// Step 3b of snapToCreases(): tips. Two creases that share a sheet and run into one point at a small angle
-/// (8°–maxChainTurn; a step in a surface fading out, as fandisk's wedge at (0.072 0.035 −0.046), 18°) end
-/// there without a third crease. Within a few spacings of the tip both creases lie in every fit's
-/// neighbourhood, so the traces stop about a neighbourhood apart, and step 4's end lines (through the last
-/// two samples, bent by the other crease) meet short of the tip. Here each open end's crease is the last fit
-/// that holds at the end sample or up to 3 samples back (the full ball, else the half-ball behind), its
-/// planes refitted without the points off both (refitPlanesRobust: the other crease's far sheet). Two ends
-/// whose lines converge, share a plane (each end within maxLineDistance of one of the other's planes) and
-/// meet (within half a spacing) ahead of both (within 6·radius local spacings) have their tip there, refined
-/// as the common point of the shared plane and the two other sheets' planes refitted (Gaussian-weighted) on
-/// the points around it, up to 4 times while a refit moves it by 0.1–1 spacing. Both ends are continued to
-/// the tip on the straight line at their step (the second one's samples within half a step of the first's
-/// left out, close to the tip) unless a placed sample lies on the way (within half a step: another crease
-/// between them) or the tip is farther than maxOffCrease from the input. The samples are inserted after their
-/// ends, so the runs end at the tip and step 4 adds no corner there. Ends are paired greedily in order:
-/// deterministic.
-void placeCreaseTips(const PointCloud& cloud, const KnnIndex& index, double h, const FeatureParams& params,
-                     std::vector<Eigen::Vector3d>& out, std::vector<std::uint32_t>& owner) {
-  struct TipEnd {
-    std::size_t run;
-    bool back;                         // the run's last sample (else its first)
-    Eigen::Vector3d point, direction;  // on the fitted line, nearest the end sample; forward, off the end
-    double step, hl;
-    Crease crease;
-  };
-  const auto runs = ownerRuns(owner);
+/// A chain end of placeCreaseTips(): its crease line off the end.
+struct TipEnd {
+  std::size_t run;
+  bool back;                         // the run's last sample (else its first)
+  Eigen::Vector3d point, direction;  // on the fitted line, nearest the end sample; forward, off the end
+  double step, hl;
+  Crease crease;
+};
+
+/// The runs' ends with a crease fit near them (up to 3 samples in; the robust refit when it keeps the
+/// direction), as points on the fitted line with the direction off the end.
+std::vector<TipEnd> tipEnds(const PointCloud& cloud, const KnnIndex& index, double h, const FeatureParams& params,
+                            const std::vector<Eigen::Vector3d>& out,
+                            const std::vector<std::pair<std::size_t, std::size_t>>& runs) {
   const double cosTurn = std::cos(params.maxChainTurn * kDeg);
-  std::vector<TipEnd> ends;
   std::vector<std::uint32_t> idx, behind;
   std::vector<double> d2;
+  std::vector<TipEnd> ends;
   for (std::size_t r = 0; r < runs.size(); ++r) {
     const auto [a, b] = runs[r];
     if (b == a) continue;
@@ -240,6 +228,70 @@ void placeCreaseTips(const PointCloud& cloud, const KnnIndex& index, double h, c
       ends.push_back({r, side == 1, c.point + dir * (tip - c.point).dot(dir), dir, step, hl, c});
     }
   }
+  return ends;
+}
+
+/// The tip where ends @p ea and @p eb meet, as the three sheets' common point, starting from @p tip.
+Eigen::Vector3d refineTip(const PointCloud& cloud, const KnnIndex& index, const FeatureParams& params,
+                          const TipEnd& ea, const TipEnd& eb, bool sharedA, bool sharedB, double hl,
+                          Eigen::Vector3d tip) {
+  std::vector<std::uint32_t> idx;
+  std::vector<double> d2;
+  // The tip as the three sheets' common point: the shared plane (from the ends' fits: the shared sheet
+  // narrows to nothing at the tip) and the two other sheets' planes, refitted on the points around the
+  // tip that lie nearest to them (within 3·maxResidual).
+  Eigen::Vector3d pn[3] = {sharedA ? ea.crease.normalA : ea.crease.normalB,
+                           sharedA ? ea.crease.normalB : ea.crease.normalA,
+                           sharedB ? eb.crease.normalB : eb.crease.normalA};
+  double po[3] = {sharedA ? ea.crease.offsetA : ea.crease.offsetB,
+                  sharedA ? ea.crease.offsetB : ea.crease.offsetA,
+                  sharedB ? eb.crease.offsetB : eb.crease.offsetA};
+  const double tolc = 3.0 * params.maxResidual * hl;
+  std::vector<std::uint32_t> part[3];
+  for (int it = 0; it < 4; ++it) {
+    index.radius(tip, params.radius * hl, idx, d2);
+    partitionByPlanes(cloud.points, idx, pn, po, tolc, part);
+    Eigen::Vector3d tn[3] = {pn[0], pn[1], pn[2]};
+    double to[3] = {po[0], po[1], po[2]};
+    bool fitted = true;
+    for (int k = 1; k < 3 && fitted; ++k)
+      fitted = part[k].size() >= 5 && fitPlane(cloud.points, part[k], tip, params.snapSigma * hl, pn[k],
+                                               tn[k], to[k]) <= 2.0 * params.maxResidual * hl;
+    if (!fitted) break;
+    Eigen::Matrix3d m;
+    m << tn[0].transpose(), tn[1].transpose(), tn[2].transpose();
+    if (std::abs(m.determinant()) < 0.1) break;
+    const Eigen::Vector3d k3 = m.inverse() * Eigen::Vector3d(to[0], to[1], to[2]);
+    const double moved = (k3 - tip).norm();
+    if (moved > hl) break;
+    for (int k = 1; k < 3; ++k) pn[k] = tn[k], po[k] = to[k];
+    tip = k3;
+    if (moved < 0.1 * hl) break;
+  }
+  return tip;
+}
+
+/// Step 3b of snapToCreases(): tips. Two creases that share a sheet and run into one point at a small angle
+/// (8°–maxChainTurn; a step in a surface fading out, as fandisk's wedge at (0.072 0.035 −0.046), 18°) end
+/// there without a third crease. Within a few spacings of the tip both creases lie in every fit's
+/// neighbourhood, so the traces stop about a neighbourhood apart, and step 4's end lines (through the last
+/// two samples, bent by the other crease) meet short of the tip. Here each open end's crease is the last fit
+/// that holds at the end sample or up to 3 samples back (the full ball, else the half-ball behind), its
+/// planes refitted without the points off both (refitPlanesRobust: the other crease's far sheet). Two ends
+/// whose lines converge, share a plane (each end within maxLineDistance of one of the other's planes) and
+/// meet (within half a spacing) ahead of both (within 6·radius local spacings) have their tip there, refined
+/// as the common point of the shared plane and the two other sheets' planes refitted (Gaussian-weighted) on
+/// the points around it, up to 4 times while a refit moves it by 0.1–1 spacing. Both ends are continued to
+/// the tip on the straight line at their step (the second one's samples within half a step of the first's
+/// left out, close to the tip) unless a placed sample lies on the way (within half a step: another crease
+/// between them) or the tip is farther than maxOffCrease from the input. The samples are inserted after their
+/// ends, so the runs end at the tip and step 4 adds no corner there. Ends are paired greedily in order:
+/// deterministic.
+void placeCreaseTips(const PointCloud& cloud, const KnnIndex& index, double h, const FeatureParams& params,
+                     std::vector<Eigen::Vector3d>& out, std::vector<std::uint32_t>& owner) {
+  const auto runs = ownerRuns(owner);
+  const double cosTurn = std::cos(params.maxChainTurn * kDeg);
+  std::vector<TipEnd> ends = tipEnds(cloud, index, h, params, out, runs);
   const double cosMin = std::cos(8.0 * kDeg);  // closer to parallel: no tip within reach
   std::vector<char> used(ends.size(), 0);
   std::vector<std::vector<Eigen::Vector3d>> extension(ends.size());
@@ -274,39 +326,7 @@ void placeCreaseTips(const PointCloud& cloud, const KnnIndex& index, double h, c
       const Eigen::Vector3d pa = ea.point + sa * ea.direction, pb = eb.point + tb * eb.direction;
       if ((pa - pb).norm() > 0.5 * hl) continue;  // the two lines must (nearly) meet
       Eigen::Vector3d tip = 0.5 * (pa + pb);
-      {
-        // The tip as the three sheets' common point: the shared plane (from the ends' fits: the shared sheet
-        // narrows to nothing at the tip) and the two other sheets' planes, refitted on the points around the
-        // tip that lie nearest to them (within 3·maxResidual).
-        Eigen::Vector3d pn[3] = {sharedA ? ea.crease.normalA : ea.crease.normalB,
-                                 sharedA ? ea.crease.normalB : ea.crease.normalA,
-                                 sharedB ? eb.crease.normalB : eb.crease.normalA};
-        double po[3] = {sharedA ? ea.crease.offsetA : ea.crease.offsetB,
-                        sharedA ? ea.crease.offsetB : ea.crease.offsetA,
-                        sharedB ? eb.crease.offsetB : eb.crease.offsetA};
-        const double tolc = 3.0 * params.maxResidual * hl;
-        std::vector<std::uint32_t> part[3];
-        for (int it = 0; it < 4; ++it) {
-          index.radius(tip, params.radius * hl, idx, d2);
-          partitionByPlanes(cloud.points, idx, pn, po, tolc, part);
-          Eigen::Vector3d tn[3] = {pn[0], pn[1], pn[2]};
-          double to[3] = {po[0], po[1], po[2]};
-          bool fitted = true;
-          for (int k = 1; k < 3 && fitted; ++k)
-            fitted = part[k].size() >= 5 && fitPlane(cloud.points, part[k], tip, params.snapSigma * hl, pn[k],
-                                                     tn[k], to[k]) <= 2.0 * params.maxResidual * hl;
-          if (!fitted) break;
-          Eigen::Matrix3d m;
-          m << tn[0].transpose(), tn[1].transpose(), tn[2].transpose();
-          if (std::abs(m.determinant()) < 0.1) break;
-          const Eigen::Vector3d k3 = m.inverse() * Eigen::Vector3d(to[0], to[1], to[2]);
-          const double moved = (k3 - tip).norm();
-          if (moved > hl) break;
-          for (int k = 1; k < 3; ++k) pn[k] = tn[k], po[k] = to[k];
-          tip = k3;
-          if (moved < 0.1 * hl) break;
-        }
-      }
+      tip = refineTip(cloud, index, params, ea, eb, sharedA, sharedB, hl, tip);
       double nearest = 0;
       index.nearest(tip, &nearest);
       if (std::sqrt(nearest) > params.maxOffCrease * hl) continue;  // off the surface
@@ -352,8 +372,122 @@ void placeCreaseTips(const PointCloud& cloud, const KnnIndex& index, double h, c
 }
 
 
+
+/// Step 3 of snapToCreases(): corners. Two chain ends whose crease lines, continued forward, meet within a few
+/// spacings of both get a sample where they meet (the end samples of chains stop short of a corner, where the
+/// two-plane fit fails), and the gaps to it samples at the chains' spacing.
+void addCorners(const KnnIndex& index, double h, const FeatureParams& params, std::vector<Eigen::Vector3d>& out,
+                std::vector<std::uint32_t>& owner) {
+  struct End {
+    Eigen::Vector3d point, direction;  // direction: forward, off the end of the chain
+    double step;                       // the chain's sample spacing there
+    std::uint32_t chain;
+    bool filled;                       // already linked to a corner
+  };
+  std::vector<End> ends;
+  for (const auto& [a, b] : ownerRuns(owner))
+    if (b > a) {
+      ends.push_back({out[a], (out[a] - out[a + 1]).normalized(), (out[a] - out[a + 1]).norm(), owner[a], false});
+      ends.push_back({out[b], (out[b] - out[b - 1]).normalized(), (out[b] - out[b - 1]).norm(), owner[a], false});
+    }
+  const double reach = 3.0 * params.radius * h;
+  std::vector<Eigen::Vector3d> corners, cornerPoints;  // all added samples; the corners alone
+  std::vector<std::uint32_t> cornerOwner;
+  // The gap between a chain end and its corner gets samples at the chain's spacing, on the straight line.
+  auto fill = [&](End& e, const Eigen::Vector3d& corner) {
+    if (e.filled) return;
+    e.filled = true;
+    const double gap = (corner - e.point).norm();
+    const int pieces = static_cast<int>(std::ceil(gap / std::max(e.step, 1e-300) - 0.25));
+    for (int k = 1; k < pieces; ++k) {
+      corners.push_back(e.point + (corner - e.point) * (static_cast<double>(k) / pieces));
+      cornerOwner.push_back(e.chain);
+    }
+  };
+  for (std::size_t a = 0; a < ends.size(); ++a)
+    for (std::size_t b = a + 1; b < ends.size(); ++b) {
+      End &ea = ends[a], &eb = ends[b];
+      if (ea.chain == eb.chain || (ea.point - eb.point).norm() > reach) continue;
+      // Closest points of the two lines: ea.point + s·da and eb.point + t·db.
+      const double c = ea.direction.dot(eb.direction);
+      if (1.0 - c * c < 0.05) continue;  // nearly parallel (under 13°): no corner between them
+      const Eigen::Vector3d w = ea.point - eb.point;
+      const double d = ea.direction.dot(w), e = eb.direction.dot(w);
+      const double sa = (c * e - d) / (1.0 - c * c), tb = (e - c * d) / (1.0 - c * c);
+      if (sa < -0.5 * h || tb < -0.5 * h || sa > reach || tb > reach) continue;
+      const Eigen::Vector3d pa = ea.point + sa * ea.direction, pb = eb.point + tb * eb.direction;
+      if ((pa - pb).norm() > 0.5 * h) continue;  // the two lines must (nearly) meet
+      Eigen::Vector3d corner = 0.5 * (pa + pb);
+      double nearest = 0;
+      index.nearest(corner, &nearest);
+      if (std::sqrt(nearest) > params.maxOffCrease * h) continue;  // the lines meet off the surface
+      // A corner the tracing already placed (or any sample there): nothing to add.
+      bool taken = false;
+      for (const auto& q : out)
+        if ((q - corner).norm() < 0.5 * std::min(ea.step, eb.step)) taken = true;
+      if (taken) continue;
+      bool dup = false;
+      for (const auto& q : cornerPoints)
+        if ((q - corner).norm() < h) dup = true, corner = q;
+      if (!dup) {
+        cornerPoints.push_back(corner);
+        corners.push_back(corner);
+        cornerOwner.push_back(ea.chain);
+      }
+      fill(ea, corner);
+      fill(eb, corner);
+    }
+  owner.insert(owner.end(), cornerOwner.begin(), cornerOwner.end());
+  out.insert(out.end(), corners.begin(), corners.end());
+}
+
 }  // namespace
 
+// The steps of snapToCreases():
+//  1. At each sample x, the neighbours within params.radius spacings are split into two sheets as in the
+//     normal-variation test, a plane is fitted to each with weights exp(−d²/σ²) (d the distance to x, σ =
+//     params.snapSigma spacings: local planes, so curved sheets bias the line less than the detector's
+//     unweighted fit), and x moves to the nearest point of the two planes' intersection; once more from there.
+//     Where no crease lies within maxLineDistance, x may jump to one up to 0.8·radius away that runs along
+//     its chain (within maxChainTurn); failing that, a looser fit (any angle, 2× residual, half the cluster
+//     share) may correct it by at most h/4.
+//  2. A sample where that fit fails the detector's thresholds goes onto the chord between the nearest fitted
+//     samples of its chain (at most 3 away on each side) if the chord's sagitta, L·θ/8 (θ the turn between the
+//     two fits' crease directions), is below maxResidual spacings; otherwise it is dropped (a chain end
+//     extended past the feature would sit off the surface; a chord across a bend would cut inside it).
+//  3. Tracing: each chain's samples are split where samples were dropped (gaps over 1.6 × the chain's median
+//     spacing), and every piece's ends (a lone sample: both ways along its own crease) are continued along the
+//     crease: step one spacing along the last crease direction, fit the two sheets there (the snap fit; on the
+//     half-ball behind the prediction where the full ball fails), place the sample one step on along the fitted
+//     line; stop where the fit fails (over one or two failed steps the trace may resume), where the fit lands
+//     more than half a step (+ h/4) off the prediction, or where a sample is already within 0.75 steps (the gap
+//     is bridged). Near a corner the points ahead that neither plane explains (3·maxResidual off both, a normal
+//     unlike both) fit a third plane: the corner is the three planes' intersection (refined by reassigning the
+//     points around it to the nearest plane, twice), the gap to it is filled, and the corner's two other creases
+//     (the third plane with each sheet, on the side where the sheet lies) are followed along those planes while
+//     the points around stay explained by them, handing over to the stepped fit once it holds. Traced
+//     branches get chain indices after the given ones. Sequential in a fixed order: deterministic.
+//  3b. Tips: two open ends whose crease lines (each the last fit that holds within 3 samples of the end,
+//     its planes refitted without the points off both) share a plane and converge at 8°–maxChainTurn,
+//     meeting ahead of both within 6·radius spacings, are continued on those lines to the tip: the common
+//     point of the shared plane and the two other sheets' planes, refitted on the points around it (a step
+//     in a surface fading out, as fandisk's wedge: two creases end at one point without a third crease).
+//  4. Where two chains' end lines (at least 13° apart), continued, meet within 3·radius spacings of both ends and within
+//     params.maxOffCrease spacings of an input point, and no sample is within half a spacing of it (tracing
+//     placed most corners already), a corner sample is added there, and the gap from each of those chain ends
+//     to the corner gets samples at the chain's spacing on the straight line.
+//  5. Gaps: two samples 1.5–6 × the chains' median spacing apart with no sample between them (within 0.45 × their
+//     distance of the midpoint and half a spacing of their line) get samples at ≤ that spacing between them: on
+//     the snap fit's crease where it runs along them and near their chord, else on the fitted crease line of
+//     either, else on the chord where the samples on either side run on in line with it (within 20°; one side
+//     suffices up to 4.5 spacings); a gap where none holds (two creases meeting) stays open.
+//  6. Curved sheets: a plane fitted to a sheet that curves along the crease (a plate meeting a cylinder) lies
+//     off it, and so does the planes' line. Every sample whose looser snap fit (as in 1) puts the planes'
+//     line within maxLineDistance/2 local spacings of it moves to the crease of the two sheets fitted as
+//     height fields over those planes, bending along the crease (h = c0 + c1·u + c2·v + c3·u², u along it),
+//     on the 40 nearest input points (each to the nearer sheet; points over 3·maxResidual off both left out,
+//     the others weighted down by their distance), if both fit within maxResidual, under 10 % of the points
+//     are left out (more: a third sheet, as at a corner) and the move is at most maxLineDistance local spacings.
 std::vector<Eigen::Vector3d> snapToCreases(const PointCloud& cloud, const std::vector<Eigen::Vector3d>& samples,
                                            const std::vector<std::uint32_t>& chainOfSample, double spacing,
                                            const FeatureParams& params, std::vector<std::uint32_t>* chainOut) {
@@ -442,69 +576,7 @@ std::vector<Eigen::Vector3d> snapToCreases(const PointCloud& cloud, const std::v
     if (keep[i]) out.push_back(moved[i]), owner.push_back(chainOfSample[i]);
   traceChainEnds(cloud, index, h, params, out, owner);
   placeCreaseTips(cloud, index, h, params, out, owner);
-  // 3. Corners: two chain ends whose crease lines, continued forward, meet within a few spacings of both get
-  // a sample where they meet (the end samples of chains stop short of a corner, where the two-plane fit fails).
-  struct End {
-    Eigen::Vector3d point, direction;  // direction: forward, off the end of the chain
-    double step;                       // the chain's sample spacing there
-    std::uint32_t chain;
-    bool filled;                       // already linked to a corner
-  };
-  std::vector<End> ends;
-  for (const auto& [a, b] : ownerRuns(owner))
-    if (b > a) {
-      ends.push_back({out[a], (out[a] - out[a + 1]).normalized(), (out[a] - out[a + 1]).norm(), owner[a], false});
-      ends.push_back({out[b], (out[b] - out[b - 1]).normalized(), (out[b] - out[b - 1]).norm(), owner[a], false});
-    }
-  const double reach = 3.0 * params.radius * h;
-  std::vector<Eigen::Vector3d> corners, cornerPoints;  // all added samples; the corners alone
-  std::vector<std::uint32_t> cornerOwner;
-  // The gap between a chain end and its corner gets samples at the chain's spacing, on the straight line.
-  auto fill = [&](End& e, const Eigen::Vector3d& corner) {
-    if (e.filled) return;
-    e.filled = true;
-    const double gap = (corner - e.point).norm();
-    const int pieces = static_cast<int>(std::ceil(gap / std::max(e.step, 1e-300) - 0.25));
-    for (int k = 1; k < pieces; ++k) {
-      corners.push_back(e.point + (corner - e.point) * (static_cast<double>(k) / pieces));
-      cornerOwner.push_back(e.chain);
-    }
-  };
-  for (std::size_t a = 0; a < ends.size(); ++a)
-    for (std::size_t b = a + 1; b < ends.size(); ++b) {
-      End &ea = ends[a], &eb = ends[b];
-      if (ea.chain == eb.chain || (ea.point - eb.point).norm() > reach) continue;
-      // Closest points of the two lines: ea.point + s·da and eb.point + t·db.
-      const double c = ea.direction.dot(eb.direction);
-      if (1.0 - c * c < 0.05) continue;  // nearly parallel (under 13°): no corner between them
-      const Eigen::Vector3d w = ea.point - eb.point;
-      const double d = ea.direction.dot(w), e = eb.direction.dot(w);
-      const double sa = (c * e - d) / (1.0 - c * c), tb = (e - c * d) / (1.0 - c * c);
-      if (sa < -0.5 * h || tb < -0.5 * h || sa > reach || tb > reach) continue;
-      const Eigen::Vector3d pa = ea.point + sa * ea.direction, pb = eb.point + tb * eb.direction;
-      if ((pa - pb).norm() > 0.5 * h) continue;  // the two lines must (nearly) meet
-      Eigen::Vector3d corner = 0.5 * (pa + pb);
-      double nearest = 0;
-      index.nearest(corner, &nearest);
-      if (std::sqrt(nearest) > params.maxOffCrease * h) continue;  // the lines meet off the surface
-      // A corner the tracing already placed (or any sample there): nothing to add.
-      bool taken = false;
-      for (const auto& q : out)
-        if ((q - corner).norm() < 0.5 * std::min(ea.step, eb.step)) taken = true;
-      if (taken) continue;
-      bool dup = false;
-      for (const auto& q : cornerPoints)
-        if ((q - corner).norm() < h) dup = true, corner = q;
-      if (!dup) {
-        cornerPoints.push_back(corner);
-        corners.push_back(corner);
-        cornerOwner.push_back(ea.chain);
-      }
-      fill(ea, corner);
-      fill(eb, corner);
-    }
-  owner.insert(owner.end(), cornerOwner.begin(), cornerOwner.end());
-  out.insert(out.end(), corners.begin(), corners.end());
+  addCorners(index, h, params, out, owner);  // 3.
   fillCreaseGaps(cloud, index, h, params, out, owner);
   refineOnCurvedSheets(cloud, index, h, params, out);
   if (chainOut) *chainOut = std::move(owner);

@@ -12,7 +12,7 @@
 
 #include "iires/knn.hpp"
 #include "iires/normals.hpp"
-#include "iires/parallel.hpp"
+#include "iires/detail/parallel.hpp"
 #include "quadric_fit.hpp"
 
 namespace iires {

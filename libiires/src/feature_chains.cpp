@@ -19,7 +19,7 @@
 #include <unordered_map>
 
 #include "iires/knn.hpp"
-#include "iires/parallel.hpp"
+#include "iires/detail/parallel.hpp"
 
 
 namespace iires {
@@ -117,144 +117,148 @@ std::vector<ChainEnd> openEnds(const std::vector<FeatureChain>& chains) {
   return ends;
 }
 
-/// Post-processing of the raw chains (paths of crease points):
-///  1. local line fits (denoising);
-///  2. the ends (where a third surface or a fading crease biases the fit) are trimmed by one
-///     neighbourhood radius and re-grown along the end line;
-///  3. chains whose ends meet head-on are joined (and a chain meeting itself is closed);
-///  4. an end whose line meets another end's line (a corner) or another chain (a T-junction) within reach is
-///     extended to the meeting point, so the feature lines reach their corners;
-///  5. deterministic orientation and order (longest first).
-void finishChains(std::vector<FeatureChain>& chains, double h, const FeatureParams& prm) {
-  const double link = prm.chainRadius * h, cosTurn = std::cos(prm.maxChainTurn * kDeg);
-  const double trim = prm.radius * h, tol = 2.0 * prm.maxLineDistance * h;
-  for (auto& c : chains) {
-    fitLocalLines(c, 6);
-    // 2. trim the biased ends, remember by how much, and grow back along the end lines.
-    if (arcLength(c) > 4 * trim) {
-      for (int side = 0; side < 2; ++side) {
-        std::reverse(c.points.begin(), c.points.end());
-        std::reverse(c.directions.begin(), c.directions.end());
-        for (auto& dd : c.directions) dd = -dd;
-        const Eigen::Vector3d end = c.points.back();
-        while (c.points.size() > 2 && (c.points.back() - end).norm() < trim) {
-          c.points.pop_back();
-          c.directions.pop_back();
-        }
-        // End line: PCA of the last vertices (beyond the trimmed part).
-        const std::size_t n = c.points.size(), lo = n > 12 ? n - 12 : 0;
-        Eigen::Vector3d m = Eigen::Vector3d::Zero();
-        for (std::size_t u = lo; u < n; ++u) m += c.points[u];
-        m /= static_cast<double>(n - lo);
-        Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-        for (std::size_t u = lo; u < n; ++u) cov += (c.points[u] - m) * (c.points[u] - m).transpose();
-        Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(cov);
-        Eigen::Vector3d dir = es.eigenvectors().col(2);
-        if (dir.dot(c.points.back() - c.points[lo]) < 0) dir = -dir;
-        const Eigen::Vector3d tip = m + dir * (end - m).dot(dir);
-        c.points.push_back(tip);
-        c.directions.push_back(dir);
-        c.directions[n - 1] = dir;
+/// Step 2 of finishChains: the ends of @p c (where a third surface or a fading crease biases the fit) trimmed
+/// by @p trim and grown back along the end lines.
+void trimAndRegrowEnds(FeatureChain& c, double trim) {
+  if (arcLength(c) > 4 * trim) {
+    for (int side = 0; side < 2; ++side) {
+      std::reverse(c.points.begin(), c.points.end());
+      std::reverse(c.directions.begin(), c.directions.end());
+      for (auto& dd : c.directions) dd = -dd;
+      const Eigen::Vector3d end = c.points.back();
+      while (c.points.size() > 2 && (c.points.back() - end).norm() < trim) {
+        c.points.pop_back();
+        c.directions.pop_back();
+      }
+      // End line: PCA of the last vertices (beyond the trimmed part).
+      const std::size_t n = c.points.size(), lo = n > 12 ? n - 12 : 0;
+      Eigen::Vector3d m = Eigen::Vector3d::Zero();
+      for (std::size_t u = lo; u < n; ++u) m += c.points[u];
+      m /= static_cast<double>(n - lo);
+      Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+      for (std::size_t u = lo; u < n; ++u) cov += (c.points[u] - m) * (c.points[u] - m).transpose();
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(cov);
+      Eigen::Vector3d dir = es.eigenvectors().col(2);
+      if (dir.dot(c.points.back() - c.points[lo]) < 0) dir = -dir;
+      const Eigen::Vector3d tip = m + dir * (end - m).dot(dir);
+      c.points.push_back(tip);
+      c.directions.push_back(dir);
+      c.directions[n - 1] = dir;
+    }
+  }
+}
+
+/// Candidate pairs (gap, end a, end b) of chain ends that meet head-on (anti-parallel end directions, each end
+/// on the other's end line, gap up to 4 links: random samplings leave stretches of a crease with no point close
+/// enough to be detected). End 2c is chain c's front, 2c + 1 its back.
+std::vector<std::tuple<double, std::uint32_t, std::uint32_t>> headOnPairs(const std::vector<FeatureChain>& chains,
+                                                                          double link, double tol, double cosTurn) {
+  const std::size_t nc = chains.size();
+  std::vector<Eigen::Vector3d> pos(2 * nc), out(2 * nc);
+  for (std::size_t c = 0; c < nc; ++c) {
+    pos[2 * c] = chains[c].points.front();
+    out[2 * c] = -chains[c].directions.front();
+    pos[2 * c + 1] = chains[c].points.back();
+    out[2 * c + 1] = chains[c].directions.back();
+  }
+  std::vector<std::tuple<double, std::uint32_t, std::uint32_t>> pairs;
+  if (nc > 0) {
+    KnnIndex endIndex(pos);
+    std::vector<std::uint32_t> idx;
+    std::vector<double> d2;
+    for (std::uint32_t a = 0; a < 2 * nc; ++a) {
+      endIndex.radius(pos[a], 4 * link, idx, d2);
+      for (std::uint32_t b : idx) {
+        if (b <= a) continue;
+        const Eigen::Vector3d gap = pos[b] - pos[a];
+        const double len = gap.norm();
+        if (-out[a].dot(out[b]) < cosTurn) continue;
+        if (len > tol && (out[a].dot(gap) < cosTurn * len || -out[b].dot(gap) < cosTurn * len)) continue;
+        const double offA = (gap - out[a] * gap.dot(out[a])).norm();
+        const double offB = (gap - out[b] * gap.dot(out[b])).norm();
+        if (len > link && std::max(offA, offB) > tol) continue;
+        pairs.emplace_back(len, a, b);
       }
     }
   }
-  // 3. join head-on ends: candidate pairs of ends (anti-parallel end directions, each end on the other's end
-  // line, gap up to 4 links: random samplings leave stretches of a crease with no point close enough to be
-  // detected), accepted greedily nearest first, each end once; a group meeting itself is closed.
-  {
-    const std::size_t nc = chains.size();
-    std::vector<Eigen::Vector3d> pos(2 * nc), out(2 * nc);
-    for (std::size_t c = 0; c < nc; ++c) {
-      pos[2 * c] = chains[c].points.front();
-      out[2 * c] = -chains[c].directions.front();
-      pos[2 * c + 1] = chains[c].points.back();
-      out[2 * c + 1] = chains[c].directions.back();
+  return pairs;
+}
+
+/// The ends' partners: @p pairs accepted greedily nearest first, each end once; a group meeting itself only
+/// when it is long (a closed loop).
+std::vector<std::int64_t> partnerEnds(const std::vector<FeatureChain>& chains,
+                                      std::vector<std::tuple<double, std::uint32_t, std::uint32_t>> pairs, double link) {
+  const std::size_t nc = chains.size();
+  std::sort(pairs.begin(), pairs.end());
+  std::vector<std::int64_t> partner(2 * nc, -1);
+  Dsu groups(nc);
+  std::vector<double> groupLength(nc);
+  for (std::size_t c = 0; c < nc; ++c) groupLength[c] = arcLength(chains[c]);
+  for (const auto& [len, a, b] : pairs) {
+    if (partner[a] >= 0 || partner[b] >= 0) continue;
+    const std::uint32_t ga = groups.find(a / 2), gb = groups.find(b / 2);
+    if (ga == gb && groupLength[ga] < 3 * link) continue;  // closing a loop: only a long one
+    partner[a] = b;
+    partner[b] = a;
+    if (ga != gb) {
+      groups.parent[ga] = gb;
+      groupLength[gb] += groupLength[ga] + len;
     }
-    std::vector<std::tuple<double, std::uint32_t, std::uint32_t>> pairs;
-    if (nc > 0) {
-      KnnIndex endIndex(pos);
-      std::vector<std::uint32_t> idx;
-      std::vector<double> d2;
-      for (std::uint32_t a = 0; a < 2 * nc; ++a) {
-        endIndex.radius(pos[a], 4 * link, idx, d2);
-        for (std::uint32_t b : idx) {
-          if (b <= a) continue;
-          const Eigen::Vector3d gap = pos[b] - pos[a];
-          const double len = gap.norm();
-          if (-out[a].dot(out[b]) < cosTurn) continue;
-          if (len > tol && (out[a].dot(gap) < cosTurn * len || -out[b].dot(gap) < cosTurn * len)) continue;
-          const double offA = (gap - out[a] * gap.dot(out[a])).norm();
-          const double offB = (gap - out[b] * gap.dot(out[b])).norm();
-          if (len > link && std::max(offA, offB) > tol) continue;
-          pairs.emplace_back(len, a, b);
-        }
-      }
-    }
-    std::sort(pairs.begin(), pairs.end());
-    std::vector<std::int64_t> partner(2 * nc, -1);
-    Dsu groups(nc);
-    std::vector<double> groupLength(nc);
-    for (std::size_t c = 0; c < nc; ++c) groupLength[c] = arcLength(chains[c]);
-    for (const auto& [len, a, b] : pairs) {
-      if (partner[a] >= 0 || partner[b] >= 0) continue;
-      const std::uint32_t ga = groups.find(a / 2), gb = groups.find(b / 2);
-      if (ga == gb && groupLength[ga] < 3 * link) continue;  // closing a loop: only a long one
-      partner[a] = b;
-      partner[b] = a;
-      if (ga != gb) {
-        groups.parent[ga] = gb;
-        groupLength[gb] += groupLength[ga] + len;
-      }
-    }
-    // Assemble: walk each group from a free end (or anywhere, for a loop), appending chains in order.
-    std::vector<FeatureChain> joined;
-    std::vector<char> used(nc, 0);
-    auto append = [](FeatureChain& dst, const FeatureChain& src, bool reversed) {
-      if (!reversed) {
-        dst.points.insert(dst.points.end(), src.points.begin(), src.points.end());
-        dst.directions.insert(dst.directions.end(), src.directions.begin(), src.directions.end());
-      } else {
-        for (std::size_t t = src.points.size(); t-- > 0;) {
-          dst.points.push_back(src.points[t]);
-          dst.directions.push_back(-src.directions[t]);
-        }
-      }
-    };
-    for (std::size_t c0 = 0; c0 < nc; ++c0) {
-      if (used[c0]) continue;
-      // Find the start: go out through front ends until a free end or back to c0.
-      std::uint32_t entry = static_cast<std::uint32_t>(2 * c0);  // the end through which we enter the chain
-      bool loop = false;
-      for (std::size_t guard = 0; guard <= nc; ++guard) {
-        if (partner[entry] < 0) break;
-        const std::uint32_t nextExit = static_cast<std::uint32_t>(partner[entry]);
-        entry = nextExit ^ 1u;  // enter the neighbour through its other end when walking backwards
-        if (entry / 2 == c0) {
-          loop = true;
-          entry = static_cast<std::uint32_t>(2 * c0);
-          break;
-        }
-      }
-      FeatureChain g;
-      std::uint32_t e = entry;
-      for (;;) {
-        const std::uint32_t c = e / 2;
-        if (used[c]) break;
-        used[c] = 1;
-        append(g, chains[c], (e & 1u) != 0);  // entering through the back end: traverse reversed
-        const std::int64_t nxt = partner[e ^ 1u];
-        if (nxt < 0) break;
-        e = static_cast<std::uint32_t>(nxt);
-      }
-      g.closed = loop;
-      joined.push_back(std::move(g));
-    }
-    // Drop what is still short after joining.
-    chains.clear();
-    for (auto& g : joined)
-      if (g.points.size() >= 2 && arcLength(g) >= prm.minChainLength * h) chains.push_back(std::move(g));
   }
-  // 4. corners and T-junctions: extend each open end to where its line meets another end's line or chain.
+  return partner;
+}
+
+/// The joined chains: each group walked from a free end (or anywhere, for a loop), its chains appended in order.
+std::vector<FeatureChain> assembleGroups(const std::vector<FeatureChain>& chains, const std::vector<std::int64_t>& partner) {
+  const std::size_t nc = chains.size();
+  std::vector<FeatureChain> joined;
+  std::vector<char> used(nc, 0);
+  auto append = [](FeatureChain& dst, const FeatureChain& src, bool reversed) {
+    if (!reversed) {
+      dst.points.insert(dst.points.end(), src.points.begin(), src.points.end());
+      dst.directions.insert(dst.directions.end(), src.directions.begin(), src.directions.end());
+    } else {
+      for (std::size_t t = src.points.size(); t-- > 0;) {
+        dst.points.push_back(src.points[t]);
+        dst.directions.push_back(-src.directions[t]);
+      }
+    }
+  };
+  for (std::size_t c0 = 0; c0 < nc; ++c0) {
+    if (used[c0]) continue;
+    // Find the start: go out through front ends until a free end or back to c0.
+    std::uint32_t entry = static_cast<std::uint32_t>(2 * c0);  // the end through which we enter the chain
+    bool loop = false;
+    for (std::size_t guard = 0; guard <= nc; ++guard) {
+      if (partner[entry] < 0) break;
+      const std::uint32_t nextExit = static_cast<std::uint32_t>(partner[entry]);
+      entry = nextExit ^ 1u;  // enter the neighbour through its other end when walking backwards
+      if (entry / 2 == c0) {
+        loop = true;
+        entry = static_cast<std::uint32_t>(2 * c0);
+        break;
+      }
+    }
+    FeatureChain g;
+    std::uint32_t e = entry;
+    for (;;) {
+      const std::uint32_t c = e / 2;
+      if (used[c]) break;
+      used[c] = 1;
+      append(g, chains[c], (e & 1u) != 0);  // entering through the back end: traverse reversed
+      const std::int64_t nxt = partner[e ^ 1u];
+      if (nxt < 0) break;
+      e = static_cast<std::uint32_t>(nxt);
+    }
+    g.closed = loop;
+    joined.push_back(std::move(g));
+  }
+  return joined;
+}
+
+/// Step 4 of finishChains: each open end extended to where its line meets another end's line (a corner) or
+/// another chain (a T-junction) within reach.
+void extendToCorners(std::vector<FeatureChain>& chains, double h, double link, double trim, double tol) {
   const double reach = 2 * link + trim;
   const auto ends = openEnds(chains);
   std::vector<std::pair<std::size_t, Eigen::Vector3d>> extensions;  // (end index, new tip)
@@ -300,7 +304,11 @@ void finishChains(std::vector<FeatureChain>& chains, double h, const FeaturePara
       c.directions.insert(c.directions.begin(), c.directions.front());
     }
   }
-  // 5. lengths, orientation, order.
+}
+
+/// Step 5 of finishChains: lengths, a deterministic orientation (lexicographically smaller end first) and
+/// order (longest first).
+void orientAndOrder(std::vector<FeatureChain>& chains) {
   for (auto& c : chains) {
     c.length = arcLength(c);
     if (c.closed) c.length += (c.points.back() - c.points.front()).norm();
@@ -315,6 +323,31 @@ void finishChains(std::vector<FeatureChain>& chains, double h, const FeaturePara
   }
   std::stable_sort(chains.begin(), chains.end(),
                    [](const FeatureChain& a, const FeatureChain& b) { return a.length > b.length; });
+}
+
+/// Post-processing of the raw chains (paths of crease points):
+///  1. local line fits (denoising);
+///  2. the ends (where a third surface or a fading crease biases the fit) are trimmed by one
+///     neighbourhood radius and re-grown along the end line;
+///  3. chains whose ends meet head-on are joined (and a chain meeting itself is closed);
+///  4. an end whose line meets another end's line (a corner) or another chain (a T-junction) within reach is
+///     extended to the meeting point, so the feature lines reach their corners;
+///  5. deterministic orientation and order (longest first).
+void finishChains(std::vector<FeatureChain>& chains, double h, const FeatureParams& prm) {
+  const double link = prm.chainRadius * h, cosTurn = std::cos(prm.maxChainTurn * kDeg);
+  const double trim = prm.radius * h, tol = 2.0 * prm.maxLineDistance * h;
+  for (auto& c : chains) {
+    fitLocalLines(c, 6);
+    trimAndRegrowEnds(c, trim);
+  }
+  std::vector<FeatureChain> joined =
+      assembleGroups(chains, partnerEnds(chains, headOnPairs(chains, link, tol, cosTurn), link));
+  // Drop what is still short after joining.
+  chains.clear();
+  for (auto& g : joined)
+    if (g.points.size() >= 2 && arcLength(g) >= prm.minChainLength * h) chains.push_back(std::move(g));
+  extendToCorners(chains, h, link, trim, tol);
+  orientAndOrder(chains);
 }
 
 struct CellKey {

@@ -19,7 +19,7 @@
 #include <unordered_map>
 
 #include "iires/knn.hpp"
-#include "iires/parallel.hpp"
+#include "iires/detail/parallel.hpp"
 
 
 #include "features_internal.hpp"

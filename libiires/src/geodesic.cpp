@@ -9,14 +9,15 @@
 #include <cmath>
 #include <numeric>
 #include <optional>
-#include <sstream>
 #include <stdexcept>
 #include <thread>
 
-#include "iires/disjoint_sets.hpp"
+#include "iires/detail/json.hpp"
+#include "iires/detail/disjoint_sets.hpp"
 #include "iires/io.hpp"
+#include "io_format.hpp"
 #include "iires/knn.hpp"
-#include "iires/parallel.hpp"
+#include "iires/detail/parallel.hpp"
 
 namespace iires {
 
@@ -188,14 +189,12 @@ void GeodesicParams::validate() const {
 }
 
 std::string GeodesicReport::toJson() const {
-  std::ostringstream o;
-  o.precision(6);
-  o << "{\"points\": " << points << ", \"edges\": " << edges << ", \"components\": " << components
-    << ", \"attached_components\": " << attachedComponents << ", \"spacing\": " << spacing
-    << ", \"graph_s\": " << graphSeconds << ", \"components_s\": " << componentSeconds
-    << ", \"satellites_s\": " << satelliteSeconds << ", \"fields_s\": " << fieldSeconds
-    << ", \"time_s\": " << totalSeconds << "}";
-  return o.str();
+  detail::JsonWriter j(6);
+  j.beginObject().member("points", points).member("edges", edges).member("components", components);
+  j.member("attached_components", attachedComponents).member("spacing", spacing);
+  j.member("graph_s", graphSeconds).member("components_s", componentSeconds);
+  j.member("satellites_s", satelliteSeconds).member("fields_s", fieldSeconds).member("time_s", totalSeconds);
+  return j.endObject().str();
 }
 
 struct GeodesicCoordinates::Impl {
@@ -217,25 +216,73 @@ struct GeodesicCoordinates::Impl {
   double spacing = 0;
   GeodesicReport report;
 
+  /// The k nearest neighbours of every point (internal order, k per point, padded with kNone / kInf), each
+  /// point's local spacing rho (distance to its spacingNeighbour-th neighbour) and unit normal (zero if unknown).
+  struct NeighbourLists {
+    std::vector<std::uint32_t> index;
+    std::vector<float> distance;
+    std::vector<float> rho;
+    std::vector<Eigen::Vector3f> normal;
+    bool givenNormals = false;
+  };
+  /// Connected components of the filtered graph, numbered by their first point in the caller's order.
+  struct Components {
+    std::vector<std::uint32_t> id;  ///< per internal point
+    std::uint32_t count = 0;
+    std::vector<std::array<std::uint32_t, 2>> attaching;  ///< edges that attach tiny components
+  };
+
   void build(const NeighbourTable* table, const GeodesicCoordinates::Alongside& alongside);
+  // The steps of build(), in order.
+  void sortPoints();
+  NeighbourLists neighbourLists(const NeighbourTable* table);
+  std::vector<std::uint8_t> filterEdges(const NeighbourLists& lists) const;
+  Components findComponents(const NeighbourLists& lists, const std::vector<std::uint8_t>& keep);
+  void buildGraph(const NeighbourLists& lists, const std::vector<std::uint8_t>& keep, const Components& components);
+  void satellitesAndFields(const Components& components, const GeodesicCoordinates::Alongside& alongside);
+  // Parts of satellitesAndFields().
+  struct Members;
+  void fieldsOfComponent(std::size_t c, const Members& members, std::vector<std::uint32_t>& sat,
+                         std::vector<float>& field, bool spareThread, Sweep& sweep, std::optional<Sweep>& second,
+                         std::vector<float>& minDist, double& seedSeconds) const;
+  void toCallerOrder(const Components& components, const std::vector<float>& field,
+                     const std::vector<std::vector<std::uint32_t>>& sat);
 };
 
 void GeodesicCoordinates::Impl::build(const NeighbourTable* table,
                                       const GeodesicCoordinates::Alongside& alongside) {
   const auto start = Clock::now();
-  const std::size_t n = points.size();
-  const int threads = params.threads;
-  const std::size_t k = static_cast<std::size_t>(params.k);
-
-  // --- 1. k-NN lists, local spacing, normals -------------------------------------------------------------
+  // 1. k-NN lists, local spacing, normals; 2. filter the edges
   auto t = Clock::now();
-  order = mortonOrder(points, threads);
+  sortPoints();
+  NeighbourLists lists = neighbourLists(table);
+  std::vector<std::uint8_t> keep = filterEdges(lists);
+  report.graphSeconds = secondsSince(t);
+  // 3. components and the graph
+  t = Clock::now();
+  const Components components = findComponents(lists, keep);
+  buildGraph(lists, keep, components);
+  report.componentSeconds = secondsSince(t);
+  lists = {};
+  keep = {};
+  // 4. satellites and fields
+  satellitesAndFields(components, alongside);
+  report.points = points.size();
+  report.components = components.count;
+  report.spacing = spacing;
+  report.totalSeconds = secondsSince(start);
+}
+
+/// Z-order (order, rank), the sorted points (a cloud already in Z-order, the resampler's, is not copied) and
+/// their float copy.
+void GeodesicCoordinates::Impl::sortPoints() {
+  const std::size_t n = points.size();
+  order = mortonOrder(points, params.threads);
   rank.assign(n, 0);
   bool identity = true;
   for (std::size_t i = 0; i < n && identity; ++i) identity = order[i] == i;
-  if (!identity) sortedCopy.resize(n);  // a cloud already in Z-order (the resampler's) is not copied
+  if (!identity) sortedCopy.resize(n);
   sorted = identity ? &points : &sortedCopy;
-  const std::vector<Eigen::Vector3d>& zp = *sorted;
   pos.resize(n);
   // The float copy is taken relative to the bounding-box centre: a small object far from the origin (scan
   // coordinates) would otherwise lose its spacing to float rounding.
@@ -245,16 +292,28 @@ void GeodesicCoordinates::Impl::build(const NeighbourTable* table,
   for (std::size_t i = 0; i < n; ++i) {
     rank[order[i]] = static_cast<std::uint32_t>(i);
     if (!identity) sortedCopy[i] = points[order[i]];
-    pos[i] = (zp[i] - centre).cast<float>();
+    pos[i] = ((*sorted)[i] - centre).cast<float>();
   }
+}
+
+/// The k-NN lists from @p table (when it fits) or a k-d tree, each point's spacing and normal, and the median
+/// nearest-neighbour distance (spacing).
+GeodesicCoordinates::Impl::NeighbourLists GeodesicCoordinates::Impl::neighbourLists(const NeighbourTable* table) {
+  const std::size_t n = points.size();
+  const std::size_t k = static_cast<std::size_t>(params.k);
+  const std::vector<Eigen::Vector3d>& zp = *sorted;
   if (table && (table->k() < k + 1 || table->size() != n)) table = nullptr;
-  if (!table) index = std::make_unique<KnnIndex>(zp);  // with a table only nearest() needs it: built below
-  std::vector<std::uint32_t> knn(n * k, kNone);
-  std::vector<float> knnDist(n * k, kInf);
-  std::vector<float> rho(n, 0.0f), nearestDist(n, 0.0f);
-  const bool given = normals.size() == n;
-  std::vector<Eigen::Vector3f> nrm(n, Eigen::Vector3f::Zero());
-  parallelFor(n, threads, [&](std::size_t i) {
+  if (!table) index = std::make_unique<KnnIndex>(zp);  // with a table only nearest() needs it: built later
+  NeighbourLists lists;
+  std::vector<std::uint32_t>& knn = lists.index;
+  std::vector<float>& knnDist = lists.distance;
+  knn.assign(n * k, kNone);
+  knnDist.assign(n * k, kInf);
+  lists.rho.assign(n, 0.0f);
+  std::vector<float> nearestDist(n, 0.0f);
+  const bool given = lists.givenNormals = normals.size() == n;
+  lists.normal.assign(n, Eigen::Vector3f::Zero());
+  parallelFor(n, params.threads, [&](std::size_t i) {
     std::vector<std::uint32_t> idx;
     std::vector<double> d2;
     if (table) {  // the caller's order: map the neighbours to ours
@@ -272,10 +331,10 @@ void GeodesicCoordinates::Impl::build(const NeighbourTable* table,
     }
     if (w == 0) return;
     nearestDist[i] = knnDist[i * k];
-    rho[i] = knnDist[i * k + std::min<std::size_t>(w, static_cast<std::size_t>(params.spacingNeighbour)) - 1];
+    lists.rho[i] = knnDist[i * k + std::min<std::size_t>(w, static_cast<std::size_t>(params.spacingNeighbour)) - 1];
     if (given) {
       const double len = normals[order[i]].norm();
-      if (len > 0) nrm[i] = (normals[order[i]] / len).cast<float>();
+      if (len > 0) lists.normal[i] = (normals[order[i]] / len).cast<float>();
     } else if (w >= 2) {
       // PCA normal of the point and its k nearest neighbours (unoriented; used by the tangent test only).
       Eigen::Vector3d mean = zp[i];
@@ -288,35 +347,39 @@ void GeodesicCoordinates::Impl::build(const NeighbourTable* table,
       }
       Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
       eig.computeDirect(cov);
-      nrm[i] = eig.eigenvectors().col(0).cast<float>();
+      lists.normal[i] = eig.eigenvectors().col(0).cast<float>();
     }
   });
-  {
-    std::vector<float> tmp(nearestDist);
-    std::nth_element(tmp.begin(), tmp.begin() + static_cast<std::ptrdiff_t>(n / 2), tmp.end());
-    spacing = tmp[n / 2];
-  }
+  std::nth_element(nearestDist.begin(), nearestDist.begin() + static_cast<std::ptrdiff_t>(n / 2), nearestDist.end());
+  spacing = nearestDist[n / 2];
+  return lists;
+}
 
-  // --- 2. Filter the edges (symmetric tests, so both directions agree) ---------------------------------
+/// Which k-NN entries become edges, by symmetric tests (so both directions agree): 0 = dropped, 1 = kept and
+/// mutual, 2 = kept, not mutual (the reverse direction must be added).
+std::vector<std::uint8_t> GeodesicCoordinates::Impl::filterEdges(const NeighbourLists& lists) const {
+  const std::size_t n = points.size();
+  const std::size_t k = static_cast<std::size_t>(params.k);
+  const std::vector<std::uint32_t>& knn = lists.index;
+  const std::vector<Eigen::Vector3f>& nrm = lists.normal;
   const float sinSlope = static_cast<float>(std::sin(params.maxEdgeSlopeDeg * M_PI / 180.0));
   const float cosNormal = static_cast<float>(std::cos(params.maxNormalAngleDeg * M_PI / 180.0));
   const bool slopeTest = params.maxEdgeSlopeDeg < 90.0;
-  const bool normalTest = given && params.maxNormalAngleDeg < 180.0;
+  const bool normalTest = lists.givenNormals && params.maxNormalAngleDeg < 180.0;
   const float ratio = static_cast<float>(params.maxEdgeRatio);
   auto inList = [&](std::uint32_t of, std::uint32_t x) {
     const std::uint32_t* l = &knn[static_cast<std::size_t>(of) * k];
     return std::find(l, l + k, x) != l + k;
   };
-  // keep: 0 = dropped, 1 = kept and mutual, 2 = kept, not mutual (the reverse direction must be added).
   std::vector<std::uint8_t> keep(n * k, 0);
-  parallelFor(n, threads, [&](std::size_t i) {
+  parallelFor(n, params.threads, [&](std::size_t i) {
     for (std::size_t r = 0; r < k; ++r) {
       const std::uint32_t j = knn[i * k + r];
       if (j == kNone) break;
       const bool mutual = inList(j, static_cast<std::uint32_t>(i));
       if (params.mutualNeighbours && !mutual) continue;
-      const float d = knnDist[i * k + r];
-      if (ratio > 0 && d > ratio * std::min(rho[i], rho[j])) continue;
+      const float d = lists.distance[i * k + r];
+      if (ratio > 0 && d > ratio * std::min(lists.rho[i], lists.rho[j])) continue;
       if (d > 0) {
         const Eigen::Vector3f dir = (pos[j] - pos[i]) / d;
         if (slopeTest && std::abs(nrm[i].dot(dir)) > sinSlope && std::abs(nrm[j].dot(dir)) > sinSlope) continue;
@@ -325,15 +388,22 @@ void GeodesicCoordinates::Impl::build(const NeighbourTable* table,
       keep[i * k + r] = mutual ? 1 : 2;
     }
   });
-  report.graphSeconds = secondsSince(t);
+  return keep;
+}
 
-  // --- 3. Components (union-find); attach tiny ones by their shortest k-NN link --------------------------
-  t = Clock::now();
+/// Components by union-find over the kept edges; a tiny one (< minComponentSize) is attached to a large one
+/// by its shortest k-NN link. Sets componentSize and report.attachedComponents.
+GeodesicCoordinates::Impl::Components GeodesicCoordinates::Impl::findComponents(
+    const NeighbourLists& lists, const std::vector<std::uint8_t>& keep) {
+  const std::size_t n = points.size();
+  const std::size_t k = static_cast<std::size_t>(params.k);
+  const std::vector<std::uint32_t>& knn = lists.index;
+  Components components;
+  std::vector<std::array<std::uint32_t, 2>>& extra = components.attaching;
   DisjointSets sets(n);
   for (std::size_t i = 0; i < n; ++i)
     for (std::size_t r = 0; r < k; ++r)
       if (keep[i * k + r]) sets.unite(static_cast<std::uint32_t>(i), knn[i * k + r]);
-  std::vector<std::array<std::uint32_t, 2>> extra;  // attaching edges
   report.attachedComponents = 0;
   if (params.minComponentSize > 1) {
     std::vector<std::size_t> rootSize(n, 0);
@@ -357,7 +427,7 @@ void GeodesicCoordinates::Impl::build(const NeighbourTable* table,
           const std::uint32_t j = knn[i * k + r];
           if (j == kNone) break;
           if (rootSize[sets.find(j)] < params.minComponentSize) continue;
-          const float d = knnDist[i * k + r];
+          const float d = lists.distance[i * k + r];
           if (d < best[ri].d) best[ri] = {d, static_cast<std::uint32_t>(i), j};
           break;  // lists are sorted: the first large neighbour is this point's shortest link
         }
@@ -370,19 +440,29 @@ void GeodesicCoordinates::Impl::build(const NeighbourTable* table,
       for (const auto& e : extra) sets.unite(e[0], e[1]);
     }
   }
-  // Number components by their first point in the caller's order; comp[] is internal.
-  std::vector<std::uint32_t> comp(n, kNone), rootId(n, kNone);
-  std::uint32_t count = 0;
+  // Number components by their first point in the caller's order; the ids are per internal point.
+  std::vector<std::uint32_t> rootId(n, kNone);
+  std::uint32_t& count = components.count;
   for (std::size_t o = 0; o < n; ++o) {
     const std::uint32_t r = sets.find(rank[o]);
     if (rootId[r] == kNone) rootId[r] = count++;
   }
-  for (std::size_t i = 0; i < n; ++i) comp[i] = rootId[sets.find(static_cast<std::uint32_t>(i))];
+  components.id.assign(n, kNone);
+  for (std::size_t i = 0; i < n; ++i) components.id[i] = rootId[sets.find(static_cast<std::uint32_t>(i))];
   componentSize.assign(count, 0);
-  for (std::size_t i = 0; i < n; ++i) ++componentSize[comp[i]];
+  for (std::size_t i = 0; i < n; ++i) ++componentSize[components.id[i]];
+  return components;
+}
 
-  // Adjacency: own kept entries (in distance order), then reverse directions of non-mutual edges and the
-  // attaching edges, in index order.
+/// The adjacency (CSR): each point's own kept entries (in distance order), then the reverse directions of
+/// non-mutual edges and the attaching edges, in index order.
+void GeodesicCoordinates::Impl::buildGraph(const NeighbourLists& lists, const std::vector<std::uint8_t>& keep,
+                                           const Components& components) {
+  const std::size_t n = points.size();
+  const std::size_t k = static_cast<std::size_t>(params.k);
+  const std::vector<std::uint32_t>& knn = lists.index;
+  const std::vector<float>& knnDist = lists.distance;
+  const std::vector<std::array<std::uint32_t, 2>>& extra = components.attaching;
   std::vector<std::uint32_t> degree(n, 0);
   for (std::size_t i = 0; i < n; ++i)
     for (std::size_t r = 0; r < k; ++r)
@@ -412,31 +492,94 @@ void GeodesicCoordinates::Impl::build(const NeighbourTable* table,
     addEdge(e[1], e[0], d);
   }
   report.edges = graph.offset[n] / 2;
-  report.componentSeconds = secondsSince(t);
-  knn = {};
-  knnDist = {};
-  keep = {};
+}
 
-  // --- 4. Satellites and fields (paper §3.2): per component, satellite 1 is the point farthest
-  // (straight-line) from its first point; satellite s+1 the point farthest from satellites 1..s on their
-  // accurate fields, which are the coordinates gₛ themselves (farthest-point sampling). Satellite 3 is chosen
-  // before field 2 exists — farthest from satellite 1 on g₁ and from satellite 2 in straight line — so that
-  // fields 2 and 3 are swept at once where a thread is free. Components run in parallel.
-  t = Clock::now();
+/// Members of each component (internal indices, ascending, list[offset[c], offset[c + 1])) and its first
+/// point in the caller's order (seed).
+struct GeodesicCoordinates::Impl::Members {
+  std::vector<std::uint32_t> offset, list, seed;
+};
+
+/// Satellites and fields of component @p c (paper §3.2): satellite 1 is the point farthest (straight-line)
+/// from its first point; satellite s+1 the point farthest from satellites 1..s on their accurate fields, which
+/// are the coordinates gₛ themselves (farthest-point sampling). Satellite 3 is chosen before field 2 exists —
+/// farthest from satellite 1 on g₁ and from satellite 2 in straight line — so that fields 2 and 3 are swept at
+/// once where a thread is free (@p spareThread).
+void GeodesicCoordinates::Impl::fieldsOfComponent(std::size_t c, const Members& members,
+                                                  std::vector<std::uint32_t>& sc, std::vector<float>& field,
+                                                  bool spareThread, Sweep& sweep, std::optional<Sweep>& second,
+                                                  std::vector<float>& minDist, double& seedSeconds) const {
   const int m = params.satellites;
-  // Members of each component (internal indices, ascending).
-  std::vector<std::uint32_t> memberOffset(count + 1, 0), memberList(n);
-  for (std::size_t i = 0; i < n; ++i) ++memberOffset[comp[i] + 1];
-  for (std::uint32_t c = 0; c < count; ++c) memberOffset[c + 1] += memberOffset[c];
-  {
-    std::vector<std::uint32_t> fill(memberOffset.begin(), memberOffset.end() - 1);
-    for (std::size_t i = 0; i < n; ++i) memberList[fill[comp[i]]++] = static_cast<std::uint32_t>(i);
+  const std::size_t n = points.size();
+  const auto t0 = Clock::now();
+  const std::uint32_t* member = members.list.data() + members.offset[c];
+  const std::size_t size = members.offset[c + 1] - members.offset[c];
+  minDist.assign(size, kInf);
+  auto pickFarthest = [&](auto value) {
+    std::size_t best = 0;
+    for (std::size_t x = 1; x < size; ++x)
+      if (value(x) > value(best)) best = x;  // ties: lowest internal index (members are sorted)
+    return member[best];
+  };
+  const Eigen::Vector3f& first = pos[members.seed[c]];
+  sc.push_back(pickFarthest([&](std::size_t x) { return (pos[member[x]] - first).squaredNorm(); }));
+  seedSeconds += secondsSince(t0);
+  auto keep = [&](const Sweep& from, int s) {  // field s from a finished sweep
+    for (std::size_t x = 0; x < size; ++x) {
+      const float d = from.distance(member[x]);
+      field[member[x] * static_cast<std::size_t>(m) + static_cast<std::size_t>(s)] = d;
+      minDist[x] = std::min(minDist[x], d);
+    }
+  };
+  for (int s = 0; s < m; ++s) {
+    if (s == 1 && m >= 3) {
+      const Eigen::Vector3f& satellite2 = pos[sc.back()];
+      sc.push_back(pickFarthest(
+          [&](std::size_t x) { return std::min(minDist[x], (pos[member[x]] - satellite2).norm()); }));
+      if (spareThread) {
+        if (!second) second.emplace(n);
+        std::thread other([&] { second->run(graph, pos, sc[2], params.fastMarching); });
+        sweep.run(graph, pos, sc[1], params.fastMarching);
+        other.join();
+        keep(sweep, 1);
+        keep(*second, 2);
+      } else {
+        for (int f : {1, 2}) {
+          sweep.run(graph, pos, sc[static_cast<std::size_t>(f)], params.fastMarching);
+          keep(sweep, f);
+        }
+      }
+      ++s;
+    } else {
+      sweep.run(graph, pos, sc.back(), params.fastMarching);
+      keep(sweep, s);
+    }
+    if (s + 1 < m) sc.push_back(pickFarthest([&](std::size_t x) { return minDist[x]; }));
   }
-  std::vector<std::uint32_t> seed(count, kNone);
-  for (std::size_t o = n; o-- > 0;) seed[comp[rank[o]]] = rank[o];
+}
+
+/// Satellites and fields per component, components in parallel; meanwhile, on the idle threads, the work that
+/// does not need the fields (the caller's @p alongside and the k-d tree for nearest(), if not built yet).
+void GeodesicCoordinates::Impl::satellitesAndFields(const Components& components,
+                                                    const GeodesicCoordinates::Alongside& alongside) {
+  const auto t = Clock::now();
+  const std::size_t n = points.size();
+  const std::uint32_t count = components.count;
+  const std::vector<std::uint32_t>& comp = components.id;
+  Members members;
+  members.offset.assign(count + 1, 0);
+  members.list.resize(n);
+  for (std::size_t i = 0; i < n; ++i) ++members.offset[comp[i] + 1];
+  for (std::uint32_t c = 0; c < count; ++c) members.offset[c + 1] += members.offset[c];
+  {
+    std::vector<std::uint32_t> fill(members.offset.begin(), members.offset.end() - 1);
+    for (std::size_t i = 0; i < n; ++i) members.list[fill[comp[i]]++] = static_cast<std::uint32_t>(i);
+  }
+  members.seed.assign(count, kNone);
+  for (std::size_t o = n; o-- > 0;) members.seed[comp[rank[o]]] = rank[o];
   std::vector<std::vector<std::uint32_t>> sat(count);
-  std::vector<float> field(n * static_cast<std::size_t>(m), kInf);  // internal order
-  const int team = resolveThreads(threads);
+  std::vector<float> field(n * static_cast<std::size_t>(params.satellites), kInf);  // internal order
+  const int team = resolveThreads(params.threads);
   const int nThreads = std::max(1, std::min<int>(team, static_cast<int>(std::min<std::size_t>(count, 1024))));
   const bool spareThread = team > nThreads;  // fields 2 and 3 are swept on two threads
   double seedSeconds = 0, sweepSeconds = 0;
@@ -447,61 +590,14 @@ void GeodesicCoordinates::Impl::build(const NeighbourTable* table,
       std::optional<Sweep> second;  // for the second of two fields swept at once
       std::vector<float> minDist;
 #pragma omp for schedule(dynamic, 1)
-      for (long long c = 0; c < static_cast<long long>(count); ++c) {
-        const auto t0 = Clock::now();
-        std::vector<std::uint32_t>& sc = sat[static_cast<std::size_t>(c)];
-        const std::uint32_t* members = memberList.data() + memberOffset[static_cast<std::size_t>(c)];
-        const std::size_t size =
-            memberOffset[static_cast<std::size_t>(c) + 1] - memberOffset[static_cast<std::size_t>(c)];
-        minDist.assign(size, kInf);
-        auto pickFarthest = [&](auto value) {
-          std::size_t best = 0;
-          for (std::size_t x = 1; x < size; ++x)
-            if (value(x) > value(best)) best = x;  // ties: lowest internal index (members are sorted)
-          return members[best];
-        };
-        const Eigen::Vector3f& first = pos[seed[static_cast<std::size_t>(c)]];
-        sc.push_back(pickFarthest([&](std::size_t x) { return (pos[members[x]] - first).squaredNorm(); }));
-        seedSeconds += secondsSince(t0);
-        auto keep = [&](const Sweep& from, int s) {  // field s from a finished sweep
-          for (std::size_t x = 0; x < size; ++x) {
-            const float d = from.distance(members[x]);
-            field[members[x] * static_cast<std::size_t>(m) + static_cast<std::size_t>(s)] = d;
-            minDist[x] = std::min(minDist[x], d);
-          }
-        };
-        for (int s = 0; s < m; ++s) {
-          if (s == 1 && m >= 3) {
-            const Eigen::Vector3f& satellite2 = pos[sc.back()];
-            sc.push_back(pickFarthest(
-                [&](std::size_t x) { return std::min(minDist[x], (pos[members[x]] - satellite2).norm()); }));
-            if (spareThread) {
-              if (!second) second.emplace(n);
-              std::thread other([&] { second->run(graph, pos, sc[2], params.fastMarching); });
-              sweep.run(graph, pos, sc[1], params.fastMarching);
-              other.join();
-              keep(sweep, 1);
-              keep(*second, 2);
-            } else {
-              for (int f : {1, 2}) {
-                sweep.run(graph, pos, sc[static_cast<std::size_t>(f)], params.fastMarching);
-                keep(sweep, f);
-              }
-            }
-            ++s;
-          } else {
-            sweep.run(graph, pos, sc.back(), params.fastMarching);
-            keep(sweep, s);
-          }
-          if (s + 1 < m) sc.push_back(pickFarthest([&](std::size_t x) { return minDist[x]; }));
-        }
-      }
+      for (long long c = 0; c < static_cast<long long>(count); ++c)
+        fieldsOfComponent(static_cast<std::size_t>(c), members, sat[static_cast<std::size_t>(c)], field,
+                          spareThread, sweep, second, minDist, seedSeconds);
     }
     sweepSeconds = secondsSince(t);
   };
-  // What does not need the fields: the caller's work and the k-d tree for nearest(), if not built yet.
   auto besides = [&](int threads) {
-    if (!index) index = std::make_unique<KnnIndex>(zp);
+    if (!index) index = std::make_unique<KnnIndex>(*sorted);
     if (alongside) alongside(threads, sortedCopy.empty() ? index.get() : nullptr);
   };
   if (team > nThreads) {  // the sweeps on a thread of their own, the other work on the idle ones
@@ -526,22 +622,24 @@ void GeodesicCoordinates::Impl::build(const NeighbourTable* table,
     besides(team);
   }
   report.satelliteSeconds = seedSeconds;
-  // Back to the caller's order.
-  component.assign(n, 0);
-  coords.assign(n * static_cast<std::size_t>(m), kInf);
-  for (std::size_t i = 0; i < n; ++i) {
-    component[order[i]] = comp[i];
-    std::copy_n(&field[i * static_cast<std::size_t>(m)], m, &coords[order[i] * static_cast<std::size_t>(m)]);
-  }
-  satellites.assign(count, {});
-  for (std::size_t c = 0; c < count; ++c)
-    for (std::uint32_t x : sat[c]) satellites[c].push_back(order[x]);
+  toCallerOrder(components, field, sat);
   report.fieldSeconds = sweepSeconds - seedSeconds / nThreads;
+}
 
-  report.points = n;
-  report.components = count;
-  report.spacing = spacing;
-  report.totalSeconds = secondsSince(start);
+/// Components, coordinates and satellites back in the caller's point order.
+void GeodesicCoordinates::Impl::toCallerOrder(const Components& components, const std::vector<float>& field,
+                                              const std::vector<std::vector<std::uint32_t>>& sat) {
+  const std::size_t n = points.size();
+  const auto m = static_cast<std::size_t>(params.satellites);
+  component.assign(n, 0);
+  coords.assign(n * m, kInf);
+  for (std::size_t i = 0; i < n; ++i) {
+    component[order[i]] = components.id[i];
+    std::copy_n(&field[i * m], m, &coords[order[i] * m]);
+  }
+  satellites.assign(components.count, {});
+  for (std::size_t c = 0; c < components.count; ++c)
+    for (std::uint32_t x : sat[c]) satellites[c].push_back(order[x]);
 }
 
 GeodesicCoordinates::GeodesicCoordinates(const PointCloud& cloud, const GeodesicParams& params,
@@ -616,39 +714,13 @@ std::vector<std::array<std::uint32_t, 2>> GeodesicCoordinates::edges() const {
 void writeGeodesicPly(OutputBatch& batch, const std::string& path, const GeodesicCoordinates& geo) {
   if (extensionOf(path) != ".ply")
     throw InputError("cannot write " + path + ": geodesic coordinates are written as .ply only");
-  batch.file(path, [&](std::ostream& out) {
-    const bool normals = geo.normals().size() == geo.size();
-    const int m = geo.dimensions();
-    std::ostringstream h;
-    h << "ply\nformat binary_little_endian 1.0\ncomment geodesic coordinates (iires, paper 3.2)\n"
-      << "element vertex " << geo.size() << "\nproperty double x\nproperty double y\nproperty double z\n";
-    if (normals) h << "property double nx\nproperty double ny\nproperty double nz\n";
-    for (int s = 0; s < m; ++s) h << "property float g" << (s + 1) << "\n";
-    h << "property uint component\nend_header\n";
-    out << h.str();
-    std::vector<char> buffer;
-    const std::size_t record = (normals ? 48 : 24) + 4 * static_cast<std::size_t>(m) + 4;
-    buffer.reserve(record * 4096);
-    auto put = [&](const void* p, std::size_t bytes) {
-      const char* c = static_cast<const char*>(p);
-      buffer.insert(buffer.end(), c, c + bytes);
-    };
-    for (std::size_t i = 0; i < geo.size(); ++i) {
-      put(geo.points()[i].data(), 24);
-      if (normals) put(geo.normals()[i].data(), 24);
-      for (int s = 0; s < m; ++s) {
-        const float g = geo.coordinate(i, s);
-        put(&g, 4);
-      }
-      const std::uint32_t c = geo.component(i);
-      put(&c, 4);
-      if (buffer.size() >= record * 4096) {
-        out.write(buffer.data(), static_cast<std::streamsize>(buffer.size()));
-        buffer.clear();
-      }
-    }
-    out.write(buffer.data(), static_cast<std::streamsize>(buffer.size()));
-  });
+  detail::io::PlyContent content{geo.points(), geo.normals().size() == geo.size() ? &geo.normals() : nullptr, {}};
+  for (int s = 0; s < geo.dimensions(); ++s)
+    content.properties.push_back(
+        {"g" + std::to_string(s + 1), "float", [&geo, s](std::size_t i) { return geo.coordinate(i, s); }});
+  content.properties.push_back({"component", "uint", [&geo](std::size_t i) { return geo.component(i); }});
+  content.comment = "geodesic coordinates (iires, paper 3.2)";
+  detail::io::stagePly(batch, path, content, false);
 }
 
 void writeGeodesicPly(const std::string& path, const GeodesicCoordinates& geo) {

@@ -4,8 +4,8 @@
 #include <algorithm>
 #include <nanoflann.hpp>
 
-#include "iires/parallel.hpp"
-#include "iires/radix_sort.hpp"
+#include "iires/detail/parallel.hpp"
+#include "iires/detail/radix_sort.hpp"
 
 namespace iires {
 namespace {

@@ -12,7 +12,7 @@
 #include <limits>
 
 #include "iires/knn.hpp"
-#include "iires/parallel.hpp"
+#include "iires/detail/parallel.hpp"
 
 namespace iires {
 namespace {

@@ -6,7 +6,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "iires/parallel.hpp"
+#include "iires/detail/parallel.hpp"
 #include "quadric_fit.hpp"
 
 namespace iires {

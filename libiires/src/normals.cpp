@@ -8,10 +8,10 @@
 #include <cstring>
 #include <tuple>
 
-#include "iires/disjoint_sets.hpp"
+#include "iires/detail/disjoint_sets.hpp"
 #include "iires/knn.hpp"
-#include "iires/parallel.hpp"
-#include "iires/radix_sort.hpp"
+#include "iires/detail/parallel.hpp"
+#include "iires/detail/radix_sort.hpp"
 
 namespace iires {
 namespace {

@@ -10,7 +10,7 @@
 
 #include "iires/denoise.hpp"
 #include "iires/knn.hpp"
-#include "iires/parallel.hpp"
+#include "iires/detail/parallel.hpp"
 
 namespace iires {
 namespace {

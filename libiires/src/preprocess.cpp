@@ -1,10 +1,11 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "iires/preprocess.hpp"
 
+#include "iires/detail/json.hpp"
+
 #include <algorithm>
 #include <chrono>
 #include <optional>
-#include <sstream>
 #include <stdexcept>
 
 
@@ -18,14 +19,13 @@ void PreprocessParams::validate() const {
 }
 
 std::string PreprocessResult::toJson() const {
-  std::ostringstream s;
-  s.precision(10);
-  s << "{\"input_points\": " << inputPoints << ", \"output_points\": " << outputPoints
-    << ", \"outliers_found\": " << outliersFound << ", \"outliers_pulled\": " << outliersPulled
-    << ", \"outliers_removed\": " << outliersRemoved << ", \"denoise_iterations\": " << denoiseIterations
-    << ", \"clean_input\": " << (cleanInput ? "true" : "false") << ", \"mean_displacement\": " << meanDisplacement << ", \"outlier_time_s\": " << outlierSeconds
-    << ", \"denoise_time_s\": " << denoiseSeconds << ", \"time_s\": " << seconds << "}";
-  return s.str();
+  detail::JsonWriter j;
+  j.beginObject().member("input_points", inputPoints).member("output_points", outputPoints);
+  j.member("outliers_found", outliersFound).member("outliers_pulled", outliersPulled);
+  j.member("outliers_removed", outliersRemoved).member("denoise_iterations", denoiseIterations);
+  j.member("clean_input", cleanInput).member("mean_displacement", meanDisplacement);
+  j.member("outlier_time_s", outlierSeconds).member("denoise_time_s", denoiseSeconds).member("time_s", seconds);
+  return j.endObject().str();
 }
 
 std::size_t preprocessNeighbours(const PreprocessParams& params) {

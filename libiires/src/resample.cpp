@@ -4,156 +4,32 @@
 #include "iires/attributes.hpp"
 
 #include <algorithm>
-#include <array>
 #include <chrono>
 #include <cmath>
-#include <cstring>
 #include <limits>
-#include <numeric>
 #include <optional>
 #include <sstream>
 #include <stdexcept>
-#include <tuple>
 
 #include <Eigen/Geometry>
 
+#include "iires/detail/json.hpp"
 #include "iires/knn.hpp"
-#include "iires/parallel.hpp"
-#include "iires/radix_sort.hpp"
-#include "iires/tangent_cell.hpp"
+#include "iires/detail/parallel.hpp"
+#include "iires/detail/stage_clock.hpp"
 #include "iires/validate.hpp"
+#include "resampler.hpp"
+#include "voxel_thin.hpp"
 
 namespace iires {
 namespace {
 
+using detail::initialCandidates;
+using detail::Resampler;
+using detail::Samples;
+using detail::voxelThin;
+
 using Clock = std::chrono::steady_clock;
-
-constexpr std::uint32_t kNone = 0xffffffffu;
-constexpr double kOffSurfaceLimit = 0.6;  // MlsSurface::project's offSurface beyond which a move left the cloud
-// MlsSurface::project's `beyond` (tangent-plane distance outside the input neighbours' hull, in kernel widths,
-// ≈ 0.15 input spacings) past which a move left the input's extent at an open boundary. kOffSurfaceLimit alone
-// lets a sample sit 0.6 kernel widths (≈ 2 input spacings) from the nearest input point, which at an open
-// boundary of a sparse input is several output spacings past the data (upsampling).
-constexpr double kBeyondLimit = 0.05;
-constexpr double kCarryShare = 0.05;     // edits touching more than this share of samples restart the relaxation
-
-/// The working sample set S.
-struct Samples {
-  std::vector<Eigen::Vector3d> pos, nrm;
-  std::vector<char> fixed;
-  std::vector<MlsCache> cache;  // each sample's last MLS neighbourhood (saves most k-NN searches in relaxation)
-  std::size_t size() const { return pos.size(); }
-  void add(const Eigen::Vector3d& p, const Eigen::Vector3d& n, bool isFixed, MlsCache c = {}) {
-    pos.push_back(p);
-    nrm.push_back(n);
-    fixed.push_back(isFixed ? 1 : 0);
-    cache.push_back(std::move(c));
-  }
-};
-
-/// Per sample: its 1-ring (tangent-plane Delaunay neighbours) and the centroid of its tangent-plane Voronoi cell.
-struct Rings {
-  int stride = 0;
-  std::vector<std::uint32_t> ring;  // stride entries per sample, kNone-padded
-  std::vector<Eigen::Vector3d> centroid;
-  std::vector<double> nearest;  // distance to the nearest accepted neighbour
-  std::vector<Eigen::Vector3d> outward;  // unit tangent pointing off the surface at boundary samples, else 0
-  std::vector<double> size;  // each sample's target size factor s (1 in isotropic mode)
-  std::vector<std::uint32_t> candidates;  // per sample the stride + 1 nearest samples its ring was built from
-  std::vector<char> open;                 // the sample's cell reaches its bounding disc (boundary, sparse region)
-};
-
-/// What one round of splits and collapses did to the sample indices.
-struct EditMap {
-  std::vector<std::uint32_t> newIndex;  // old index → new index, kNone for a removed sample
-  std::vector<std::uint32_t> touched;   // old indices of removed samples, moved collapse ends and split ends
-  std::size_t added = 0;                // split samples, appended after the kept ones
-};
-
-/// Lloyd relaxation state carried across iterations on one sample set (no splits or collapses in between).
-struct Relaxation {
-  std::optional<Rings> rings;  // the last iteration's rings
-  std::vector<char> active;    // samples whose cell may have changed since (they or a ring neighbour moved)
-  int sinceQuery = 0;          // iterations since the candidate lists came from a k-d tree
-  std::vector<char> stale;     // samples whose candidate lists an edit made stale: queried anew next iteration
-};
-
-struct Edge {
-  double length;  // in units of the local target size (s_a + s_b) / 2: the plain length in isotropic mode
-  std::uint32_t a, b;
-};
-
-/// Voxel thinning (DESIGN §3.5): cells sized by secant steps on the cell size (from @p cell) so that about
-/// @p target (−15 % to +20 %) are occupied; per cell the point nearest its centre, indices ascending. With
-/// normals, the normal's dominant signed axis is part of the cell key, so facing sheets of a thin part that
-/// share a cell (a gap narrower than the cell) each keep a point.
-std::vector<std::uint32_t> voxelThin(const std::vector<Eigen::Vector3d>& pts, const std::vector<Eigen::Vector3d>& normals,
-                                     std::size_t target, double cell, std::uint64_t seed, int threads) {
-  Eigen::Vector3d lo = pts[0], hi = pts[0];
-  for (const auto& p : pts) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
-  // A seed shifts the grid by a fraction of a cell in each axis (seed 0: no shift).
-  Eigen::Vector3d shift = Eigen::Vector3d::Zero();
-  for (int a = 0; seed && a < 3; ++a) {
-    std::uint64_t z = seed + 0x9e3779b97f4a7c15ull * static_cast<std::uint64_t>(a + 1);
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
-    shift[a] = static_cast<double>((z ^ (z >> 31)) >> 11) * 0x1.0p-53;
-  }
-  const std::size_t n = pts.size();
-  auto normalClass = [&](std::size_t i) -> std::uint64_t {
-    if (normals.empty()) return 0;
-    Eigen::Index axis;
-    normals[i].cwiseAbs().maxCoeff(&axis);
-    return static_cast<std::uint64_t>(2 * axis + (normals[i][axis] < 0 ? 1 : 0));
-  };
-  // Cell key of every point (and its squared distance to the cell centre), computed in parallel; cells are
-  // then found by radix-sorting the keys. Keys number the grid's cells densely (few radix passes) unless the
-  // grid is too large for that, then they mix the three cell coordinates.
-  std::vector<KeyedIndex> byCell(n);  // (cell key, point), sorted by key; equal keys keep index order
-  std::vector<double> toCentre(n);
-  double sortedFor = 0;  // the cell size byCell is sorted for
-  auto sortCells = [&](double size) {
-    if (size == sortedFor) return;
-    sortedFor = size;
-    const Eigen::Vector3d dims = (hi - lo) / size + Eigen::Vector3d::Constant(2.0);
-    const bool dense = dims.prod() < 0x1.0p58;
-    const auto ny = static_cast<std::uint64_t>(dims.y()), nz = static_cast<std::uint64_t>(dims.z());
-    parallelFor(n, threads, [&](std::size_t i) {
-      const Eigen::Vector3d q = (pts[i] - lo) / size + shift;
-      const auto ix = static_cast<std::uint64_t>(q.x()), iy = static_cast<std::uint64_t>(q.y()),
-                 iz = static_cast<std::uint64_t>(q.z());
-      const std::uint64_t cellKey = dense ? (ix * ny + iy) * nz + iz : (ix << 42) ^ (iy << 21) ^ iz;
-      byCell[i] = {cellKey * 8 + normalClass(i), static_cast<std::uint32_t>(i)};
-      toCentre[i] = (q - Eigen::Vector3d(ix + 0.5, iy + 0.5, iz + 0.5)).squaredNorm();
-    });
-    radixSort(byCell, threads);
-  };
-  auto occupied = [&](double size) {
-    sortCells(size);
-    std::size_t cells = 0;
-    for (std::size_t r = 0; r < n; ++r) cells += r == 0 || byCell[r].first != byCell[r - 1].first;
-    return cells;
-  };
-  // Occupied cells scale like cell⁻² on a surface.
-  for (int step = 0; step < 8; ++step) {
-    const double ratio = static_cast<double>(occupied(cell)) / static_cast<double>(target);
-    if (ratio > 0.85 && ratio < 1.2) break;
-    cell *= std::sqrt(std::clamp(ratio, 0.25, 4.0));
-  }
-  sortCells(cell);  // (already sorted when the loop stopped on it)
-  // Per cell the point nearest its centre (ties: the lowest index, the first of its run), returned in index
-  // order.
-  std::vector<char> picked(n, 0);
-  for (std::size_t r = 0, best = 0; r < n; ++r) {
-    const std::uint32_t i = byCell[r].second;
-    if (r == 0 || byCell[r].first != byCell[r - 1].first || toCentre[i] < toCentre[best]) best = i;
-    if (r + 1 == n || byCell[r + 1].first != byCell[r].first) picked[best] = 1;
-  }
-  std::vector<std::uint32_t> chosen;
-  for (std::size_t i = 0; i < n; ++i)
-    if (picked[i]) chosen.push_back(static_cast<std::uint32_t>(i));
-  return chosen;
-}
 
 /// The points (and normals) of @p cloud at @p indices, in that order.
 PointCloud select(const PointCloud& cloud, const std::vector<std::uint32_t>& indices) {
@@ -167,731 +43,6 @@ PointCloud select(const PointCloud& cloud, const std::vector<std::uint32_t>& ind
   return out;
 }
 
-/// The samples of @p s not marked in @p removed, in Morton order (loops over samples and their k-NN queries then
-/// stay in cache).
-Samples spatiallySorted(Samples& s, const std::vector<char>& removed, int threads) {
-  std::vector<std::uint32_t> order = mortonOrder(s.pos, threads);
-  Samples out;
-  for (std::uint32_t i : order)
-    if (!removed[i]) out.add(s.pos[i], s.nrm[i], s.fixed[i], std::move(s.cache[i]));
-  return out;
-}
-
-class Resampler {
- public:
-  /// @param size per input point target-size factor (curvature mode), or null (isotropic)
-  Resampler(const std::vector<Eigen::Vector3d>& pts, const std::vector<Eigen::Vector3d>& normals,
-            const MlsSurface& surface, const ResampleParams& params, NeighbourRule& rule,
-            const std::vector<double>* size)
-      : pts_(pts), normals_(normals), surface_(surface), params_(params), rule_(rule), size_(size) {}
-
-  /// @p chosen: the input points to start from (initialCandidates()).
-  Samples initialise(const std::vector<std::uint32_t>& chosen, ResampleResult& result);
-  void run(Samples& s, ResampleResult& result);
-
- private:
-  Rings computeRings(const Samples& s, double cellRadius, Relaxation* relaxation = nullptr,
-                     bool requery = true) const;
-  std::vector<Edge> edges(const Samples& s, const Rings& r) const;
-  /// @p projectionSteps: MLS projection steps per move (0 = MlsParams::iterations).
-  double relax(Samples& s, double l, int iterations, Relaxation& state, int projectionSteps = 0);
-  EditMap splitAndCollapse(Samples& s, const std::vector<Edge>& sorted, std::size_t splits, double minSplit,
-                           std::size_t collapses, double maxCollapse, ResampleResult& result);
-  void carry(Relaxation& state, const EditMap& edits, std::size_t count) const;
-  Rings edgeRings(const Samples& s, double l, const Relaxation& state) const;
-  void eliminate(Samples& s, std::size_t count);
-  void forceCount(Samples& s, Relaxation& relaxation);
-  /// The neighbour rule's update after a change of the sample set (or a drift, see relax()).
-  void updateRule(const Samples& s);
-
-  const std::vector<Eigen::Vector3d>& pts_;
-  const std::vector<Eigen::Vector3d>& normals_;
-  const MlsSurface& surface_;
-  const ResampleParams& params_;
-  NeighbourRule& rule_;
-  const std::vector<double>* size_;
-  std::vector<Eigen::Vector3d> rulePos_;  // the samples' positions at the rule's last update
-};
-
-/// x⁸ by three squarings (std::pow with a real exponent costs a log and an exp).
-float pow8(double x) {
-  x *= x;
-  x *= x;
-  return static_cast<float>(x * x);
-}
-
-/// A monotone stand-in for the angle of the unit vector @p d, in [0, 4): sorts directions counter-clockwise
-/// from +x like atan2 does from −x, without the transcendental call.
-double pseudoAngle(const Eigen::Vector2d& d) {
-  const double s = std::abs(d.x()) + std::abs(d.y());
-  const double t = d.y() / s;  // in [−1, 1]
-  return d.x() >= 0 ? (d.y() >= 0 ? t : 4.0 + t) : 2.0 - t;
-}
-
-/// The counter-clockwise gap from unit direction @p from to the next one @p to of a 1-ring: its bisector when
-/// the gap is wider than 135°, else nothing. @p full: the two are the same direction and the gap is the whole
-/// circle (a ring with one direction).
-std::optional<Eigen::Vector2d> gapBisector(const Eigen::Vector2d& from, const Eigen::Vector2d& to,
-                                           bool full) {
-  if (full) return -from;
-  const double cross = from.x() * to.y() - from.y() * to.x(), dot = from.dot(to);
-  if (cross > 0) {
-    if (dot >= -std::sqrt(0.5)) return std::nullopt;  // at most 135°
-    return (from + to).normalized();
-  }
-  if (cross == 0) {
-    if (dot > 0) return std::nullopt;             // the same direction: no gap
-    return Eigen::Vector2d(-from.y(), from.x());  // exactly 180°
-  }
-  return -(from + to).normalized();  // more than 180°
-}
-
-/// Neighbours are filtered by the neighbour rule as of its last update, which follows every change of the
-/// sample set (relaxation moves samples by a fraction of a spacing and keeps their order).
-/// @param relaxation with the rings of the previous iteration on the same samples: samples it marks inactive
-/// keep their ring and cell, and unless @p requery the others re-sort their previous candidate lists by the
-/// current distances instead of querying a new k-d tree (samples moved by a fraction of a spacing, so the few
-/// neighbours that shape a cell stay among the nearest of a step ago). Its rings are moved into the result (the
-/// caller replaces them with it). Without it every ring is computed from scratch.
-Rings Resampler::computeRings(const Samples& s, double cellRadius, Relaxation* relaxation, bool requery) const {
-  const bool previous = relaxation && relaxation->rings;
-  if (!previous) requery = true;
-  auto active = [&](std::size_t i) { return !previous || relaxation->active[i]; };
-  const std::vector<char>* stale = relaxation && !relaxation->stale.empty() ? &relaxation->stale : nullptr;
-  const int k = params_.neighbours;
-  const std::size_t stride = static_cast<std::size_t>(k) + 1;
-  Rings r;
-  if (previous) {  // inactive samples keep everything; the rest is overwritten below
-    r = std::move(*relaxation->rings);
-  } else {
-    r.stride = k;
-    r.ring.assign(s.size() * static_cast<std::size_t>(k), kNone);
-    r.candidates.assign(s.size() * stride, kNone);
-    r.centroid.resize(s.size());
-    r.nearest.assign(s.size(), 0.0);
-    r.outward.assign(s.size(), Eigen::Vector3d::Zero());
-    r.size.assign(s.size(), 1.0);
-    r.open.assign(s.size(), 0);
-  }
-  if (size_)  // adaptive mode (eq. 10): a sample takes the size factor of its nearest input point
-    parallelFor(s.size(), params_.threads, [&](std::size_t i) {
-      if (active(i)) r.size[i] = (*size_)[surface_.index().nearest(s.pos[i])];
-    });
-  std::optional<KnnIndex> index;
-  if (requery || stale) index.emplace(s.pos);
-  // The disc bounding each cell, as a polygon circumscribing the unit circle.
-  constexpr int kDiscEdges = 16;
-  std::array<Eigen::Vector2d, kDiscEdges> unitDisc;
-  for (int e = 0; e < kDiscEdges; ++e)
-    unitDisc[static_cast<std::size_t>(e)] = {std::cos(2 * M_PI * e / kDiscEdges), std::sin(2 * M_PI * e / kDiscEdges)};
-  parallelFor(s.size(), params_.threads, [&](std::size_t i) {
-    if (!active(i)) return;
-    // Per-thread scratch buffers (one thread-local lookup): this runs for every sample in every iteration.
-    struct Scratch {
-      std::vector<std::uint32_t> idx, lab, tmpL, coincident;
-      std::vector<double> d2;
-      std::vector<std::pair<double, Eigen::Vector2d>> dirs;
-      std::vector<std::pair<double, std::uint32_t>> byDistance;
-      std::vector<std::pair<std::uint32_t, Eigen::Vector2d>> nb;
-      std::vector<Eigen::Vector2d> poly, tmpV;
-    };
-    thread_local Scratch scratch;
-    Scratch& sc = scratch;
-    auto &idx = sc.idx, &lab = sc.lab, &tmpL = sc.tmpL, &coincident = sc.coincident;
-    auto& d2 = sc.d2;
-    auto& dirs = sc.dirs;
-    auto &poly = sc.poly, &tmpV = sc.tmpV;
-    auto& byDistance = sc.byDistance;
-    auto& nb = sc.nb;
-    const auto candidates = r.candidates.begin() + static_cast<long>(i * stride);
-    if (requery || (stale && (*stale)[i])) {
-      index->knn(s.pos[i], stride, idx, d2);
-    } else {
-      byDistance.clear();
-      for (std::size_t c = 0; c < stride; ++c)
-        if (const std::uint32_t j = candidates[static_cast<long>(c)]; j != kNone)
-          byDistance.emplace_back((s.pos[j] - s.pos[i]).squaredNorm(), j);
-      std::sort(byDistance.begin(), byDistance.end());
-      idx.clear();
-      d2.clear();
-      for (const auto& [d, j] : byDistance) idx.push_back(j), d2.push_back(d);
-    }
-    std::fill_n(candidates, stride, kNone);
-    std::copy(idx.begin(), idx.end(), candidates);
-    std::fill_n(r.ring.begin() + static_cast<long>(i * static_cast<std::size_t>(k)), k, kNone);
-    r.outward[i].setZero();
-    const Eigen::Vector3d& n = s.nrm[i];
-    const Eigen::Vector3d u = n.unitOrthogonal(), v = n.cross(u);
-    // Accepted neighbours in tangent coordinates. Log-map approximation: the tangent direction of the neighbour
-    // with its true 3-D distance, so that on curved patches Lloyd equalises real spacings rather than their
-    // (shorter) tangent-plane projections.
-    nb.clear();
-    coincident.clear();
-    for (std::size_t c = 0; c < idx.size(); ++c) {
-      const std::uint32_t j = idx[c];
-      if (j == i || !rule_.accept(i, j)) continue;
-      const Eigen::Vector3d d = s.pos[j] - s.pos[i];
-      Eigen::Vector2d q(d.dot(u), d.dot(v));
-      const double qn = q.norm(), dist = std::sqrt(d2[c]);
-      if (dist <= 1e-9 * cellRadius) {  // no cell between them: a ring edge of length 0, collapsed first
-        coincident.push_back(j);
-        continue;
-      }
-      if (qn < 1e-12 * dist || qn == 0.0) continue;
-      nb.emplace_back(j, q * (dist / qn));
-    }
-    // The cell is bounded by a disc of radius R (for open boundaries); R follows the local spacing where the
-    // samples are sparser than l (upsampling), so rings never depend on how far the count still is from N.
-    const double nearest = nb.empty() ? 0.0 : nb.front().second.norm();
-    const double radius = std::max(cellRadius * r.size[i], nearest);
-    poly.clear();
-    lab.clear();
-    const double rad = radius / std::cos(M_PI / kDiscEdges);
-    for (const Eigen::Vector2d& corner : unitDisc) {
-      poly.push_back(rad * corner);
-      lab.push_back(kNone);
-    }
-    for (const auto& [j, q] : nb) {
-      if (q.norm() > 4.0 * radius) break;  // sorted by distance: the rest cannot touch the cell
-      clipByBisector(poly, lab, q, r.size[i] / (r.size[i] + r.size[j]), j, tmpV, tmpL);
-      if (poly.size() < 3) break;
-    }
-    // Samples at one position (e.g. a split onto a sample its edge's ends did not see) would share a cell and
-    // move together for good: of each such pair the lower index keeps the −u side of the cell, the higher +u.
-    for (std::uint32_t j : coincident) {
-      if (poly.size() < 3) break;
-      clipByBisector(poly, lab, Eigen::Vector2d(j > i ? 1e-6 * radius : -1e-6 * radius, 0.0), 0.5, j, tmpV, tmpL);
-    }
-    const Eigen::Vector2d c2 = poly.size() >= 3 ? polygonCentroid(poly) : Eigen::Vector2d::Zero();
-    r.centroid[i] = s.pos[i] + c2.x() * u + c2.y() * v;
-    r.nearest[i] = nearest;
-    std::sort(lab.begin(), lab.end());
-    lab.erase(std::unique(lab.begin(), lab.end()), lab.end());
-    r.open[i] = !lab.empty() && lab.back() == kNone;
-    int w = 0;
-    dirs.clear();
-    for (std::uint32_t j : lab) {
-      if (j == kNone || w >= k) continue;
-      r.ring[i * static_cast<std::size_t>(k) + static_cast<std::size_t>(w++)] = j;
-      const auto it = std::find_if(nb.begin(), nb.end(), [&](const auto& x) { return x.first == j; });
-      if (it == nb.end()) continue;  // a coincident sample: no direction
-      const Eigen::Vector2d d = it->second.normalized();
-      dirs.emplace_back(pseudoAngle(d), d);
-    }
-    const auto ringBegin = r.ring.begin() + static_cast<long>(i * static_cast<std::size_t>(k));
-    for (std::uint32_t j : coincident)  // a ring edge of length 0, collapsed first (once, if clipping put it there)
-      if (w < k && std::find(ringBegin, ringBegin + w, j) == ringBegin + w) ringBegin[w++] = j;
-    // Open boundary: the 1-ring leaves an angular gap wider than 135° and the surface does not continue into
-    // it (a probe half a cell into the gap leaves the cloud, or the input's extent: when upsampling, half a cell
-    // is a fraction of the input spacing and stays near the last input points); the gap's bisector then points
-    // off the surface.
-    // A gap with surface behind it is merely a sparse region (e.g. while upsampling) and stays open to moves.
-    std::sort(dirs.begin(), dirs.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
-    for (std::size_t a = 0; a < dirs.size(); ++a) {
-      const bool wrap = a + 1 == dirs.size();
-      const std::optional<Eigen::Vector2d> mid =
-          gapBisector(dirs[a].second, dirs[wrap ? 0 : a + 1].second, wrap && dirs[0].first == dirs[a].first);
-      if (!mid) continue;
-      const Eigen::Vector3d dir = mid->x() * u + mid->y() * v;
-      double off = 0, out = 0;
-      surface_.project(s.pos[i] + 0.5 * radius * dir, nullptr, &off, &s.nrm[i], nullptr, 0, &out);
-      if (off > kOffSurfaceLimit || out > kBeyondLimit) r.outward[i] = dir;
-    }
-  });
-  return r;
-}
-
-/// Edges present in both endpoints' 1-rings, each once (a < b), ordered by (a, b).
-std::vector<Edge> Resampler::edges(const Samples& s, const Rings& r) const {
-  const std::size_t n = s.size(), k = static_cast<std::size_t>(r.stride);
-  auto mutual = [&](std::size_t a, std::uint32_t b) {  // the edge a–b, from its lower end
-    if (b == kNone || b <= a) return false;
-    const auto* rb = &r.ring[b * k];
-    return std::find(rb, rb + k, static_cast<std::uint32_t>(a)) != rb + k;
-  };
-  std::vector<std::uint32_t> offset(n + 1, 0);
-  parallelFor(n, params_.threads, [&](std::size_t a) {
-    for (std::size_t x = 0; x < k; ++x) offset[a + 1] += mutual(a, r.ring[a * k + x]);
-  });
-  for (std::size_t a = 0; a < n; ++a) offset[a + 1] += offset[a];
-  std::vector<Edge> out(offset[n]);
-  parallelFor(n, params_.threads, [&](std::size_t a) {
-    const auto first = out.begin() + offset[a];
-    auto at = first;
-    for (std::size_t x = 0; x < k; ++x)
-      if (const std::uint32_t b = r.ring[a * k + x]; mutual(a, b))
-        *at++ = {(s.pos[a] - s.pos[b]).norm() / (0.5 * (r.size[a] + r.size[b])), static_cast<std::uint32_t>(a), b};
-    std::sort(first, at, [](const Edge& x, const Edge& y) { return x.b < y.b; });
-  });
-  return out;
-}
-
-/// Lloyd relaxation: move each free sample to the centroid of its tangent-plane Voronoi cell, projected onto
-/// the MLS surface (halving the step if the move would leave the cloud). Returns the spacing CV after the last
-/// iteration (from the 1-rings, so it costs nothing extra).
-/// Only active samples are recomputed: a sample whose cell neighbours and itself all moved by less than
-/// kStillMove·l last time has (nearly) the same cell and centroid, and keeps them. Late in the relaxation most
-/// samples are still, so an iteration costs a fraction of the first ones.
-double Resampler::relax(Samples& s, double l, int iterations, Relaxation& state, int projectionSteps) {
-  constexpr double kStillMove = 0.005;  // in units of l
-  constexpr int kRequeryEvery = 4;     // iterations between fresh k-d tree candidate lists
-  constexpr double kRuleDrift = 0.5;   // in units of l: a drift from the rule's last positions that updates it
-  const std::size_t n = s.size(), k = static_cast<std::size_t>(params_.neighbours);
-  double cv = 0;
-  std::vector<Eigen::Vector3d> pos, nrm;  // the moved samples; swapped with s's, so both keep their memory
-  for (int it = 0; it < iterations; ++it) {
-    const bool requery = !state.rings || state.sinceQuery >= kRequeryEvery;
-    Rings r = computeRings(s, l, &state, requery);
-    state.sinceQuery = requery ? 1 : state.sinceQuery + 1;
-    state.stale.clear();
-    if (!state.rings) state.active.assign(n, 1);
-    pos = s.pos;
-    nrm = s.nrm;
-    parallelFor(n, params_.threads, [&](std::size_t i) {
-      if (s.fixed[i] || !state.active[i]) return;
-      Eigen::Vector3d step = params_.overRelaxation * (r.centroid[i] - s.pos[i]);
-      // Boundary samples may slide along the boundary or move inwards, never off the surface.
-      step -= std::max(0.0, step.dot(r.outward[i])) * r.outward[i];
-      Eigen::Vector3d target = s.pos[i] + step;
-      for (int attempt = 0; attempt < 3; ++attempt) {
-        Eigen::Vector3d nn;
-        double off = 0, out = 0;
-        const Eigen::Vector3d p =
-            surface_.project(target, &nn, &off, &s.nrm[i], &s.cache[i], projectionSteps, &out);
-        // A boundary sample never ends farther out than it was (the projection itself may push it there,
-        // where the MLS surface only extrapolates past the last input points) and stays closer to the cloud.
-        if (off <= (r.outward[i].isZero() ? kOffSurfaceLimit : 0.5 * kOffSurfaceLimit) && out <= kBeyondLimit &&
-            (p - s.pos[i]).dot(r.outward[i]) <= 0) {
-          pos[i] = p;
-          nrm[i] = nn;
-          return;
-        }
-        target = 0.5 * (target + s.pos[i]);
-      }
-    });
-    // Next iteration's active set: samples that moved and the 1-ring neighbours of those (both directions).
-    std::vector<char> moved(n, 0), next(n, 0);
-    const double still2 = kStillMove * kStillMove * l * l;
-    for (std::size_t i = 0; i < n; ++i) moved[i] = (pos[i] - s.pos[i]).squaredNorm() > still2;
-    for (std::size_t i = 0; i < n; ++i)
-      for (std::size_t x = 0; x < k; ++x) {
-        const std::uint32_t j = r.ring[i * k + x];
-        if (j == kNone) break;
-        if (moved[i] || moved[j]) next[i] = next[j] = 1;
-      }
-    for (std::size_t i = 0; i < n; ++i) next[i] |= moved[i];
-    s.pos.swap(pos);
-    s.nrm.swap(nrm);
-    // The rule judges pairs at the positions of its last update. A sample that drifted far from there (into
-    // a hole, over several iterations) would be judged where it was: two samples that met on the same sheet
-    // can then be refused as neighbours — where the geodesic coordinates are a few tens of per cent off over
-    // that distance — and their cells overlap, so they pile up. Such a drift updates the rule.
-    const double drift2 = kRuleDrift * kRuleDrift * l * l;
-    bool drifted = false;
-    for (std::size_t i = 0; i < n && !drifted; ++i) drifted = (s.pos[i] - rulePos_[i]).squaredNorm() > drift2;
-    if (drifted) updateRule(s);
-    double sum = 0, sq = 0;
-    for (double d : r.nearest) sum += d, sq += d * d;
-    const double mean = sum / static_cast<double>(n);
-    cv = mean > 0 ? std::sqrt(std::max(0.0, sq / static_cast<double>(n) - mean * mean)) / mean : 0;
-    state.rings = std::move(r);
-    state.active = std::move(next);
-  }
-  return cv;
-}
-
-/// One round of edge operations on the 1-ring edges (@p sorted ascending by length):
-/// - split the longest edges longer than @p minSplit, at most @p splits: insert the edge midpoint projected onto
-///   the surface (a point cloud has no connectivity to keep, so a sample may take part in several splits);
-/// - collapse the shortest edges shorter than @p maxCollapse, at most @p collapses, each sample in at most one
-///   collapse: both ends are replaced by their midpoint on the surface (a fixed end stays put).
-EditMap Resampler::splitAndCollapse(Samples& s, const std::vector<Edge>& sorted, std::size_t splits,
-                                    double minSplit, std::size_t collapses, double maxCollapse,
-                                    ResampleResult& result) {
-  EditMap map;
-  // Longest first; midpoints are projected in parallel batches and an edge spanning a hole of the cloud (its
-  // midpoint leaves the surface) is not split.
-  std::vector<Eigen::Vector3d> newPos, newNrm;
-  std::vector<const Edge*> batch;
-  auto next = sorted.rbegin();
-  while (newPos.size() < splits && next != sorted.rend() && next->length > minSplit) {
-    batch.clear();
-    for (; next != sorted.rend() && next->length > minSplit && batch.size() < 2 * (splits - newPos.size()) + 16;
-         ++next)
-      batch.push_back(&*next);
-    std::vector<Eigen::Vector3d> pos(batch.size()), nrm(batch.size());
-    std::vector<double> off(batch.size()), out(batch.size());
-    parallelFor(batch.size(), params_.threads, [&](std::size_t c) {
-      const Edge& e = *batch[c];
-      pos[c] = surface_.project(0.5 * (s.pos[e.a] + s.pos[e.b]), &nrm[c], &off[c], &s.nrm[e.a], nullptr, 0, &out[c]);
-    });
-    for (std::size_t c = 0; c < batch.size() && newPos.size() < splits; ++c)
-      if (off[c] <= kOffSurfaceLimit && out[c] <= kBeyondLimit) {
-        newPos.push_back(pos[c]), newNrm.push_back(nrm[c]);
-        map.touched.push_back(batch[c]->a), map.touched.push_back(batch[c]->b);
-      }
-  }
-  std::vector<char> touched(s.size(), 0), removed(s.size(), 0);
-  std::size_t collapsed = 0;
-  for (const Edge& e : sorted) {
-    if (collapsed >= collapses || e.length >= maxCollapse) break;
-    if (touched[e.a] || touched[e.b] || (s.fixed[e.a] && s.fixed[e.b])) continue;
-    touched[e.a] = touched[e.b] = 1;
-    std::uint32_t keep = e.a, drop = e.b;
-    if (s.fixed[drop]) std::swap(keep, drop);
-    if (!s.fixed[keep])
-      s.pos[keep] = surface_.project(0.5 * (s.pos[e.a] + s.pos[e.b]), &s.nrm[keep], nullptr, &s.nrm[keep]);
-    removed[drop] = 1;
-    map.touched.push_back(keep), map.touched.push_back(drop);
-    ++collapsed;
-  }
-  // Kept samples stay in order (the Morton order of the initialisation degrades only by the few edits), split
-  // samples follow.
-  map.newIndex.assign(s.size(), kNone);
-  Samples kept;
-  for (std::size_t i = 0; i < s.size(); ++i)
-    if (!removed[i]) {
-      map.newIndex[i] = static_cast<std::uint32_t>(kept.size());
-      kept.add(s.pos[i], s.nrm[i], s.fixed[i], std::move(s.cache[i]));
-    }
-  for (std::size_t c = 0; c < newPos.size(); ++c) kept.add(newPos[c], newNrm[c], false);
-  s = std::move(kept);
-  map.added = newPos.size();
-  updateRule(s);
-  result.splits += newPos.size();
-  result.collapses += collapsed;
-  return map;
-}
-
-/// Carries a relaxation across a few edits: kept samples keep their rings (indices renumbered), and only the
-/// samples whose cell an edit can change — the split samples, the edited ones and their old neighbourhoods —
-/// are active, with fresh k-d tree candidates. @p count is the new number of samples.
-void Resampler::carry(Relaxation& state, const EditMap& edits, std::size_t count) const {
-  if (!state.rings) return;
-  const Rings& old = *state.rings;
-  const std::size_t k = static_cast<std::size_t>(old.stride), stride = k + 1;
-  Rings r;
-  r.stride = old.stride;
-  r.ring.assign(count * k, kNone);
-  r.candidates.assign(count * stride, kNone);
-  r.centroid.assign(count, Eigen::Vector3d::Zero());
-  r.nearest.assign(count, 0.0);
-  r.outward.assign(count, Eigen::Vector3d::Zero());
-  r.size.assign(count, 1.0);
-  r.open.assign(count, 0);
-  std::vector<char> active(count, 0);
-  for (std::size_t i = 0; i < edits.newIndex.size(); ++i) {
-    const std::uint32_t to = edits.newIndex[i];
-    if (to == kNone) continue;
-    std::size_t w = 0;
-    for (std::size_t x = 0; x < k; ++x)
-      if (const std::uint32_t j = old.ring[i * k + x]; j != kNone && edits.newIndex[j] != kNone)
-        r.ring[to * k + w++] = edits.newIndex[j];
-    for (std::size_t x = 0; x < stride; ++x)
-      if (const std::uint32_t j = old.candidates[i * stride + x]; j != kNone)
-        r.candidates[to * stride + x] = edits.newIndex[j];
-    r.centroid[to] = old.centroid[i];
-    r.nearest[to] = old.nearest[i];
-    r.outward[to] = old.outward[i];
-    r.size[to] = old.size[i];
-    r.open[to] = old.open[i];
-    active[to] = state.active[i];
-  }
-  // The samples an edit can affect (split samples, edited ones and their old neighbourhoods) get fresh
-  // candidates next iteration; the others only re-sort theirs.
-  std::vector<char> edited(count, 0);
-  for (std::size_t a = count - edits.added; a < count; ++a) edited[a] = 1;
-  for (std::uint32_t e : edits.touched) {
-    if (edits.newIndex[e] != kNone) edited[edits.newIndex[e]] = 1;
-    for (std::size_t x = 0; x < stride; ++x)
-      if (const std::uint32_t j = old.candidates[e * stride + x]; j != kNone && edits.newIndex[j] != kNone)
-        edited[edits.newIndex[j]] = 1;
-  }
-  for (std::size_t i = 0; i < count; ++i) active[i] |= edited[i];
-  state.rings = std::move(r);
-  state.active = std::move(active);
-  state.stale = std::move(edited);
-}
-
-/// Rings for the edge operations, from a relaxation's last rings: cells bounded by their neighbours alone are
-/// the same with a wider bounding disc, so only the open ones (boundaries, sparse regions) are recomputed, with
-/// the disc of radius 1.5·l that lets long edges — across holes — show. The others keep the rings of the last
-/// iteration: one Lloyd step moves a sample by a fraction of a spacing, which changes few 1-rings, and the edge
-/// lengths are measured at the current positions.
-Rings Resampler::edgeRings(const Samples& s, double l, const Relaxation& state) const {
-  if (!state.rings) return computeRings(s, 1.5 * l);
-  Relaxation wide{state.rings, state.rings->open, 0, {}};
-  return computeRings(s, 1.5 * l, &wide, false);
-}
-
-/// Weighted sample elimination (Yuksel 2015) of free samples down to @p count: repeatedly drop the sample whose
-/// neighbours within 2·r_max crowd it most. Gives a Poisson-disk-like set whatever the input density.
-void Resampler::eliminate(Samples& s, std::size_t count) {
-  if (s.size() <= count) return;
-  const double rmax = std::sqrt(surface_.area() / (2.0 * std::sqrt(3.0) * static_cast<double>(count)));
-  const double ratio = static_cast<double>(count) / static_cast<double>(s.size());
-  const double rmin = rmax * (1.0 - std::pow(ratio, 1.5)) * 0.65;  // Yuksel 2015: γ = 1.5, β = 0.65
-  // Adaptive mode: the Poisson-disk radius of a pair scales with the mean size factor of its two samples.
-  std::vector<double> sz(s.size(), 1.0);
-  if (size_)
-    parallelFor(s.size(), params_.threads, [&](std::size_t i) { sz[i] = (*size_)[surface_.index().nearest(s.pos[i])]; });
-  const double maxSize = *std::max_element(sz.begin(), sz.end());
-  KnnIndex index(s.pos);
-  updateRule(s);  // only neighbours by the rule crowd each other (not across a thin gap)
-  // float: 8 bytes a pair, and each row allocated once at its size (memory at 5M)
-  std::vector<std::vector<std::pair<std::uint32_t, float>>> nb(s.size());
-  parallelFor(s.size(), params_.threads, [&](std::size_t i) {
-    thread_local std::vector<std::uint32_t> idx;
-    thread_local std::vector<double> d2;
-    thread_local std::vector<std::pair<std::uint32_t, float>> row;
-    index.radius(s.pos[i], 2.0 * rmax * 0.5 * (sz[i] + maxSize), idx, d2);
-    row.clear();
-    for (std::size_t c = 0; c < idx.size(); ++c) {
-      if (idx[c] == i || !rule_.accept(i, idx[c])) continue;
-      const double scale = 0.5 * (sz[i] + sz[idx[c]]), radius = 2.0 * rmax * scale;
-      const double d = std::max(std::sqrt(d2[c]), 2.0 * rmin * scale);
-      if (d < radius) row.emplace_back(idx[c], pow8(1.0 - d / radius));
-    }
-    nb[i].assign(row.begin(), row.end());
-  });
-  std::vector<double> weight(s.size(), 0.0);
-  for (std::size_t i = 0; i < s.size(); ++i)
-    for (const auto& [j, w] : nb[i]) weight[i] += w;
-  // Ties broken by a seeded hash of the index, so equal weights do not always favour low indices.
-  auto tie = [&](std::uint32_t i) {
-    std::uint64_t z = params_.seed + 0x9e3779b97f4a7c15ull * (i + 1);
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
-    return z ^ (z >> 27);
-  };
-  // The most crowded sample (largest weight) goes first, ties by (hash, index). Weights only decrease, so an
-  // entry's key is at least its sample's weight: a stale entry that reaches the top is sifted down again with
-  // the current weight, and a current one at the top is the true maximum (the same order as a heap keeping
-  // every weight current). A binary max-heap of (weight, index), the hash computed only on equal weights.
-  struct Item {
-    double weight;
-    std::uint32_t i;
-  };
-  auto before = [&](const Item& a, const Item& b) {  // a below b in the heap: b goes first
-    if (a.weight != b.weight) return a.weight < b.weight;
-    const std::uint64_t ta = tie(a.i), tb = tie(b.i);
-    return ta != tb ? ta < tb : a.i < b.i;
-  };
-  std::vector<Item> heap;
-  heap.reserve(s.size());
-  for (std::uint32_t i = 0; i < s.size(); ++i)
-    if (!s.fixed[i]) heap.push_back({weight[i], i});
-  std::make_heap(heap.begin(), heap.end(), before);
-  auto siftDownTop = [&] {  // restores the heap after heap[0] decreased
-    const std::size_t size = heap.size();
-    const Item x = heap[0];
-    std::size_t at = 0;
-    for (std::size_t child; (child = 2 * at + 1) < size; at = child) {
-      if (child + 1 < size && before(heap[child], heap[child + 1])) ++child;
-      if (!before(x, heap[child])) break;
-      heap[at] = heap[child];
-    }
-    heap[at] = x;
-  };
-  std::vector<char> removed(s.size(), 0);
-  std::size_t alive = s.size();
-  while (alive > count && !heap.empty()) {
-    const Item top = heap[0];
-    if (top.weight != weight[top.i]) {
-      heap[0].weight = weight[top.i];
-      siftDownTop();
-      continue;
-    }
-    heap[0] = heap.back();
-    heap.pop_back();
-    if (!heap.empty()) siftDownTop();
-    removed[top.i] = 1;
-    --alive;
-    for (const auto& [j, wj] : nb[top.i])
-      if (!removed[j]) weight[j] -= wj;
-  }
-  s = spatiallySorted(s, removed, params_.threads);
-}
-
-void Resampler::updateRule(const Samples& s) {
-  rule_.update(s.pos, s.nrm);
-  rulePos_ = s.pos;
-}
-
-/// Last resort when the edge operations cannot reach N (a handful of points with degenerate 1-rings): drop the
-/// free samples closest to another sample, or add the input points farthest from the samples, one at a time.
-void Resampler::forceCount(Samples& s, Relaxation& relaxation) {
-  const std::size_t n = params_.targetCount;
-  std::vector<char> removed(s.size(), 0);
-  std::vector<std::uint32_t> idx;
-  std::vector<double> d2;
-  if (s.size() > n) {  // the free samples nearest another sample go first, one of each close pair
-    const KnnIndex index(s.pos);
-    std::vector<std::tuple<double, std::uint32_t, std::uint32_t>> crowded;  // (d², sample, its nearest)
-    for (std::uint32_t i = 0; i < s.size(); ++i)
-      if (!s.fixed[i] && index.knn(s.pos[i], 2, idx, d2) == 2) crowded.emplace_back(d2[1], i, idx[1]);
-    std::sort(crowded.begin(), crowded.end());
-    std::size_t excess = s.size() - n;
-    for (const bool pairwise : {true, false})
-      for (const auto& [d, i, nearest] : crowded)
-        if (excess > 0 && !removed[i] && !(pairwise && removed[nearest])) removed[i] = 1, --excess;
-  }
-  Samples kept;
-  for (std::size_t i = 0; i < s.size(); ++i)
-    if (!removed[i]) kept.add(s.pos[i], s.nrm[i], s.fixed[i], std::move(s.cache[i]));
-  if (kept.size() < n) {  // the input points farthest from the samples, one at a time
-    std::vector<double> toSamples(pts_.size(), std::numeric_limits<double>::max());
-    if (!kept.pos.empty()) {
-      const KnnIndex index(kept.pos);
-      for (std::size_t q = 0; q < pts_.size(); ++q)
-        if (index.knn(pts_[q], 1, idx, d2) == 1) toSamples[q] = d2[0];
-    }
-    while (kept.size() < n) {
-      const auto far = static_cast<std::size_t>(std::max_element(toSamples.begin(), toSamples.end()) - toSamples.begin());
-      kept.add(pts_[far], normals_[far], false);
-      for (std::size_t q = 0; q < pts_.size(); ++q)
-        toSamples[q] = std::min(toSamples[q], (pts_[q] - pts_[far]).squaredNorm());
-    }
-  }
-  s = std::move(kept);
-  updateRule(s);
-  relaxation = {};
-}
-
-/// The input points the initialisation starts from: about candidateFactor·N voxel cells' worth (all points of
-/// a cloud not that much denser than the output).
-std::vector<std::uint32_t> initialCandidates(const PointCloud& cloud, const MlsSurface& surface,
-                                             const ResampleParams& params, int threads) {
-  const std::size_t count =
-      static_cast<std::size_t>(params.candidateFactor * static_cast<double>(params.targetCount));
-  if (cloud.size() <= count) {
-    std::vector<std::uint32_t> all(cloud.size());
-    std::iota(all.begin(), all.end(), 0u);
-    return all;
-  }
-  return voxelThin(cloud.points, cloud.normals, count, std::sqrt(surface.area() / static_cast<double>(count)),
-                   params.seed, threads);
-}
-
-Samples Resampler::initialise(const std::vector<std::uint32_t>& chosen, ResampleResult& result) {
-  const std::size_t n = params_.targetCount;
-  Samples s;
-  for (const auto& p : params_.fixedSamples) {
-    Eigen::Vector3d nrm;
-    surface_.project(p, &nrm);
-    s.add(p, nrm, true);
-  }
-  // Candidates are input points (on the cloud already): only the survivors of the elimination are projected.
-  for (std::uint32_t c : chosen) s.add(pts_[c], normals_[c], false);
-  eliminate(s, n);
-  parallelFor(s.size(), params_.threads, [&](std::size_t i) {
-    if (!s.fixed[i]) s.pos[i] = surface_.project(s.pos[i], &s.nrm[i], nullptr, &s.nrm[i], &s.cache[i]);
-  });
-  updateRule(s);
-  result.initialSamples = s.size();
-  return s;
-}
-
-void Resampler::run(Samples& s, ResampleResult& result) {
-  const std::size_t n = params_.targetCount;
-  const double countD = static_cast<double>(n);
-  // By (length, a, b): a stable radix sort on the lengths' bits (non-negative doubles order like them) of
-  // edges in (a, b) order.
-  auto sortedEdges = [&](const Rings& r) {
-    const std::vector<Edge> e = edges(s, r);
-    std::vector<KeyedIndex> byLength(e.size());
-    for (std::size_t x = 0; x < e.size(); ++x) {
-      std::uint64_t bits;
-      std::memcpy(&bits, &e[x].length, sizeof bits);
-      byLength[x] = {bits, static_cast<std::uint32_t>(x)};
-    }
-    radixSort(byLength, params_.threads);
-    std::vector<Edge> out(e.size());
-    for (std::size_t x = 0; x < e.size(); ++x) out[x] = e[byLength[x].second];
-    return out;
-  };
-  // Count control: l = mean 1-ring edge · √(|S|/N), the length at which N samples would cover the surface.
-  auto targetLength = [&](const std::vector<Edge>& e) {
-    double mean = 0;
-    for (const Edge& x : e) mean += x.length;
-    mean = e.empty() ? std::sqrt(surface_.area() / countD) : mean / static_cast<double>(e.size());
-    return mean * std::sqrt(static_cast<double>(s.size()) / countD);
-  };
-  double l = std::sqrt(2.0 * surface_.area() / (std::sqrt(3.0) * countD));
-  // Passes: split edges > splitRatio·l, collapse edges < collapseRatio·l, then relax. Away from N the net
-  // change always moves |S| towards N without overshooting; at N every collapse is paired with a split of
-  // one of the longest edges, so close pairs and holes that Lloyd alone cannot undo are replaced.
-  // One relaxation state throughout: a round of edits renumbers it and activates the cells around the edits
-  // (a large round, away from N, starts it afresh).
-  Relaxation relaxation;
-  auto edit = [&](const std::vector<Edge>& e, std::size_t splits, double minSplit, std::size_t collapses,
-                  double maxCollapse) {
-    const EditMap map = splitAndCollapse(s, e, splits, minSplit, collapses, maxCollapse, result);
-    if (static_cast<double>(map.touched.size()) > kCarryShare * static_cast<double>(s.size())) relaxation = {};
-    carry(relaxation, map, s.size());
-  };
-  // maxPasses bounds the passes at N; passes that still change the count (upsampling doubles it at most once
-  // per pass) come on top, up to kMaxCountPasses of them.
-  constexpr int kMaxCountPasses = 8;
-  for (int pass = 0, atN = 0; atN < params_.maxPasses && pass < params_.maxPasses + kMaxCountPasses; ++pass) {
-    if (params_.progress) params_.progress("resample", 0.8 * atN / params_.maxPasses);
-    // At N, or off by what one balanced round of edits can leave (a collapse may find its samples taken).
-    atN += static_cast<double>(s.size() > n ? s.size() - n : n - s.size()) <= params_.maxEditShare * countD + 1;
-    const std::vector<Edge> e = sortedEdges(edgeRings(s, l, relaxation));
-    l = targetLength(e);
-    ++result.passes;
-    const auto longCount = static_cast<std::size_t>(
-        std::count_if(e.begin(), e.end(), [&](const Edge& x) { return x.length > params_.splitRatio * l; }));
-    const auto shortCount = static_cast<std::size_t>(
-        std::count_if(e.begin(), e.end(), [&](const Edge& x) { return x.length < params_.collapseRatio * l; }));
-    std::size_t splits = longCount, collapses = shortCount;
-    double minSplit = params_.splitRatio * l, maxCollapse = params_.collapseRatio * l;
-    if (s.size() == n) {
-      if (longCount == 0 && shortCount == 0) break;
-      splits = collapses = std::min(std::max(longCount, shortCount),
-                                    static_cast<std::size_t>(params_.maxEditShare * countD) + 1);
-      minSplit = 0;
-      maxCollapse = std::numeric_limits<double>::max();
-    } else {
-      const std::size_t excess = s.size() > n ? s.size() - n : 0, deficit = n > s.size() ? n - s.size() : 0;
-      collapses = std::min(collapses, splits + excess);
-      splits = std::min(splits, collapses + deficit);
-      // Upsampling can stall short of N: l comes from the 1-ring edges, which miss the holes a sparse input
-      // leaves, so few edges exceed splitRatio·l. The longest edges then make up the deficit (up to half the
-      // samples per pass).
-      if (deficit > 0 && splits < collapses + deficit) {
-        splits = std::min(collapses + deficit, std::max(splits, s.size() / 2));
-        minSplit = 0;
-      }
-    }
-    edit(e, splits, minSplit, collapses, maxCollapse);
-    // One projection step per move while the passes still edit the set; the final relaxation below projects fully.
-    relax(s, l, params_.relaxPerPass, relaxation, 1);
-    result.relaxIterations += params_.relaxPerPass;
-  }
-  // Exact-count finish: collapse the shortest or split the longest edges until |S| == N.
-  for (int guard = 0; s.size() != n && guard < 64; ++guard) {
-    const std::vector<Edge> e = sortedEdges(edgeRings(s, l, relaxation));
-    const std::size_t excess = s.size() > n ? s.size() - n : 0, deficit = n > s.size() ? n - s.size() : 0;
-    edit(e, deficit, 0.0, excess, std::numeric_limits<double>::max());
-    l = targetLength(e);
-    relax(s, l, 1, relaxation);
-    ++result.relaxIterations;
-  }
-  if (s.size() != n) forceCount(s, relaxation);
-  // Lloyd relaxation in rounds of 4 iterations until the spacing CV has not improved for relaxPatience rounds.
-  double best = std::numeric_limits<double>::max();
-  for (int it = 0, stale = 0; it < params_.maxRelaxIterations && stale < params_.relaxPatience; it += 4) {
-    if (params_.progress) params_.progress("resample", 0.8 + 0.2 * it / params_.maxRelaxIterations);
-    const double cv = relax(s, l, std::min(4, params_.maxRelaxIterations - it), relaxation);
-    result.relaxIterations += std::min(4, params_.maxRelaxIterations - it);
-    stale = cv < best - 1e-5 ? 0 : stale + 1;
-    best = std::min(best, cv);
-  }
-  result.targetLength = l;
-  if (params_.ringEdges)
-    for (const Edge& e : edges(s, computeRings(s, l))) result.ringEdges.push_back({e.a, e.b});
-}
-
 /// The input's attributes at the output points, from input neighbours on the same sheet (near the output point's
 /// tangent plane, and accepted by the intrinsic rule when the run used it).
 std::vector<PointAttribute> carryAttributes(const PointCloud& input, const std::vector<Eigen::Vector3d>& output,
@@ -903,22 +54,6 @@ std::vector<PointAttribute> carryAttributes(const PointCloud& input, const std::
   AttributeParams ap;
   ap.threads = threads;
   return interpolateAttributes(input, output, normals, sameSheet, ap);
-}
-
-std::string jsonNumber(double x) {
-  if (!std::isfinite(x)) return "null";
-  std::ostringstream os;
-  os.precision(10);
-  os << x;
-  return os.str();
-}
-
-template <typename T>
-std::string jsonArray(const std::vector<T>& values) {
-  std::string out = "[";
-  for (std::size_t i = 0; i < values.size(); ++i)
-    out += (i ? ", " : "") + jsonNumber(static_cast<double>(values[i]));
-  return out + "]";
 }
 
 /// Exit 0 promises points on the input's surface. Each axis of the working cloud's bounding box is enlarged by
@@ -949,6 +84,63 @@ void checkWithinInput(const std::vector<Eigen::Vector3d>& samples, const std::ve
   }
 }
 
+/// The cloud the stages work on: voxel-thinned first when it is far denser than the output (so every O(n)
+/// stage works on ≈ maxInputPerSample·N points, never fewer than kMinWorkingPoints: small N keep a fine
+/// surface), then in Morton order (every stage loops over the points querying their neighbours: in that order
+/// those stay in cache).
+PointCloud workingCloud(PointCloud cloud, const ResampleParams& params, const StageClock& clock) {
+  constexpr std::size_t kMinWorkingPoints = 60000;
+  const std::size_t workingTarget = std::max(kMinWorkingPoints, params.maxInputPerSample * params.targetCount);
+  if (params.maxInputPerSample > 0 && cloud.size() > workingTarget) {
+    const auto t = clock.begin("thin");
+    const std::size_t target = workingTarget;
+    cloud = select(cloud, voxelThin(cloud.points, cloud.normals, target,
+                                    bboxDiagonal(cloud.points) / std::sqrt(static_cast<double>(target)), 0,
+                                    params.threads));
+    clock.end("thin", t);
+  }
+  return select(cloud, mortonOrder(cloud.points, params.threads));
+}
+
+/// The samples `--sharp-edges` holds: the feature chains sampled at edgeRatio × the output spacing (coarser when
+/// they would take over half of N) and put exactly on the creases; sets featurePoints and featureSamples (how
+/// many of them fit beside the caller's fixed samples).
+std::vector<Eigen::Vector3d> creaseSamples(const PointCloud& cloud, double area, const ResampleParams& params,
+                                           ResampleResult& result) {
+  FeatureParams fp = params.features;
+  fp.threads = params.threads;
+  const FeatureResult features = detectFeatures(cloud, fp);
+  const double l0 = std::sqrt(2.0 * area / (std::sqrt(3.0) * static_cast<double>(params.targetCount)));
+  std::vector<std::uint32_t> chainOf;
+  std::vector<Eigen::Vector3d> onEdges = sampleFeatureChains(features.chains, params.edgeRatio * l0, &chainOf);
+  if (onEdges.size() + params.fixedSamples.size() > params.targetCount / 2)  // never let edges take over N
+    onEdges = sampleFeatureChains(features.chains, params.edgeRatio * l0 * 2.0 *
+                                                       static_cast<double>(onEdges.size()) /
+                                                       static_cast<double>(params.targetCount), &chainOf);
+  onEdges = snapToCreases(cloud, onEdges, chainOf, features.spacing, fp);  // exactly on the creases
+  result.featurePoints = features.featureIndices.size();
+  result.featureSamples = std::min(onEdges.size(), params.targetCount - params.fixedSamples.size());
+  return onEdges;
+}
+
+/// Curvature mode's report: output points and mean spacing per level (each output point takes the level of
+/// its nearest working-cloud point, found in @p working).
+void reportLevels(const CurvatureResult& curvature, const KnnIndex& working, ResampleResult& result) {
+  const std::size_t levels = curvature.pointsPerLevel.size();
+  result.pointsPerLevel.assign(levels, 0);
+  result.spacingPerLevel.assign(levels, 0.0);
+  const KnnIndex out(result.cloud.points);
+  std::vector<std::uint32_t> idx;
+  std::vector<double> d2;
+  for (const Eigen::Vector3d& p : result.cloud.points) {
+    const auto level = static_cast<std::size_t>(curvature.level[working.nearest(p)]);
+    ++result.pointsPerLevel[level];
+    if (out.knn(p, 2, idx, d2) == 2) result.spacingPerLevel[level] += std::sqrt(d2[1]);
+  }
+  for (std::size_t q = 0; q < levels; ++q)
+    if (result.pointsPerLevel[q]) result.spacingPerLevel[q] /= static_cast<double>(result.pointsPerLevel[q]);
+}
+
 }  // namespace
 
 void ResampleParams::validate() const {
@@ -972,23 +164,21 @@ void ResampleParams::validate() const {
 }
 
 std::string ResampleResult::toJson() const {
-  std::ostringstream os;
-  os << "{\n  \"input_points\": " << inputPoints << ",\n  \"duplicates_merged\": " << duplicatesMerged
-     << ",\n  \"requested_points\": " << requestedPoints << ",\n  \"output_points\": " << cloud.size()
-     << ",\n  \"working_points\": " << thinnedPoints << ",\n  \"initial_samples\": " << initialSamples << ",\n  \"passes\": " << passes
-     << ",\n  \"relax_iterations\": " << relaxIterations << ",\n  \"splits\": " << splits
-     << ",\n  \"collapses\": " << collapses << ",\n  \"target_length\": " << jsonNumber(targetLength)
-     << ",\n  \"components\": " << components << ",\n  \"satellites\": " << satellites
-     << ",\n  \"feature_points\": " << featurePoints << ",\n  \"feature_samples\": " << featureSamples
-     << ",\n  \"points_per_level\": " << jsonArray(pointsPerLevel)
-     << ",\n  \"spacing_per_level\": " << jsonArray(spacingPerLevel)
-     << ",\n  \"preprocess\": " << preprocessing.toJson()
-     << ",\n  \"spacing\": {\"mean\": " << jsonNumber(spacing.mean) << ", \"min\": " << jsonNumber(spacing.min)
-     << ", \"max\": " << jsonNumber(spacing.max) << ", \"cv\": " << jsonNumber(spacing.cv) << "},\n  \"time_s\": {";
-  for (std::size_t i = 0; i < timings.size(); ++i)
-    os << (i ? ", " : "") << "\"" << timings[i].name << "\": " << jsonNumber(timings[i].seconds);
-  os << "}\n}\n";
-  return os.str();
+  detail::JsonWriter j;
+  j.beginObject(true).member("input_points", inputPoints).member("duplicates_merged", duplicatesMerged);
+  j.member("requested_points", requestedPoints).member("output_points", cloud.size());
+  j.member("working_points", thinnedPoints).member("initial_samples", initialSamples).member("passes", passes);
+  j.member("relax_iterations", relaxIterations).member("splits", splits).member("collapses", collapses);
+  j.member("target_length", targetLength).member("components", components).member("satellites", satellites);
+  j.member("feature_points", featurePoints).member("feature_samples", featureSamples);
+  j.array("points_per_level", pointsPerLevel).array("spacing_per_level", spacingPerLevel);
+  j.key("preprocess").embed(preprocessing.toJson());
+  j.key("spacing").beginObject().member("mean", spacing.mean).member("min", spacing.min);
+  j.member("max", spacing.max).member("cv", spacing.cv).endObject();
+  j.key("time_s").beginObject();
+  for (const StageTime& t : timings) j.member(t.name, t.seconds);
+  j.endObject().endObject();
+  return j.str() + "\n";
 }
 
 ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
@@ -1012,20 +202,8 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
   result.duplicatesMerged = report.duplicatesMerged;
   clock.end("validate", t);
 
-  constexpr std::size_t kMinWorkingPoints = 60000;  // thinning never goes below this: small N keep a fine surface
-  const std::size_t workingTarget = std::max(kMinWorkingPoints, params.maxInputPerSample * params.targetCount);
-  if (params.maxInputPerSample > 0 && cloud.size() > workingTarget) {
-    // Far denser than the output: thin first, so every O(n) stage below works on ≈ maxInputPerSample·N points.
-    t = clock.begin("thin");
-    const std::size_t target = workingTarget;
-    cloud = select(cloud, voxelThin(cloud.points, cloud.normals, target,
-                                    bboxDiagonal(cloud.points) / std::sqrt(static_cast<double>(target)), 0,
-                                    params.threads));
-    clock.end("thin", t);
-  }
+  cloud = workingCloud(std::move(cloud), params, clock);
   result.thinnedPoints = cloud.size();
-  // Every stage below loops over the points querying their neighbours: in Morton order those stay in cache.
-  cloud = select(cloud, mortonOrder(cloud.points, params.threads));
 
   constexpr std::size_t kPreprocessMinPoints = 25;
   const bool preprocessing = params.preprocess && cloud.size() >= kPreprocessMinPoints;
@@ -1117,20 +295,7 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
   ResampleParams local = params;  // sharp edges add fixed samples
   if (params.sharpEdges) {
     t = clock.begin("features");
-    FeatureParams fp = params.features;
-    fp.threads = params.threads;
-    const FeatureResult features = detectFeatures(cloud, fp);
-    const double l0 =
-        std::sqrt(2.0 * surface->area() / (std::sqrt(3.0) * static_cast<double>(params.targetCount)));
-    std::vector<std::uint32_t> chainOf;
-    std::vector<Eigen::Vector3d> onEdges = sampleFeatureChains(features.chains, params.edgeRatio * l0, &chainOf);
-    if (onEdges.size() + params.fixedSamples.size() > params.targetCount / 2)  // never let edges take over N
-      onEdges = sampleFeatureChains(features.chains, params.edgeRatio * l0 * 2.0 *
-                                                         static_cast<double>(onEdges.size()) /
-                                                         static_cast<double>(params.targetCount), &chainOf);
-    onEdges = snapToCreases(cloud, onEdges, chainOf, features.spacing, fp);  // exactly on the creases
-    result.featurePoints = features.featureIndices.size();
-    result.featureSamples = std::min(onEdges.size(), params.targetCount - params.fixedSamples.size());
+    const std::vector<Eigen::Vector3d> onEdges = creaseSamples(cloud, surface->area(), params, result);
     local.fixedSamples.insert(local.fixedSamples.end(), onEdges.begin(),
                               onEdges.begin() + static_cast<long>(result.featureSamples));
     clock.end("features", t);
@@ -1153,21 +318,7 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
   t = clock.begin("report");
   result.spacing = spacingStats(result.cloud.points, params.threads);
   checkWithinInput(result.cloud.points, cloud.points, result.spacing.mean);
-  if (curvature) {  // points and mean spacing per level (each output point takes its nearest input's level)
-    const std::size_t levels = curvature->pointsPerLevel.size();
-    result.pointsPerLevel.assign(levels, 0);
-    result.spacingPerLevel.assign(levels, 0.0);
-    const KnnIndex out(result.cloud.points);
-    std::vector<std::uint32_t> idx;
-    std::vector<double> d2;
-    for (const Eigen::Vector3d& p : result.cloud.points) {
-      const auto level = static_cast<std::size_t>(curvature->level[surface->index().nearest(p)]);
-      ++result.pointsPerLevel[level];
-      if (out.knn(p, 2, idx, d2) == 2) result.spacingPerLevel[level] += std::sqrt(d2[1]);
-    }
-    for (std::size_t q = 0; q < levels; ++q)
-      if (result.pointsPerLevel[q]) result.spacingPerLevel[q] /= static_cast<double>(result.pointsPerLevel[q]);
-  }
+  if (curvature) reportLevels(*curvature, surface->index(), result);
   clock.end("report", t);
   if (!attributeSource.attributes.empty()) {
     t = clock.begin("attributes");

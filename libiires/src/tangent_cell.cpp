@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
-#include "iires/tangent_cell.hpp"
+#include "iires/detail/tangent_cell.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -8,8 +8,8 @@
 #include <sstream>
 #include <vector>
 
-#include "iires/parallel.hpp"
-#include "iires/radix_sort.hpp"
+#include "iires/detail/parallel.hpp"
+#include "iires/detail/radix_sort.hpp"
 
 namespace iires {
 namespace {
@@ -95,7 +95,7 @@ ValidationReport validateCloud(PointCloud& cloud, std::size_t minPoints, const s
   report.inputPoints = cloud.size();
   if (cloud.empty()) throw InputError(what + ": the cloud is empty");
   // The first point that is non-finite, or finite but so large that squared distances, covariances and MLS
-  // moments overflow to Inf/NaN (a fuzzer find: one point at 5e244 turned the whole output into NaN).
+  // moments overflow to Inf/NaN (one point at 5e244 would turn the whole output into NaN).
   const std::size_t n = cloud.size();
   const std::size_t bad = firstWhere(n, threads, [&](std::size_t i) {
     return !cloud.points[i].allFinite() || cloud.points[i].cwiseAbs().maxCoeff() > kMaxCoordinate;
@@ -118,7 +118,7 @@ ValidationReport validateCloud(PointCloud& cloud, std::size_t minPoints, const s
        << " (squared distances would underflow): scale the coordinates up";
     throw InputError(os.str());
   }
-  // Denormal-scale coordinates (a fuzzer find: a cluster of points ~1e-310 apart) make differences whose
+  // Denormal-scale coordinates (e.g. a cluster of points ~1e-310 apart) make differences whose
   // squares underflow to 0, and normalising them gives NaN; below kTinyCoordinate a coordinate is 0.
   parallelFor(n, threads, [&](std::size_t i) {
     for (int k = 0; k < 3; ++k)

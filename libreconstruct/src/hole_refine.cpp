@@ -19,7 +19,7 @@
 #include <unordered_map>
 #include <vector>
 
-#include "iires/disjoint_sets.hpp"
+#include "iires/detail/disjoint_sets.hpp"
 #include "iires/reconstruct/mesh_quality.hpp"
 #include "iires/reconstruct/mesh_repair.hpp"
 

@@ -12,10 +12,11 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "iires/disjoint_sets.hpp"
+#include "iires/detail/json.hpp"
+#include "iires/detail/disjoint_sets.hpp"
 #include "iires/knn.hpp"
 #include "iires/metrics.hpp"
-#include "iires/parallel.hpp"
+#include "iires/detail/parallel.hpp"
 #include "iires/reconstruct/self_intersections.hpp"
 #include "iires/sampling.hpp"
 
@@ -297,19 +298,6 @@ std::string describePart(const ComponentTopology& p) {
   return s + ", " + std::to_string(p.faces) + " faces";
 }
 
-std::string partsJson(const std::vector<ComponentTopology>& parts) {
-  std::ostringstream os;
-  for (std::size_t i = 0; i < parts.size(); ++i) {
-    const ComponentTopology& p = parts[i];
-    os << (i ? ", " : "") << "{\"faces\": " << p.faces << ", \"vertices\": " << p.vertices << ", \"euler\": " << p.euler
-       << ", \"boundary_loops\": " << p.boundaryLoops << ", \"closed\": " << (p.closed ? "true" : "false")
-       << ", \"manifold\": " << (p.manifold ? "true" : "false")
-       << ", \"orientable\": " << (p.orientable ? "true" : "false")
-       << ", \"genus\": " << (p.genus >= 0 ? std::to_string(p.genus) : "null") << "}";
-  }
-  return os.str();
-}
-
 void topologyStats(const TriangleMesh& mesh, MeshQuality& q) {
   const std::size_t nv = mesh.vertices.size(), nf = mesh.triangles.size();
   q.faces = nf;
@@ -445,39 +433,41 @@ SurfaceDistance surfaceDistance(const TriangleMesh& mesh, const TriangleMesh& re
 }
 
 std::string MeshQuality::toJson() const {
-  std::ostringstream os;
-  os << "{\n  \"quality\": {\"min\": " << num(qualityMin) << ", \"mean\": " << num(qualityMean) << "},\n"
-     << "  \"min_angle_deg\": {\"min\": " << num(minAngleMin) << ", \"mean\": " << num(minAngleMean) << "},\n"
-     << "  \"share_angle_below_30\": " << num(shareBelow30) << ",\n"
-     << "  \"degenerate_faces\": " << degenerateFaces << ",\n"
-     << "  \"vertices\": " << vertices << ",\n  \"isolated_vertices\": " << isolatedVertices << ",\n"
-     << "  \"faces\": " << faces << ",\n  \"edges\": " << edges << ",\n"
-     << "  \"boundary_edges\": " << boundaryEdges << ",\n  \"boundary_loops\": " << boundaryLoops << ",\n"
-     << "  \"non_manifold_edges\": " << nonManifoldEdges << ",\n"
-     << "  \"non_manifold_vertices\": " << nonManifoldVertices << ",\n"
-     << "  \"self_intersecting_face_pairs\": " << selfIntersections << ",\n"
-     << "  \"components\": " << components << ",\n  \"closed_components\": " << closedComponents << ",\n"
-     << "  \"euler\": " << euler << ",\n"
-     << "  \"genus\": " << (genus >= 0 ? std::to_string(genus) : "null") << ",\n"
-     << "  \"parts\": [" << partsJson(parts) << "],\n"
-     << "  \"closed\": " << (closed ? "true" : "false") << ",\n"
-     << "  \"manifold\": " << (manifold ? "true" : "false") << ",\n"
-     << "  \"orientable\": " << (orientable ? "true" : "false") << ",\n"
-     << "  \"oriented\": " << (oriented ? "true" : "false") << ",\n"
-     << "  \"valid\": " << (valid() ? "true" : "false") << ",\n"
-     << "  \"mean_edge_length\": " << num(meanEdgeLength) << ",\n  \"area\": " << num(area);
-  if (distance.computed) {
-    os << ",\n  \"distance\": {\"hausdorff\": " << num(distance.hausdorff) << ", \"mean\": " << num(distance.mean)
-       << ", \"hausdorff_rel_diag\": " << num(distance.relativeHausdorff())
-       << ", \"mean_rel_diag\": " << num(distance.relativeMean()) << ", \"mesh_to_reference_max\": "
-       << num(distance.forwardMax) << ", \"mesh_to_reference_mean\": " << num(distance.forwardMean)
-       << ", \"reference_to_mesh_max\": " << num(distance.backwardMax) << ", \"reference_to_mesh_mean\": "
-       << num(distance.backwardMean) << ", \"diagonal\": " << num(distance.diagonal) << "}";
-    os << ",\n  \"uncovered\": {\"count\": " << uncovered << ", \"share\": " << num(uncoveredShare)
-       << ", \"distance\": " << num(uncoveredDistance) << "}";
+  detail::JsonWriter j;
+  const auto genusMember = [&](int g) { g >= 0 ? j.member("genus", g) : j.key("genus").null(); };  // -1: none
+  j.beginObject(true);
+  j.key("quality").beginObject().member("min", qualityMin).member("mean", qualityMean).endObject();
+  j.key("min_angle_deg").beginObject().member("min", minAngleMin).member("mean", minAngleMean).endObject();
+  j.member("share_angle_below_30", shareBelow30).member("degenerate_faces", degenerateFaces);
+  j.member("vertices", vertices).member("isolated_vertices", isolatedVertices);
+  j.member("faces", faces).member("edges", edges);
+  j.member("boundary_edges", boundaryEdges).member("boundary_loops", boundaryLoops);
+  j.member("non_manifold_edges", nonManifoldEdges).member("non_manifold_vertices", nonManifoldVertices);
+  j.member("self_intersecting_face_pairs", selfIntersections);
+  j.member("components", components).member("closed_components", closedComponents).member("euler", euler);
+  genusMember(genus);
+  j.key("parts").beginArray();
+  for (const ComponentTopology& p : parts) {
+    j.beginObject().member("faces", p.faces).member("vertices", p.vertices).member("euler", p.euler);
+    j.member("boundary_loops", p.boundaryLoops).member("closed", p.closed).member("manifold", p.manifold);
+    j.member("orientable", p.orientable);
+    genusMember(p.genus);
+    j.endObject();
   }
-  os << "\n}\n";
-  return os.str();
+  j.endArray().member("closed", closed).member("manifold", manifold).member("orientable", orientable);
+  j.member("oriented", oriented).member("valid", valid());
+  j.member("mean_edge_length", meanEdgeLength).member("area", area);
+  if (distance.computed) {
+    j.key("distance").beginObject().member("hausdorff", distance.hausdorff).member("mean", distance.mean);
+    j.member("hausdorff_rel_diag", distance.relativeHausdorff()).member("mean_rel_diag", distance.relativeMean());
+    j.member("mesh_to_reference_max", distance.forwardMax).member("mesh_to_reference_mean", distance.forwardMean);
+    j.member("reference_to_mesh_max", distance.backwardMax);
+    j.member("reference_to_mesh_mean", distance.backwardMean).member("diagonal", distance.diagonal).endObject();
+    j.key("uncovered").beginObject().member("count", uncovered).member("share", uncoveredShare);
+    j.member("distance", uncoveredDistance).endObject();
+  }
+  j.endObject();
+  return j.str() + "\n";
 }
 
 std::string MeshQuality::toTable() const {

@@ -126,6 +126,283 @@ double pointTriangleDistance(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
   return std::min({segment(a, b), segment(b, c), segment(c, a)});
 }
 
+/// fillSmallHoles() in steps: the boundary's index, its loops, and each loop closed (or kept).
+class HoleFiller {
+ public:
+  HoleFiller(TriangleMesh& mesh, std::vector<Eigen::Vector3d>& normals, const HoleFillingParams& params)
+      : mesh_(mesh), normals_(normals), params_(params), haveNormals_(normals.size() == mesh.vertices.size()) {}
+
+  HoleFillingReport run() {
+    if (!indexEdges()) return report_;
+    const std::vector<std::vector<std::uint32_t>> loops = boundaryLoops();
+    indexBoundaryFaces();
+    for (auto loop : loops) fill(loop);
+    report_.facesAdded = added_.size();  // with the zips' extra faces
+    mesh_.triangles.insert(mesh_.triangles.end(), added_.begin(), added_.end());
+    return report_;
+  }
+
+ private:
+  static constexpr std::uint32_t kNoVertex = std::numeric_limits<std::uint32_t>::max();
+
+  /// Faces per undirected edge, the mean edge length, and the boundary half-edges a→b (of the one face using the
+  /// edge), stored reversed (the hole is walked along b→a) with their face normals. False for a mesh without edges.
+  bool indexEdges() {
+    double edgeSum = 0;
+    count_.reserve(mesh_.triangles.size() * 2);
+    for (const auto& t : mesh_.triangles)
+      for (int c = 0; c < 3; ++c) {
+        auto [it, inserted] = count_.emplace(undirectedKey(vtx(t, c), vtx(t, (c + 1) % 3)), 0);
+        if (inserted) edgeSum += (mesh_.vertices[vtx(t, c)] - mesh_.vertices[vtx(t, (c + 1) % 3)]).norm();
+        ++it->second;
+      }
+    if (count_.empty()) return false;
+    meanEdge_ = edgeSum / static_cast<double>(count_.size());
+    edges_.reserve(count_.size());
+    for (const auto& [key, c] : count_) edges_.insert(key);
+    for (const auto& t : mesh_.triangles)
+      for (int c = 0; c < 3; ++c) {
+        const std::uint32_t a = vtx(t, c), b = vtx(t, (c + 1) % 3);
+        if (count_[undirectedKey(a, b)] != 1) continue;
+        next_[b].push_back(a), ++boundaryEdges_;
+        boundaryNormal_[directedKey(a, b)] = faceNormal(mesh_, vtx(t, 0), vtx(t, 1), vtx(t, 2)).normalized();
+      }
+    for (auto& [v, list] : next_) std::sort(list.begin(), list.end());
+    return true;
+  }
+
+  /// At a vertex with several boundary edges leaving it (two fans meeting), the one that closes the smallest
+  /// hole wedge: the smallest clockwise turn (about the vertex normal) from the edge we arrived on.
+  std::uint32_t choose(std::uint32_t prev, std::uint32_t cur, const std::vector<std::uint32_t>& outs,
+                       const std::unordered_set<std::uint64_t>& seen) const {
+    std::uint32_t bestV = kNoVertex;
+    double bestTurn = std::numeric_limits<double>::max();
+    const Eigen::Vector3d back = mesh_.vertices[prev] - mesh_.vertices[cur];
+    for (std::uint32_t cand : outs) {
+      if (seen.count(directedKey(cur, cand))) continue;
+      if (!haveNormals_ || outs.size() == 1) return cand;
+      const Eigen::Vector3d& n = normals_[cur];
+      const Eigen::Vector3d out = mesh_.vertices[cand] - mesh_.vertices[cur];
+      double turn = std::atan2(back.cross(out).dot(n), back.dot(out));  // counter-clockwise from back
+      turn = turn <= 0 ? -turn : 2 * M_PI - turn;                        // clockwise angle in (0, 2π]
+      if (cand == prev) turn = 2 * M_PI;
+      if (turn < bestTurn) bestTurn = turn, bestV = cand;
+    }
+    return bestV;
+  }
+
+  /// The simple boundary loops: each closed boundary walk split into simple cycles at the vertices it passes
+  /// more than once. A walk that does not close is counted as a loop kept open.
+  std::vector<std::vector<std::uint32_t>> boundaryLoops() {
+    std::unordered_set<std::uint64_t> visited;
+    std::vector<std::vector<std::uint32_t>> loops;
+    for (const auto& [start, outs] : next_)
+      for (std::uint32_t first : outs) {
+        if (visited.count(directedKey(start, first))) continue;
+        // Walk the closed boundary start → first → ... → start.
+        std::vector<std::uint32_t> walk{start};
+        visited.insert(directedKey(start, first));
+        std::uint32_t prev = start, cur = first;
+        bool closedWalk = true;
+        while (cur != start) {
+          walk.push_back(cur);
+          const auto it = next_.find(cur);
+          const std::uint32_t nxt = it == next_.end() ? kNoVertex : choose(prev, cur, it->second, visited);
+          if (nxt == kNoVertex || walk.size() > boundaryEdges_) {
+            closedWalk = false;
+            break;
+          }
+          visited.insert(directedKey(cur, nxt));
+          prev = cur;
+          cur = nxt;
+        }
+        if (!closedWalk) {
+          ++report_.loops;
+          ++report_.kept;
+          continue;
+        }
+        std::vector<std::uint32_t> stack;
+        std::unordered_map<std::uint32_t, std::size_t> position;
+        for (std::uint32_t v : walk) {
+          const auto it = position.find(v);
+          if (it != position.end()) {
+            // The cycle v ... (top of stack) closes here.
+            loops.emplace_back(stack.begin() + static_cast<std::ptrdiff_t>(it->second), stack.end());
+            for (std::size_t x = it->second + 1; x < stack.size(); ++x) position.erase(stack[x]);
+            stack.resize(it->second + 1);
+          } else {
+            position[v] = stack.size();
+            stack.push_back(v);
+          }
+        }
+        loops.push_back(stack);
+      }
+    return loops;
+  }
+
+  /// Boundary face of each boundary edge; indices ≥ the mesh's triangle count are faces in added_.
+  void indexBoundaryFaces() {
+    for (std::size_t f = 0; f < mesh_.triangles.size(); ++f)
+      for (int c = 0; c < 3; ++c) {
+        const std::uint32_t a = vtx(mesh_.triangles[f], c), b = vtx(mesh_.triangles[f], (c + 1) % 3);
+        if (count_[undirectedKey(a, b)] == 1) boundaryFace_[undirectedKey(a, b)] = f;
+      }
+  }
+
+  Eigen::Vector3i& faceAt(std::size_t f) {
+    return f < mesh_.triangles.size() ? mesh_.triangles[f] : added_[f - mesh_.triangles.size()];
+  }
+
+  /// Zip a corner of the loop where it turns back on itself (a near-zero angle at v between its loop edges to u
+  /// and w, e.g. where a hole runs out along a knife edge): the nearer neighbour is inserted into the longer
+  /// edge, whose face is split in two, so v leaves the loop instead of ending up in a sliver.
+  void zip(std::vector<std::uint32_t>& loop) {
+    const auto& P = mesh_.vertices;
+    for (bool again = true; again && loop.size() >= 3;) {
+      again = false;
+      for (std::size_t i = 0; i < loop.size() && loop.size() >= 3; ++i) {
+        const std::uint32_t u = loop[(i + loop.size() - 1) % loop.size()], v = loop[i], w = loop[(i + 1) % loop.size()];
+        const bool nearIsW = (P[w] - P[v]).norm() < (P[u] - P[v]).norm();
+        const std::uint32_t near = nearIsW ? w : u, far = nearIsW ? u : w;
+        const Eigen::Vector3d d = P[far] - P[v], e = P[near] - P[v];
+        if (!(e.norm() > 0) || e.normalized().dot(d.normalized()) < std::cos(15.0 * M_PI / 180.0)) continue;
+        const auto it = boundaryFace_.find(undirectedKey(v, far));
+        if (it == boundaryFace_.end()) continue;
+        const Eigen::Vector3i old = faceAt(it->second);
+        int c = 0;
+        while (!((vtx(old, c) == v || vtx(old, c) == far) && (vtx(old, (c + 1) % 3) == v || vtx(old, (c + 1) % 3) == far))) ++c;
+        const std::uint32_t s = vtx(old, c), t = vtx(old, (c + 1) % 3), x = vtx(old, (c + 2) % 3);
+        if (x == near || edges_.count(undirectedKey(near, x)) || count_[undirectedKey(s, x)] != 2 ||
+            count_[undirectedKey(t, x)] != 2)
+          continue;
+        const Eigen::Vector3d n0 = faceNormal(mesh_, s, t, x).normalized();
+        const Eigen::Vector3i first(static_cast<int>(s), static_cast<int>(near), static_cast<int>(x)),
+            second(static_cast<int>(near), static_cast<int>(t), static_cast<int>(x));
+        bool ok = true;
+        for (const auto& f : {first, second})
+          ok = ok && triangleQuality(P[vtx(f, 0)], P[vtx(f, 1)], P[vtx(f, 2)]) >= 0.2 &&
+               faceNormal(mesh_, vtx(f, 0), vtx(f, 1), vtx(f, 2)).normalized().dot(n0) > 0.5;
+        if (!ok) continue;
+        const std::size_t oldIndex = it->second, newIndex = mesh_.triangles.size() + added_.size();
+        faceAt(oldIndex) = first;
+        added_.push_back(second);
+        boundaryFace_.erase(undirectedKey(v, far));
+        boundaryFace_.erase(undirectedKey(v, near));
+        count_[undirectedKey(v, near)] = 2, count_[undirectedKey(near, x)] = 2;
+        edges_.insert(undirectedKey(near, x)), edges_.insert(undirectedKey(u, w));
+        if (loop.size() == 3) {  // a sliver hole (a T-junction): the zip closes it
+          count_[undirectedKey(u, w)] = 2;
+          boundaryFace_.erase(undirectedKey(u, w));
+        } else {
+          count_[undirectedKey(u, w)] = 1;
+          boundaryFace_[undirectedKey(u, w)] = nearIsW ? newIndex : oldIndex;
+          const Eigen::Vector3i& keeper = nearIsW ? second : first;
+          boundaryNormal_[directedKey(w, u)] =
+              faceNormal(mesh_, vtx(keeper, 0), vtx(keeper, 1), vtx(keeper, 2)).normalized();
+        }
+        loop.erase(loop.begin() + static_cast<std::ptrdiff_t>(i));
+        ++report_.zipped;
+        again = true;
+        break;
+      }
+    }
+  }
+
+  /// Closes @p loop when it is small (or medium and the fill is good), else counts it as kept.
+  void fill(std::vector<std::uint32_t>& loop) {
+    ++report_.loops;
+    double perimeter = 0;
+    for (std::size_t i = 0; i < loop.size(); ++i)
+      perimeter += (mesh_.vertices[loop[i]] - mesh_.vertices[loop[(i + 1) % loop.size()]]).norm();
+    const bool small = loop.size() <= params_.maxEdges && perimeter <= params_.maxPerimeter * meanEdge_;
+    const bool medium = !small &&
+                        static_cast<double>(loop.size()) <= params_.goodFillFactor * static_cast<double>(params_.maxEdges) &&
+                        perimeter <= params_.goodFillFactor * params_.maxPerimeter * meanEdge_;
+    if (loop.size() < 3 || !(small || medium)) {
+      ++report_.kept;
+      return;
+    }
+    zip(loop);
+    if (loop.size() < 3) {  // zipped shut
+      ++report_.filled;
+      return;
+    }
+    // Best: no new vertex and faces agreeing with the normals; then without the normal test (a corner of
+    // several creases, or a small fold); last, a fan around a new vertex at the loop's centroid (when every
+    // diagonal already exists elsewhere).
+    std::vector<Eigen::Vector3i> faces;
+    double dpQuality = 0;
+    const bool dp = triangulatePolygon(mesh_, normals_, loop, edges_, true, faces, &dpQuality);
+    if (dp && dpQuality < params_.minQuality) {
+      // Normals can be unreliable where the loop closes over a part thinner than the spacing (both sides' normals
+      // in one loop): the best triangulation without it is taken if better, as long as no face folds back onto
+      // the face across a loop edge.
+      std::vector<Eigen::Vector3i> free;
+      double freeQuality = 0;
+      if (triangulatePolygon(mesh_, normals_, loop, edges_, false, free, &freeQuality, &boundaryNormal_) &&
+          freeQuality > dpQuality)
+        faces.swap(free), dpQuality = freeQuality;
+    }
+    // The fan around the centroid, for comparison.
+    Eigen::Vector3d centre = Eigen::Vector3d::Zero(), normal = Eigen::Vector3d::Zero();
+    for (std::uint32_t v : loop) centre += mesh_.vertices[v];
+    centre /= static_cast<double>(loop.size());
+    if (haveNormals_)
+      for (std::uint32_t v : loop) normal += normals_[v];
+    double fanQuality = 1;
+    for (std::size_t i = 0; i < loop.size(); ++i) {
+      const Eigen::Vector3d &a = mesh_.vertices[loop[i]], &b = mesh_.vertices[loop[(i + 1) % loop.size()]];
+      const bool folded = haveNormals_ && (b - a).cross(centre - a).dot(normal) <= 0;
+      fanQuality = std::min(fanQuality, folded ? 0.0 : triangleQuality(a, b, centre));
+    }
+    const bool useFan = (!dp && fanQuality > 0) || (dp && dpQuality < params_.minQuality && fanQuality > dpQuality);
+    if (!dp && !useFan) {
+      faces.clear();
+      if (!triangulatePolygon(mesh_, normals_, loop, edges_, false, faces)) {
+        ++report_.kept;
+        return;
+      }
+    }
+    if (medium) {  // closed only when the fill is good
+      double worst = useFan ? fanQuality : 1.0;
+      if (!useFan)
+        for (const auto& t : faces)
+          worst = std::min(worst, triangleQuality(mesh_.vertices[vtx(t, 0)], mesh_.vertices[vtx(t, 1)], mesh_.vertices[vtx(t, 2)]));
+      if (worst < params_.minQuality) {
+        ++report_.kept;
+        return;
+      }
+    }
+    if (useFan) {
+      faces.clear();
+      const auto c = static_cast<int>(mesh_.vertices.size());
+      mesh_.vertices.push_back(centre);
+      if (haveNormals_) normals_.push_back(normal.normalized());
+      for (std::size_t i = 0; i < loop.size(); ++i)
+        faces.emplace_back(static_cast<int>(loop[i]), static_cast<int>(loop[(i + 1) % loop.size()]), c);
+      ++report_.verticesAdded;
+    }
+    for (const auto& f : faces)
+      for (int c = 0; c < 3; ++c) edges_.insert(undirectedKey(vtx(f, c), vtx(f, (c + 1) % 3)));
+    added_.insert(added_.end(), faces.begin(), faces.end());
+    ++report_.filled;
+  }
+
+  TriangleMesh& mesh_;
+  std::vector<Eigen::Vector3d>& normals_;
+  const HoleFillingParams& params_;
+  const bool haveNormals_;
+  HoleFillingReport report_;
+  std::unordered_map<std::uint64_t, int> count_;  ///< faces per undirected edge
+  std::unordered_set<std::uint64_t> edges_;       ///< every edge, and the edges of the faces added
+  double meanEdge_ = 0;
+  std::map<std::uint32_t, std::vector<std::uint32_t>> next_;  ///< reversed boundary edges, deterministic order
+  std::size_t boundaryEdges_ = 0;
+  std::unordered_map<std::uint64_t, Eigen::Vector3d> boundaryNormal_;  ///< face normal at boundary half-edge a→b
+  std::unordered_map<std::uint64_t, std::size_t> boundaryFace_;
+  std::vector<Eigen::Vector3i> added_;
+};
+
 }  // namespace
 
 void HoleFillingParams::validate() const {
@@ -141,243 +418,7 @@ void HoleFillingParams::validate() const {
 HoleFillingReport fillSmallHoles(TriangleMesh& mesh, std::vector<Eigen::Vector3d>& normals,
                                  const HoleFillingParams& params) {
   params.validate();
-  HoleFillingReport report;
-  // Boundary half-edges a→b (of the one face using the edge); the hole is walked along b→a.
-  std::unordered_map<std::uint64_t, int> count;
-  count.reserve(mesh.triangles.size() * 2);
-  double edgeSum = 0;
-  for (const auto& t : mesh.triangles)
-    for (int c = 0; c < 3; ++c) {
-      auto [it, inserted] = count.emplace(undirectedKey(vtx(t, c), vtx(t, (c + 1) % 3)), 0);
-      if (inserted) edgeSum += (mesh.vertices[vtx(t, c)] - mesh.vertices[vtx(t, (c + 1) % 3)]).norm();
-      ++it->second;
-    }
-  if (count.empty()) return report;
-  const double meanEdge = edgeSum / static_cast<double>(count.size());
-  std::unordered_set<std::uint64_t> edges;
-  edges.reserve(count.size());
-  for (const auto& [key, c] : count) edges.insert(key);
-  std::map<std::uint32_t, std::vector<std::uint32_t>> next;  // reversed boundary edges, deterministic order
-  std::size_t boundaryEdges = 0;
-  std::unordered_map<std::uint64_t, Eigen::Vector3d> boundaryNormal;  // face normal at each boundary half-edge a→b
-  for (const auto& t : mesh.triangles)
-    for (int c = 0; c < 3; ++c) {
-      const std::uint32_t a = vtx(t, c), b = vtx(t, (c + 1) % 3);
-      if (count[undirectedKey(a, b)] != 1) continue;
-      next[b].push_back(a), ++boundaryEdges;
-      boundaryNormal[directedKey(a, b)] = faceNormal(mesh, vtx(t, 0), vtx(t, 1), vtx(t, 2)).normalized();
-    }
-  for (auto& [v, list] : next) std::sort(list.begin(), list.end());
-  const bool haveNormals = normals.size() == mesh.vertices.size();
-  // At a vertex with several boundary edges leaving it (two fans meeting), take the one that closes the
-  // smallest hole wedge: the smallest clockwise turn (about the vertex normal) from the edge we arrived on.
-  auto choose = [&](std::uint32_t prev, std::uint32_t cur, const std::vector<std::uint32_t>& outs,
-                    const std::unordered_set<std::uint64_t>& seen) {
-    std::uint32_t bestV = std::numeric_limits<std::uint32_t>::max();
-    double bestTurn = std::numeric_limits<double>::max();
-    const Eigen::Vector3d back = mesh.vertices[prev] - mesh.vertices[cur];
-    for (std::uint32_t cand : outs) {
-      if (seen.count(directedKey(cur, cand))) continue;
-      if (!haveNormals || outs.size() == 1) return cand;
-      const Eigen::Vector3d& n = normals[cur];
-      const Eigen::Vector3d out = mesh.vertices[cand] - mesh.vertices[cur];
-      double turn = std::atan2(back.cross(out).dot(n), back.dot(out));  // counter-clockwise from back
-      turn = turn <= 0 ? -turn : 2 * M_PI - turn;                        // clockwise angle in (0, 2π]
-      if (cand == prev) turn = 2 * M_PI;
-      if (turn < bestTurn) bestTurn = turn, bestV = cand;
-    }
-    return bestV;
-  };
-  std::unordered_set<std::uint64_t> visited;
-  std::vector<Eigen::Vector3i> added;
-  std::vector<std::vector<std::uint32_t>> loops;
-  for (const auto& [start, outs] : next)
-    for (std::uint32_t first : outs) {
-      if (visited.count(directedKey(start, first))) continue;
-      // Walk the closed boundary start → first → ... → start, then split it into simple cycles at the
-      // vertices it passes more than once.
-      std::vector<std::uint32_t> walk{start};
-      visited.insert(directedKey(start, first));
-      std::uint32_t prev = start, cur = first;
-      bool closedWalk = true;
-      while (cur != start) {
-        walk.push_back(cur);
-        const auto it = next.find(cur);
-        const std::uint32_t nxt =
-            it == next.end() ? std::numeric_limits<std::uint32_t>::max() : choose(prev, cur, it->second, visited);
-        if (nxt == std::numeric_limits<std::uint32_t>::max() || walk.size() > boundaryEdges) {
-          closedWalk = false;
-          break;
-        }
-        visited.insert(directedKey(cur, nxt));
-        prev = cur;
-        cur = nxt;
-      }
-      if (!closedWalk) {
-        ++report.loops;
-        ++report.kept;
-        continue;
-      }
-      std::vector<std::uint32_t> stack;
-      std::unordered_map<std::uint32_t, std::size_t> position;
-      for (std::uint32_t v : walk) {
-        const auto it = position.find(v);
-        if (it != position.end()) {
-          // The cycle v ... (top of stack) closes here.
-          loops.emplace_back(stack.begin() + static_cast<std::ptrdiff_t>(it->second), stack.end());
-          for (std::size_t x = it->second + 1; x < stack.size(); ++x) position.erase(stack[x]);
-          stack.resize(it->second + 1);
-        } else {
-          position[v] = stack.size();
-          stack.push_back(v);
-        }
-      }
-      loops.push_back(stack);
-    }
-  // Boundary face of each boundary edge; indices ≥ T.size() are faces in `added`.
-  std::unordered_map<std::uint64_t, std::size_t> boundaryFace;
-  for (std::size_t f = 0; f < mesh.triangles.size(); ++f)
-    for (int c = 0; c < 3; ++c) {
-      const std::uint32_t a = vtx(mesh.triangles[f], c), b = vtx(mesh.triangles[f], (c + 1) % 3);
-      if (count[undirectedKey(a, b)] == 1) boundaryFace[undirectedKey(a, b)] = f;
-    }
-  auto faceAt = [&](std::size_t f) -> Eigen::Vector3i& {
-    return f < mesh.triangles.size() ? mesh.triangles[f] : added[f - mesh.triangles.size()];
-  };
-  // Zip a corner of the loop where it turns back on itself (a near-zero angle at v between its loop edges to u
-  // and w, e.g. where a hole runs out along a knife edge): the nearer neighbour is inserted into the longer edge,
-  // whose face is split in two, so v leaves the loop instead of ending up in a sliver.
-  auto zip = [&](std::vector<std::uint32_t>& loop) {
-    const auto& P = mesh.vertices;
-    for (bool again = true; again && loop.size() >= 3;) {
-      again = false;
-      for (std::size_t i = 0; i < loop.size() && loop.size() >= 3; ++i) {
-        const std::uint32_t u = loop[(i + loop.size() - 1) % loop.size()], v = loop[i], w = loop[(i + 1) % loop.size()];
-        const bool nearIsW = (P[w] - P[v]).norm() < (P[u] - P[v]).norm();
-        const std::uint32_t near = nearIsW ? w : u, far = nearIsW ? u : w;
-        const Eigen::Vector3d d = P[far] - P[v], e = P[near] - P[v];
-        if (!(e.norm() > 0) || e.normalized().dot(d.normalized()) < std::cos(15.0 * M_PI / 180.0)) continue;
-        const auto it = boundaryFace.find(undirectedKey(v, far));
-        if (it == boundaryFace.end()) continue;
-        const Eigen::Vector3i old = faceAt(it->second);
-        int c = 0;
-        while (!((vtx(old, c) == v || vtx(old, c) == far) && (vtx(old, (c + 1) % 3) == v || vtx(old, (c + 1) % 3) == far))) ++c;
-        const std::uint32_t s = vtx(old, c), t = vtx(old, (c + 1) % 3), x = vtx(old, (c + 2) % 3);
-        if (x == near || edges.count(undirectedKey(near, x)) || count[undirectedKey(s, x)] != 2 ||
-            count[undirectedKey(t, x)] != 2)
-          continue;
-        const Eigen::Vector3d n0 = faceNormal(mesh, s, t, x).normalized();
-        const Eigen::Vector3i first(static_cast<int>(s), static_cast<int>(near), static_cast<int>(x)),
-            second(static_cast<int>(near), static_cast<int>(t), static_cast<int>(x));
-        bool ok = true;
-        for (const auto& f : {first, second})
-          ok = ok && triangleQuality(P[vtx(f, 0)], P[vtx(f, 1)], P[vtx(f, 2)]) >= 0.2 &&
-               faceNormal(mesh, vtx(f, 0), vtx(f, 1), vtx(f, 2)).normalized().dot(n0) > 0.5;
-        if (!ok) continue;
-        const std::size_t oldIndex = it->second, newIndex = mesh.triangles.size() + added.size();
-        faceAt(oldIndex) = first;
-        added.push_back(second);
-        boundaryFace.erase(undirectedKey(v, far));
-        boundaryFace.erase(undirectedKey(v, near));
-        count[undirectedKey(v, near)] = 2, count[undirectedKey(near, x)] = 2;
-        edges.insert(undirectedKey(near, x)), edges.insert(undirectedKey(u, w));
-        if (loop.size() == 3) {  // a sliver hole (a T-junction): the zip closes it
-          count[undirectedKey(u, w)] = 2;
-          boundaryFace.erase(undirectedKey(u, w));
-        } else {
-          count[undirectedKey(u, w)] = 1;
-          boundaryFace[undirectedKey(u, w)] = nearIsW ? newIndex : oldIndex;
-          const Eigen::Vector3i& keeper = nearIsW ? second : first;
-          boundaryNormal[directedKey(w, u)] = faceNormal(mesh, vtx(keeper, 0), vtx(keeper, 1), vtx(keeper, 2)).normalized();
-        }
-        loop.erase(loop.begin() + static_cast<std::ptrdiff_t>(i));
-        ++report.zipped;
-        again = true;
-        break;
-      }
-    }
-  };
-  for (auto loop : loops) {
-    ++report.loops;
-    double perimeter = 0;
-    for (std::size_t i = 0; i < loop.size(); ++i)
-      perimeter += (mesh.vertices[loop[i]] - mesh.vertices[loop[(i + 1) % loop.size()]]).norm();
-    const bool small = loop.size() <= params.maxEdges && perimeter <= params.maxPerimeter * meanEdge;
-    const bool medium = !small &&
-                        static_cast<double>(loop.size()) <= params.goodFillFactor * static_cast<double>(params.maxEdges) &&
-                        perimeter <= params.goodFillFactor * params.maxPerimeter * meanEdge;
-    if (loop.size() < 3 || !(small || medium)) {
-      ++report.kept;
-      continue;
-    }
-    zip(loop);
-    if (loop.size() < 3) {  // zipped shut
-      ++report.filled;
-      continue;
-    }
-    // Best: no new vertex and faces agreeing with the normals; then without the normal test (a corner of
-    // several creases, or a small fold); last, a fan around a new vertex at the loop's centroid (when every
-    // diagonal already exists elsewhere).
-    std::vector<Eigen::Vector3i> faces;
-    double dpQuality = 0;
-    const bool dp = triangulatePolygon(mesh, normals, loop, edges, true, faces, &dpQuality);
-    if (dp && dpQuality < params.minQuality) {
-      // Normals can be unreliable where the loop closes over a part thinner than the spacing (both sides' normals
-      // in one loop): the best triangulation without it is taken if better, as long as no face folds back onto
-      // the face across a loop edge.
-      std::vector<Eigen::Vector3i> free;
-      double freeQuality = 0;
-      if (triangulatePolygon(mesh, normals, loop, edges, false, free, &freeQuality, &boundaryNormal) &&
-          freeQuality > dpQuality)
-        faces.swap(free), dpQuality = freeQuality;
-    }
-    // The fan around the centroid, for comparison.
-    Eigen::Vector3d centre = Eigen::Vector3d::Zero(), normal = Eigen::Vector3d::Zero();
-    for (std::uint32_t v : loop) centre += mesh.vertices[v];
-    centre /= static_cast<double>(loop.size());
-    if (haveNormals)
-      for (std::uint32_t v : loop) normal += normals[v];
-    double fanQuality = 1;
-    for (std::size_t i = 0; i < loop.size(); ++i) {
-      const Eigen::Vector3d &a = mesh.vertices[loop[i]], &b = mesh.vertices[loop[(i + 1) % loop.size()]];
-      const bool folded = haveNormals && (b - a).cross(centre - a).dot(normal) <= 0;
-      fanQuality = std::min(fanQuality, folded ? 0.0 : triangleQuality(a, b, centre));
-    }
-    const bool useFan = (!dp && fanQuality > 0) || (dp && dpQuality < params.minQuality && fanQuality > dpQuality);
-    if (!dp && !useFan) {
-      faces.clear();
-      if (!triangulatePolygon(mesh, normals, loop, edges, false, faces)) {
-        ++report.kept;
-        continue;
-      }
-    }
-    if (medium) {  // closed only when the fill is good
-      double worst = useFan ? fanQuality : 1.0;
-      if (!useFan)
-        for (const auto& t : faces)
-          worst = std::min(worst, triangleQuality(mesh.vertices[vtx(t, 0)], mesh.vertices[vtx(t, 1)], mesh.vertices[vtx(t, 2)]));
-      if (worst < params.minQuality) {
-        ++report.kept;
-        continue;
-      }
-    }
-    if (useFan) {
-      faces.clear();
-      const auto c = static_cast<int>(mesh.vertices.size());
-      mesh.vertices.push_back(centre);
-      if (haveNormals) normals.push_back(normal.normalized());
-      for (std::size_t i = 0; i < loop.size(); ++i)
-        faces.emplace_back(static_cast<int>(loop[i]), static_cast<int>(loop[(i + 1) % loop.size()]), c);
-      ++report.verticesAdded;
-    }
-    for (const auto& f : faces)
-      for (int c = 0; c < 3; ++c) edges.insert(undirectedKey(vtx(f, c), vtx(f, (c + 1) % 3)));
-    added.insert(added.end(), faces.begin(), faces.end());
-    ++report.filled;
-  }
-  report.facesAdded = added.size();  // with the zips' extra faces
-  mesh.triangles.insert(mesh.triangles.end(), added.begin(), added.end());
-  return report;
+  return HoleFiller(mesh, normals, params).run();
 }
 
 BadTriangleReport repairBadTriangles(TriangleMesh& mesh, const std::vector<Eigen::Vector3d>& normals,

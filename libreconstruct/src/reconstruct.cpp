@@ -5,11 +5,11 @@
 
 #include <chrono>
 #include <cmath>
-#include <iomanip>
-#include <sstream>
 #include <stdexcept>
 
 #include "iires/attributes.hpp"
+#include "iires/detail/json.hpp"
+#include "iires/detail/stage_clock.hpp"
 #include "iires/intrinsic.hpp"
 #include "iires/normals.hpp"
 #include "iires/reconstruct/mesh_validity.hpp"
@@ -19,24 +19,6 @@ namespace iires {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-std::string num(double x) {
-  if (!std::isfinite(x)) return "null";
-  std::ostringstream os;
-  os << std::setprecision(10) << x;
-  return os.str();
-}
-
-/// Indent every line after the first of a JSON block by two spaces and drop its trailing newline.
-std::string nested(std::string json) {
-  while (!json.empty() && json.back() == '\n') json.pop_back();
-  std::string out;
-  for (char c : json) {
-    out += c;
-    if (c == '\n') out += "  ";
-  }
-  return out;
-}
 
 }  // namespace
 
@@ -82,37 +64,41 @@ double ReconstructResult::meshingSeconds() const {
 }
 
 std::string ReconstructResult::toJson() const {
-  std::ostringstream os;
-  os << "{\n  \"method\": \"" << method << "\",\n  \"input_points\": " << inputPoints
-     << ",\n  \"resampled\": " << (resampled ? "true" : "false") << ",\n  \"samples\": " << samples.size()
-     << ",\n  \"mesh_vertices\": " << mesh.vertices.size() << ",\n  \"mesh_faces\": " << mesh.triangles.size()
-     << ",\n  \"unused_samples\": " << unusedVertices << ",\n  \"small_component_faces_removed\": " << smallComponentFaces;
-  if (resampled) os << ",\n  \"resampling\": " << nested(resampling.toJson());
-  if (method == "local")
-    os << ",\n  \"triangulation\": {\"candidates\": " << triangulation.candidates
-       << ", \"proposed_by_3\": " << triangulation.proposedBy3 << ", \"proposed_by_2\": " << triangulation.proposedBy2
-       << ", \"kept\": " << triangulation.kept << ", \"rejected_conflicts\": " << triangulation.rejectedConflicts
-       << ", \"removed_fan_faces\": " << triangulation.removedFans << ", \"flips\": " << triangulation.flips << ", \"flips_after_filling\": " << flipsAfterFilling << "}";
-  os << ",\n  \"bad_triangles\": {\"vertices_moved\": " << badTriangles.moved << ", \"vertices_removed\": " << badTriangles.removed
-     << ", \"remeshed_vertices\": " << remeshedVertices << "}";
-  os << ",\n  \"holes\": {\"loops\": " << holes.loops << ", \"filled\": " << holes.filled
-     << ", \"kept\": " << holes.kept << ", \"faces_added\": " << holes.facesAdded << ", \"vertices_added\": " << holes.verticesAdded << "}"
-     << ",\n  \"large_holes\": {\"loops\": " << largeHoles.loops << ", \"filled\": " << largeHoles.filled
-     << ", \"kept\": " << largeHoles.kept << ", \"faces_added\": " << largeHoles.facesAdded
-     << ", \"vertices_added\": " << largeHoles.verticesAdded << ", \"skipped\": " << (largeHoles.skipped ? "true" : "false") << "}"
-     << ",\n  \"validity_repair\": {\"intersecting_pairs_found\": " << validity.intersectingPairs
-     << ", \"non_manifold_edges_found\": " << validity.nonManifoldEdges << ", \"rounds\": " << validity.rounds
-     << ", \"faces_removed\": " << validity.facesRemoved << ", \"faces_added\": " << validity.facesAdded
-     << ", \"vertices_added\": " << validity.verticesAdded
-     << ", \"removed_without_fill\": " << validity.removedWithoutFill << "}"
-     << ",\n  \"orientation\": {\"components\": " << orientation.components
-     << ", \"faces_flipped\": " << orientation.facesFlipped << ", \"conflicts\": " << orientation.conflicts << "}"
-     << ",\n  \"quality\": " << nested(quality.toJson()) << ",\n  \"meshing_time_s\": " << num(meshingSeconds())
-     << ",\n  \"time_s\": {";
-  for (std::size_t i = 0; i < timings.size(); ++i)
-    os << (i ? ", " : "") << "\"" << timings[i].name << "\": " << num(timings[i].seconds);
-  os << "}\n}\n";
-  return os.str();
+  detail::JsonWriter j;
+  j.beginObject(true).member("method", method).member("input_points", inputPoints).member("resampled", resampled);
+  j.member("samples", samples.size()).member("mesh_vertices", mesh.vertices.size());
+  j.member("mesh_faces", mesh.triangles.size()).member("unused_samples", unusedVertices);
+  j.member("small_component_faces_removed", smallComponentFaces);
+  if (resampled) j.key("resampling").embed(resampling.toJson());
+  if (method == "local") {
+    j.key("triangulation").beginObject().member("candidates", triangulation.candidates);
+    j.member("proposed_by_3", triangulation.proposedBy3).member("proposed_by_2", triangulation.proposedBy2);
+    j.member("kept", triangulation.kept).member("rejected_conflicts", triangulation.rejectedConflicts);
+    j.member("removed_fan_faces", triangulation.removedFans).member("flips", triangulation.flips);
+    j.member("flips_after_filling", flipsAfterFilling).endObject();
+  }
+  j.key("bad_triangles").beginObject().member("vertices_moved", badTriangles.moved);
+  j.member("vertices_removed", badTriangles.removed).member("remeshed_vertices", remeshedVertices).endObject();
+  const auto holeCounts = [&](std::string_view name, const auto& h) {
+    j.key(name).beginObject().member("loops", h.loops).member("filled", h.filled).member("kept", h.kept);
+    j.member("faces_added", h.facesAdded).member("vertices_added", h.verticesAdded);
+  };
+  holeCounts("holes", holes);
+  j.endObject();
+  holeCounts("large_holes", largeHoles);
+  j.member("skipped", largeHoles.skipped).endObject();
+  j.key("validity_repair").beginObject().member("intersecting_pairs_found", validity.intersectingPairs);
+  j.member("non_manifold_edges_found", validity.nonManifoldEdges).member("rounds", validity.rounds);
+  j.member("faces_removed", validity.facesRemoved).member("faces_added", validity.facesAdded);
+  j.member("vertices_added", validity.verticesAdded).member("removed_without_fill", validity.removedWithoutFill);
+  j.endObject();
+  j.key("orientation").beginObject().member("components", orientation.components);
+  j.member("faces_flipped", orientation.facesFlipped).member("conflicts", orientation.conflicts).endObject();
+  j.key("quality").embed(quality.toJson()).member("meshing_time_s", meshingSeconds());
+  j.key("time_s").beginObject();
+  for (const StageTime& t : timings) j.member(t.name, t.seconds);
+  j.endObject().endObject();
+  return j.str() + "\n";
 }
 
 namespace {
@@ -128,25 +114,11 @@ std::vector<Eigen::Vector3d> vertexNormals(const TriangleMesh& mesh) {
     if (v.squaredNorm() > 0) v.normalize();
   return n;
 }
-}  // namespace
 
-ReconstructResult reconstruct(const PointCloud& input, const ReconstructParams& params) {
-  params.validate();
-  const auto start = Clock::now();
-  ReconstructResult result;
-  result.method = toString(params.method);
-  result.inputPoints = input.size();
-  const StageClock clock(result.timings, params.progress);  // the resampler reports its own stages
-
-  auto t = clock.begin("validate");
-  PointCloud cloud;  // positions and normals; the attributes are carried to the vertices at the end
-  cloud.points = input.points;
-  cloud.normals = input.normals;
-  validateCloud(cloud, 4, "input");
-  clock.end("validate", t);
-
+/// The samples: the input resampled to params.targetCount (result.resampling), else the input points as they
+/// are, with PCA normals when it has none.
+void takeSamples(const PointCloud& cloud, const ReconstructParams& params, ReconstructResult& result) {
   if (params.resample) {
-    t = Clock::now();
     ResampleParams rp = params.resampling;
     rp.targetCount = params.targetCount;
     rp.seed = params.seed;
@@ -157,20 +129,20 @@ ReconstructResult reconstruct(const PointCloud& input, const ReconstructParams& 
     result.samples = std::move(result.resampling.cloud);
     result.resampling.cloud = PointCloud{};
     result.resampled = true;
-    clock.end("resample", t);
-  } else {
-    t = clock.begin("normals");
-    result.samples = cloud;
-    if (!result.samples.hasNormals()) {
-      NormalParams np = params.resampling.normals;
-      np.threads = params.threads;
-      result.samples.normals = estimateNormals(result.samples.points, np);
-    }
-    for (auto& n : result.samples.normals) n.normalize();
-    clock.end("normals", t);
+    return;
   }
+  result.samples = cloud;
+  if (!result.samples.hasNormals()) {
+    NormalParams np = params.resampling.normals;
+    np.threads = params.threads;
+    result.samples.normals = estimateNormals(result.samples.points, np);
+  }
+  for (auto& n : result.samples.normals) n.normalize();
+}
 
-  t = clock.begin("triangulate");
+/// The mesh of the samples: local Delaunay 1-rings (with the resampler's intrinsic rule unless a neighbour
+/// rule is given) or CGAL's advancing front.
+void triangulateSamples(const ReconstructParams& params, ReconstructResult& result) {
   if (params.method == ReconstructMethod::kLocal) {
     TriangulateParams tp = params.local;
     tp.threads = params.threads;
@@ -188,11 +160,13 @@ ReconstructResult reconstruct(const PointCloud& input, const ReconstructParams& 
   } else {
     result.mesh = advancingFront(result.samples, params.advancingFront).mesh;
   }
-  clock.end("triangulate", t);
+}
 
-  std::size_t flippedEarlier = 0;  // by the orientation passes that large holes and remeshing need first
-  t = clock.begin("holes");
-  std::vector<Eigen::Vector3d> normals = result.samples.normals;  // grows with any vertex hole filling adds
+/// Small components removed, small holes closed (again after removing the fans a fill pinched together), large
+/// holes closed, edges flipped back to Delaunay, bad triangles repaired. Returns the faces flipped by the
+/// orientation passes that large holes and remeshing need first.
+std::size_t closeHoles(const ReconstructParams& params, ReconstructResult& result, std::vector<Eigen::Vector3d>& normals) {
+  std::size_t flipped = 0;
   if (params.minComponentFaces > 1) result.smallComponentFaces = removeSmallComponents(result.mesh, params.minComponentFaces);
   if (params.fillHoles) {
     result.holes = fillSmallHoles(result.mesh, normals, params.holes);
@@ -209,7 +183,7 @@ ReconstructResult reconstruct(const PointCloud& input, const ReconstructParams& 
     }
     if (params.holes.maxRefinedExtent > 0 && result.holes.kept > 0) {
       // What is left open: a gap small next to its part gets a refined fill (it needs an oriented 2-manifold).
-      flippedEarlier += orientConsistently(result.mesh, normals).facesFlipped;
+      flipped += orientConsistently(result.mesh, normals).facesFlipped;
       result.largeHoles = fillLargeHoles(result.mesh, normals, params.holes);
     }
     if (params.method == ReconstructMethod::kLocal && params.local.flipMaxDihedral > 0 &&
@@ -219,38 +193,92 @@ ReconstructResult reconstruct(const PointCloud& input, const ReconstructParams& 
   if (params.repairQuality > 0) {
     result.badTriangles = repairBadTriangles(result.mesh, normals, params.repairQuality, params.repairDeviation);
     if (params.remeshBadRegions) {
-      flippedEarlier += orientConsistently(result.mesh, normals).facesFlipped;  // remeshing needs it oriented
+      flipped += orientConsistently(result.mesh, normals).facesFlipped;  // remeshing needs it oriented
       result.remeshedVertices = remeshBadRegions(result.mesh, normals, params.repairQuality);
     }
   }
+  return flipped;
+}
+
+/// Self-intersecting faces and non-manifold parts removed (and refilled); the fills' poor triangles repaired,
+/// then checked again. Returns the faces flipped by the orientation passes remeshing needs first.
+std::size_t repairMeshValidity(const ReconstructParams& params, ReconstructResult& result,
+                               std::vector<Eigen::Vector3d>& normals) {
+  std::size_t flipped = 0;
+  ValidityParams vp = params.validity;
+  vp.holes = params.holes;
+  vp.refill = params.fillHoles && vp.refill;
+  vp.minComponentFaces = params.minComponentFaces;
+  vp.threads = params.threads;
+  result.validity = repairValidity(result.mesh, normals, vp);
+  if (result.validity.facesAdded > 0 && params.repairQuality > 0) {
+    // The fills can hold poor triangles: the same quality repairs as above, then the check again (a repair that
+    // made something intersect is undone by removal there).
+    const BadTriangleReport again = repairBadTriangles(result.mesh, normals, params.repairQuality, params.repairDeviation);
+    result.badTriangles.moved += again.moved;
+    result.badTriangles.removed += again.removed;
+    if (params.remeshBadRegions) {
+      flipped += orientConsistently(result.mesh, normals).facesFlipped;
+      result.remeshedVertices += remeshBadRegions(result.mesh, normals, params.repairQuality);
+    }
+    vp.rounds = 1;
+    const ValidityReport check = repairValidity(result.mesh, normals, vp);
+    result.validity.rounds += check.rounds;
+    result.validity.facesRemoved += check.facesRemoved;
+    result.validity.facesAdded += check.facesAdded;
+    result.validity.verticesAdded += check.verticesAdded;
+    result.validity.removedWithoutFill += check.removedWithoutFill;
+  }
+  return flipped;
+}
+
+/// The input's attributes interpolated at the mesh vertices, from input points on the same sheet.
+void carryAttributes(const PointCloud& input, const ReconstructParams& params, ReconstructResult& result) {
+  SameSheet sameSheet;  // the resampler's intrinsic rule: vertices take values from input points on their sheet
+  std::shared_ptr<const IntrinsicRule> rule;
+  if (result.resampling.geodesic) {
+    rule = std::make_shared<IntrinsicRule>(result.resampling.geodesic, params.resampling.intrinsicRule);
+    sameSheet = [&rule](const Eigen::Vector3d& a, const Eigen::Vector3d& b) { return rule->acceptPoints(a, b); };
+  }
+  AttributeParams ap;
+  ap.threads = params.threads;
+  result.mesh.vertexAttributes =
+      interpolateAttributes(input, result.mesh.vertices, vertexNormals(result.mesh), sameSheet, ap);
+}
+
+}  // namespace
+
+ReconstructResult reconstruct(const PointCloud& input, const ReconstructParams& params) {
+  params.validate();
+  const auto start = Clock::now();
+  ReconstructResult result;
+  result.method = toString(params.method);
+  result.inputPoints = input.size();
+  const StageClock clock(result.timings, params.progress);  // the resampler reports its own stages
+
+  auto t = clock.begin("validate");
+  PointCloud cloud;  // positions and normals; the attributes are carried to the vertices at the end
+  cloud.points = input.points;
+  cloud.normals = input.normals;
+  validateCloud(cloud, 4, "input");
+  clock.end("validate", t);
+
+  t = params.resample ? Clock::now() : clock.begin("normals");
+  takeSamples(cloud, params, result);
+  clock.end(params.resample ? "resample" : "normals", t);
+
+  t = clock.begin("triangulate");
+  triangulateSamples(params, result);
+  clock.end("triangulate", t);
+
+  t = clock.begin("holes");
+  std::vector<Eigen::Vector3d> normals = result.samples.normals;  // grows with any vertex hole filling adds
+  std::size_t flippedEarlier = closeHoles(params, result, normals);  // by orientation passes needed first
   clock.end("holes", t);
 
   if (params.repairValidity) {
     t = clock.begin("validity");
-    ValidityParams vp = params.validity;
-    vp.holes = params.holes;
-    vp.refill = params.fillHoles && vp.refill;
-    vp.minComponentFaces = params.minComponentFaces;
-    vp.threads = params.threads;
-    result.validity = repairValidity(result.mesh, normals, vp);
-    if (result.validity.facesAdded > 0 && params.repairQuality > 0) {
-      // The fills can hold poor triangles: the same quality repairs as above, then the check again (a repair that
-      // made something intersect is undone by removal there).
-      const BadTriangleReport again = repairBadTriangles(result.mesh, normals, params.repairQuality, params.repairDeviation);
-      result.badTriangles.moved += again.moved;
-      result.badTriangles.removed += again.removed;
-      if (params.remeshBadRegions) {
-        flippedEarlier += orientConsistently(result.mesh, normals).facesFlipped;
-        result.remeshedVertices += remeshBadRegions(result.mesh, normals, params.repairQuality);
-      }
-      vp.rounds = 1;
-      const ValidityReport check = repairValidity(result.mesh, normals, vp);
-      result.validity.rounds += check.rounds;
-      result.validity.facesRemoved += check.facesRemoved;
-      result.validity.facesAdded += check.facesAdded;
-      result.validity.verticesAdded += check.verticesAdded;
-      result.validity.removedWithoutFill += check.removedWithoutFill;
-    }
+    flippedEarlier += repairMeshValidity(params, result, normals);
     clock.end("validity", t);
   }
 
@@ -264,16 +292,7 @@ ReconstructResult reconstruct(const PointCloud& input, const ReconstructParams& 
 
   if (!input.attributes.empty()) {
     t = clock.begin("attributes");
-    SameSheet sameSheet;  // the resampler's intrinsic rule: vertices take values from input points on their sheet
-    std::shared_ptr<const IntrinsicRule> rule;
-    if (result.resampling.geodesic) {
-      rule = std::make_shared<IntrinsicRule>(result.resampling.geodesic, params.resampling.intrinsicRule);
-      sameSheet = [&rule](const Eigen::Vector3d& a, const Eigen::Vector3d& b) { return rule->acceptPoints(a, b); };
-    }
-    AttributeParams ap;
-    ap.threads = params.threads;
-    result.mesh.vertexAttributes =
-        interpolateAttributes(input, result.mesh.vertices, vertexNormals(result.mesh), sameSheet, ap);
+    carryAttributes(input, params, result);
     clock.end("attributes", t);
   }
 

@@ -12,8 +12,8 @@
 #include <Eigen/Geometry>
 #include <cstdint>
 
-#include "iires/parallel.hpp"
-#include "iires/radix_sort.hpp"
+#include "iires/detail/parallel.hpp"
+#include "iires/detail/radix_sort.hpp"
 
 namespace iires {
 namespace {

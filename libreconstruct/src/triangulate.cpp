@@ -10,8 +10,8 @@
 #include <unordered_set>
 
 #include "iires/knn.hpp"
-#include "iires/tangent_cell.hpp"
-#include "iires/parallel.hpp"
+#include "iires/detail/tangent_cell.hpp"
+#include "iires/detail/parallel.hpp"
 #include "iires/reconstruct/mesh_quality.hpp"
 #include "iires/reconstruct/mesh_repair.hpp"
 

@@ -7,7 +7,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "iires/parallel.hpp"
+#include "iires/detail/parallel.hpp"
 
 namespace iires::reg {
 

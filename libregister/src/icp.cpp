@@ -9,7 +9,7 @@
 #include <numeric>
 #include <stdexcept>
 
-#include "iires/parallel.hpp"
+#include "iires/detail/parallel.hpp"
 #include "iires/register/hausdorff.hpp"
 #include "iires/register/rotation_grid.hpp"
 

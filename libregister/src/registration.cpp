@@ -12,9 +12,10 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "iires/detail/json.hpp"
 #include "iires/knn.hpp"
 #include "iires/metrics.hpp"
-#include "iires/parallel.hpp"
+#include "iires/detail/parallel.hpp"
 #include "iires/register/hausdorff.hpp"
 #include "iires/validate.hpp"
 
@@ -257,6 +258,56 @@ std::string num(double v) {
   return s.str();
 }
 
+/// The runner-up (the best refined candidate at least 10 degrees away from the result), the score ratio, and
+/// the ambiguity flags (another pose within the tolerance; a planar cloud). Needs r.score and r.planar.
+void setRunnerUp(RegistrationResult& r, const Refined& refined, const Frame& fs, const Frame& ft,
+                 const RegistrationParams& params) {
+  const IcpResult& icp = refined.icp[refined.best];
+  const Eigen::Matrix3d Rbest = icp.T_target_source.topLeftCorner<3, 3>() / icp.scale;
+  double second = std::numeric_limits<double>::infinity();
+  for (std::size_t c = 0; c < refined.icp.size(); ++c) {
+    if (c == refined.best) continue;
+    const Eigen::Matrix3d Rc = refined.icp[c].T_target_source.topLeftCorner<3, 3>() / refined.icp[c].scale;
+    if (rotationAngle(Rbest, Rc) >= 10.0 * M_PI / 180.0 && refined.score[c].score < second) {
+      second = refined.score[c].score;
+      r.runnerUpScore = second;
+      r.runnerUpTransform = toOriginalUnits(refined.icp[c].T_target_source, refined.icp[c].scale, fs, ft);
+    }
+  }
+  r.secondBestScoreRatio = std::isfinite(second) && r.score > 0 ? second / r.score : 0.0;
+  if (std::isfinite(second) && second <= r.score * (1.0 + params.ambiguityTolerance)) {
+    r.ambiguous = true;
+    r.ambiguityReason = "another pose fits within " + num(100 * params.ambiguityTolerance) +
+                        "% (symmetric shape?)";
+  }
+  if (r.planar) {
+    r.ambiguous = true;
+    r.ambiguityReason = r.ambiguityReason.empty() ? std::string("planar cloud: mirrored poses fit equally well")
+                                                  : r.ambiguityReason + "; planar cloud";
+  }
+}
+
+/// Distances between the aligned source samples (@p source mapped by r.T_target_source) and the target's:
+/// Hausdorff, Hausdorff trimmed to the overlaps, and the overlap share.
+void measureAlignment(RegistrationResult& r, const std::vector<Eigen::Vector3d>& source,
+                      const std::vector<Eigen::Vector3d>& target, int threads) {
+  const std::vector<Eigen::Vector3d> aligned = applied(source, r.T_target_source);
+  r.hausdorff = hausdorffDistance(aligned, target, 1.0, threads);
+  // trimmed to the overlaps (estimated or given), each direction its own
+  const KnnIndex alignedTree(aligned), targetSamples(target);
+  r.hausdorffTrimmed = std::max(directedHausdorff(aligned, targetSamples, r.sourceOverlap, threads),
+                                directedHausdorff(target, alignedTree, r.targetOverlap, threads));
+  // overlap share: aligned source samples with a target sample within one sample spacing
+  const double l = spacingStats(target, threads).mean;
+  std::vector<char> near(aligned.size());
+  parallelFor(aligned.size(), threads, [&](std::size_t i) {
+    double d2 = 0;
+    targetSamples.nearest(aligned[i], &d2);
+    near[i] = d2 <= l * l;
+  });
+  r.overlapShare = static_cast<double>(std::count(near.begin(), near.end(), 1)) / static_cast<double>(near.size());
+}
+
 }  // namespace
 
 ResampleParams RegistrationParams::defaultResample() {
@@ -407,31 +458,10 @@ RegistrationResult registerClouds(const PointCloud& sourceIn, const PointCloud& 
   const std::size_t best = refined.best;
   const IcpResult& icp = refined.icp[best];
   const Eigen::Matrix4d& Tn = icp.T_target_source;
-  const Eigen::Matrix3d Rbest = Tn.topLeftCorner<3, 3>() / icp.scale;
   r.score = refined.score[best].score;
   r.sourceOverlap = refined.score[best].sourceOverlap;
   r.targetOverlap = refined.score[best].targetOverlap;
-  double second = std::numeric_limits<double>::infinity();
-  for (std::size_t c = 0; c < refined.icp.size(); ++c) {
-    if (c == best) continue;
-    const Eigen::Matrix3d Rc = refined.icp[c].T_target_source.topLeftCorner<3, 3>() / refined.icp[c].scale;
-    if (rotationAngle(Rbest, Rc) >= 10.0 * M_PI / 180.0 && refined.score[c].score < second) {
-      second = refined.score[c].score;
-      r.runnerUpScore = second;
-      r.runnerUpTransform = toOriginalUnits(refined.icp[c].T_target_source, refined.icp[c].scale, fs, ft);
-    }
-  }
-  r.secondBestScoreRatio = std::isfinite(second) && r.score > 0 ? second / r.score : 0.0;
-  if (std::isfinite(second) && second <= r.score * (1.0 + params.ambiguityTolerance)) {
-    r.ambiguous = true;
-    r.ambiguityReason = "another pose fits within " + num(100 * params.ambiguityTolerance) +
-                        "% (symmetric shape?)";
-  }
-  if (r.planar) {
-    r.ambiguous = true;
-    r.ambiguityReason = r.ambiguityReason.empty() ? std::string("planar cloud: mirrored poses fit equally well")
-                                                  : r.ambiguityReason + "; planar cloud";
-  }
+  setRunnerUp(r, refined, fs, ft, params);
   r.T_target_source = toOriginalUnits(Tn, icp.scale, fs, ft);
   r.scale = icp.scale * ft.radius / fs.radius;
   r.rotation = r.T_target_source.topLeftCorner<3, 3>() / r.scale;
@@ -445,63 +475,55 @@ RegistrationResult registerClouds(const PointCloud& sourceIn, const PointCloud& 
   r.bestCandidate = found.candidates[best].gridIndex;
   r.candidateRank = best;
   r.normalisedEnergy = found.candidates[best].energy;
-  const std::vector<Eigen::Vector3d> aligned = applied(rs.cloud.points, r.T_target_source);
-  r.hausdorff = hausdorffDistance(aligned, rt.cloud.points, 1.0, params.threads);
-  {  // trimmed to the overlaps (estimated or given), each direction its own
-    const KnnIndex alignedTree(aligned), targetSamples(rt.cloud.points);
-    r.hausdorffTrimmed = std::max(directedHausdorff(aligned, targetSamples, r.sourceOverlap, params.threads),
-                                  directedHausdorff(rt.cloud.points, alignedTree, r.targetOverlap, params.threads));
-    // overlap share: aligned source samples with a target sample within one sample spacing
-    const double l = spacingStats(rt.cloud.points, params.threads).mean;
-    std::vector<char> near(aligned.size());
-    parallelFor(aligned.size(), params.threads, [&](std::size_t i) {
-      double d2 = 0;
-      targetSamples.nearest(aligned[i], &d2);
-      near[i] = d2 <= l * l;
-    });
-    r.overlapShare = static_cast<double>(std::count(near.begin(), near.end(), 1)) / static_cast<double>(near.size());
-  }
+  measureAlignment(r, rs.cloud.points, rt.cloud.points, params.threads);
   stage("evaluate", t);
   stage("total", tTotal);
   return r;
 }
 
 std::string RegistrationResult::toJson() const {
-  std::ostringstream s;
-  auto vec = [&](const Eigen::Vector3d& v) { return "[" + num(v.x()) + ", " + num(v.y()) + ", " + num(v.z()) + "]"; };
-  auto matrix = [](const Eigen::Matrix4d& T) {
-    std::string m = "[";
-    for (int i = 0; i < 4; ++i) {
-      m += i ? ", [" : "[";
-      for (int j = 0; j < 4; ++j) m += (j ? ", " : "") + num(T(i, j));
-      m += "]";
-    }
-    return m + "]";
+  detail::JsonWriter j(12);
+  const auto vector = [&](const Eigen::Vector3d& v) {
+    j.beginArray();
+    for (int k = 0; k < 3; ++k) j.value(v[k]);
+    j.endArray();
   };
-  s << "{\n  \"transform\": " << matrix(T_target_source) << ",\n  \"scale\": " << num(scale) << ",\n  \"rotation\": [";
-  for (int i = 0; i < 3; ++i) s << (i ? ", " : "") << vec(rotation.row(i).transpose());
-  s << "],\n  \"rotation_angle_deg\": " << num(rotationAngleDeg) << ",\n  \"rotation_axis\": " << vec(rotationAxis)
-    << ",\n  \"translation\": " << vec(translation) << ",\n  \"rmse\": " << num(rmse)
-    << ",\n  \"hausdorff\": " << num(hausdorff) << ",\n  \"hausdorff_trimmed\": " << num(hausdorffTrimmed)
-    << ",\n  \"overlap_share\": " << num(overlapShare) << ",\n  \"source_overlap\": " << num(sourceOverlap)
-    << ",\n  \"target_overlap\": " << num(targetOverlap) << ",\n  \"score\": " << num(score)
-    << ",\n  \"runner_up_transform\": " << matrix(runnerUpTransform) << ",\n  \"runner_up_score\": "
-    << num(runnerUpScore)
-    << ",\n  \"normalised_energy\": " << num(normalisedEnergy) << ",\n  \"grid\": \"" << grid
-    << "\",\n  \"grid_size\": " << gridSize << ",\n  \"best_candidate\": " << bestCandidate
-    << ",\n  \"candidate_rank\": " << candidateRank << ",\n  \"icp_iterations\": " << icpIterations
-    << ",\n  \"icp_converged\": " << (icpConverged ? "true" : "false")
-    << ",\n  \"exact_evaluations\": " << exactEvaluations << ",\n  \"point_queries\": " << pointQueries
-    << ",\n  \"ambiguous\": " << (ambiguous ? "true" : "false") << ",\n  \"planar\": " << (planar ? "true" : "false")
-    << ",\n  \"ambiguity_reason\": \"" << ambiguityReason << "\",\n  \"second_best_score_ratio\": "
-    << num(secondBestScoreRatio) << ",\n  \"source_points\": " << sourcePoints << ",\n  \"target_points\": "
-    << targetPoints << ",\n  \"source_working_points\": " << sourceWorkingPoints
-    << ",\n  \"target_working_points\": " << targetWorkingPoints << ",\n  \"stray_samples_dropped\": " << strayDropped << ",\n  \"outliers_found\": " << outliersFound << ",\n  \"samples\": " << samples << ",\n  \"samples_requested\": " << samplesRequested << ",\n  \"source_radius\": " << num(sourceRadius)
-    << ",\n  \"target_radius\": " << num(targetRadius) << ",\n  \"timings\": {";
-  for (std::size_t i = 0; i < timings.size(); ++i)
-    s << (i ? ", " : "") << "\"" << timings[i].name << "_s\": " << num(timings[i].seconds);
-  s << "}\n}\n";
-  return s.str();
+  const auto matrix = [&](std::string_view name, const Eigen::Matrix4d& T) {
+    j.key(name).beginArray();
+    for (int i = 0; i < 4; ++i) {
+      j.beginArray();
+      for (int k = 0; k < 4; ++k) j.value(T(i, k));
+      j.endArray();
+    }
+    j.endArray();
+  };
+  j.beginObject(true);
+  matrix("transform", T_target_source);
+  j.member("scale", scale).key("rotation").beginArray();
+  for (int i = 0; i < 3; ++i) vector(rotation.row(i).transpose());
+  j.endArray().member("rotation_angle_deg", rotationAngleDeg).key("rotation_axis");
+  vector(rotationAxis);
+  j.key("translation");
+  vector(translation);
+  j.member("rmse", rmse).member("hausdorff", hausdorff).member("hausdorff_trimmed", hausdorffTrimmed);
+  j.member("overlap_share", overlapShare).member("source_overlap", sourceOverlap);
+  j.member("target_overlap", targetOverlap).member("score", score);
+  matrix("runner_up_transform", runnerUpTransform);
+  j.member("runner_up_score", runnerUpScore).member("normalised_energy", normalisedEnergy).member("grid", grid);
+  j.member("grid_size", gridSize).member("best_candidate", bestCandidate).member("candidate_rank", candidateRank);
+  j.member("icp_iterations", icpIterations).member("icp_converged", icpConverged);
+  j.member("exact_evaluations", exactEvaluations).member("point_queries", pointQueries);
+  j.member("ambiguous", ambiguous).member("planar", planar).member("ambiguity_reason", ambiguityReason);
+  j.member("second_best_score_ratio", secondBestScoreRatio);
+  j.member("source_points", sourcePoints).member("target_points", targetPoints);
+  j.member("source_working_points", sourceWorkingPoints).member("target_working_points", targetWorkingPoints);
+  j.member("stray_samples_dropped", strayDropped).member("outliers_found", outliersFound);
+  j.member("samples", samples).member("samples_requested", samplesRequested);
+  j.member("source_radius", sourceRadius).member("target_radius", targetRadius);
+  j.key("timings").beginObject();
+  for (const StageTime& t : timings) j.member(t.name + "_s", t.seconds);
+  j.endObject().endObject();
+  return j.str() + "\n";
 }
 
 }  // namespace iires::reg

@@ -10,7 +10,7 @@
 #include <stdexcept>
 #include <utility>
 
-#include "iires/parallel.hpp"
+#include "iires/detail/parallel.hpp"
 #include "iires/register/hausdorff.hpp"
 #include "iires/register/rotation_grid.hpp"
 

@@ -17,7 +17,7 @@
 #include "iires/resample.hpp"
 #include "iires/io.hpp"
 #include "iires/knn.hpp"
-#include "iires/parallel.hpp"
+#include "iires/detail/parallel.hpp"
 #include "iires/types.hpp"
 #include "iires/validate.hpp"
 #include "params.hpp"

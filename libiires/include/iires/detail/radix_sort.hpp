@@ -10,7 +10,7 @@
 #include <utility>
 #include <vector>
 
-#include "iires/parallel.hpp"
+#include "iires/detail/parallel.hpp"
 
 namespace iires {
 

@@ -1,0 +1,81 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#include "voxel_thin.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+#include "iires/detail/parallel.hpp"
+#include "iires/detail/radix_sort.hpp"
+
+namespace iires::detail {
+
+std::vector<std::uint32_t> voxelThin(const std::vector<Eigen::Vector3d>& pts, const std::vector<Eigen::Vector3d>& normals,
+                                     std::size_t target, double cell, std::uint64_t seed, int threads) {
+  Eigen::Vector3d lo = pts[0], hi = pts[0];
+  for (const auto& p : pts) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
+  // A seed shifts the grid by a fraction of a cell in each axis (seed 0: no shift).
+  Eigen::Vector3d shift = Eigen::Vector3d::Zero();
+  for (int a = 0; seed && a < 3; ++a) {
+    std::uint64_t z = seed + 0x9e3779b97f4a7c15ull * static_cast<std::uint64_t>(a + 1);
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+    shift[a] = static_cast<double>((z ^ (z >> 31)) >> 11) * 0x1.0p-53;
+  }
+  const std::size_t n = pts.size();
+  auto normalClass = [&](std::size_t i) -> std::uint64_t {
+    if (normals.empty()) return 0;
+    Eigen::Index axis;
+    normals[i].cwiseAbs().maxCoeff(&axis);
+    return static_cast<std::uint64_t>(2 * axis + (normals[i][axis] < 0 ? 1 : 0));
+  };
+  // Cell key of every point (and its squared distance to the cell centre), computed in parallel; cells are
+  // then found by radix-sorting the keys. Keys number the grid's cells densely (few radix passes) unless the
+  // grid is too large for that, then they mix the three cell coordinates.
+  std::vector<KeyedIndex> byCell(n);  // (cell key, point), sorted by key; equal keys keep index order
+  std::vector<double> toCentre(n);
+  double sortedFor = 0;  // the cell size byCell is sorted for
+  auto sortCells = [&](double size) {
+    if (size == sortedFor) return;
+    sortedFor = size;
+    const Eigen::Vector3d dims = (hi - lo) / size + Eigen::Vector3d::Constant(2.0);
+    const bool dense = dims.prod() < 0x1.0p58;
+    const auto ny = static_cast<std::uint64_t>(dims.y()), nz = static_cast<std::uint64_t>(dims.z());
+    parallelFor(n, threads, [&](std::size_t i) {
+      const Eigen::Vector3d q = (pts[i] - lo) / size + shift;
+      const auto ix = static_cast<std::uint64_t>(q.x()), iy = static_cast<std::uint64_t>(q.y()),
+                 iz = static_cast<std::uint64_t>(q.z());
+      const std::uint64_t cellKey = dense ? (ix * ny + iy) * nz + iz : (ix << 42) ^ (iy << 21) ^ iz;
+      byCell[i] = {cellKey * 8 + normalClass(i), static_cast<std::uint32_t>(i)};
+      toCentre[i] = (q - Eigen::Vector3d(ix + 0.5, iy + 0.5, iz + 0.5)).squaredNorm();
+    });
+    radixSort(byCell, threads);
+  };
+  auto occupied = [&](double size) {
+    sortCells(size);
+    std::size_t cells = 0;
+    for (std::size_t r = 0; r < n; ++r) cells += r == 0 || byCell[r].first != byCell[r - 1].first;
+    return cells;
+  };
+  // Occupied cells scale like cell⁻² on a surface.
+  for (int step = 0; step < 8; ++step) {
+    const double ratio = static_cast<double>(occupied(cell)) / static_cast<double>(target);
+    if (ratio > 0.85 && ratio < 1.2) break;
+    cell *= std::sqrt(std::clamp(ratio, 0.25, 4.0));
+  }
+  sortCells(cell);  // (already sorted when the loop stopped on it)
+  // Per cell the point nearest its centre (ties: the lowest index, the first of its run), returned in index
+  // order.
+  std::vector<char> picked(n, 0);
+  for (std::size_t r = 0, best = 0; r < n; ++r) {
+    const std::uint32_t i = byCell[r].second;
+    if (r == 0 || byCell[r].first != byCell[r - 1].first || toCentre[i] < toCentre[best]) best = i;
+    if (r + 1 == n || byCell[r + 1].first != byCell[r].first) picked[best] = 1;
+  }
+  std::vector<std::uint32_t> chosen;
+  for (std::size_t i = 0; i < n; ++i)
+    if (picked[i]) chosen.push_back(static_cast<std::uint32_t>(i));
+  return chosen;
+}
+
+}  // namespace iires::detail

@@ -1,0 +1,18 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#pragma once
+
+#include <Eigen/Core>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace iires::detail {
+
+/// Voxel thinning (DESIGN §3.5): cells sized by secant steps on the cell size (from @p cell) so that about
+/// @p target (−15 % to +20 %) are occupied; per cell the point nearest its centre, indices ascending. With
+/// normals, the normal's dominant signed axis is part of the cell key, so facing sheets of a thin part that
+/// share a cell (a gap narrower than the cell) each keep a point.
+std::vector<std::uint32_t> voxelThin(const std::vector<Eigen::Vector3d>& pts, const std::vector<Eigen::Vector3d>& normals,
+                                     std::size_t target, double cell, std::uint64_t seed, int threads);
+
+}  // namespace iires::detail
