@@ -23,7 +23,9 @@
 //                  [--source-count N] [--target-count N] [--samples M] [--so3-count K] [--thin F] [--icp-candidates C]
 //                  [--resample preprocess=0,intrinsic=0,maxPasses=4,...]
 //                  [--search coarsePoints=96,coarseKeep=48,fullKeep=48,keep=12,minSeparationDeg=25,refineLevels=0,
-//                            screenIterations=8,searchOverlaps=1:0.8:0.6,searchOverlapExponent=2,fitOverlapExponent=2.5]
+//                            screenIterations=8,searchOverlaps=1:0.8:0.6,searchOverlapExponent=2,fitOverlapExponent=2.5,
+//                            translationRadius=0.8,translationStep=0.4,translationPoints=48,translationRefineLevels=2,
+//                            translationScales=1]
 //                  [--verbose]
 #include <Eigen/Geometry>
 #include <algorithm>
@@ -364,10 +366,11 @@ int main(int argc, char** argv) {
       for (const auto& kv : split(next())) {
         const auto eq = kv.find('=');
         const std::string key = kv.substr(0, eq);
-        if (key == "searchOverlaps") {  // levels separated by ':'
-          searchOverlaps.clear();
+        if (key == "searchOverlaps" || key == "translationScales") {  // values separated by ':'
+          std::vector<double>& list = key == "searchOverlaps" ? searchOverlaps : searchParams.translationScales;
+          list.clear();
           std::stringstream ss(kv.substr(eq + 1));
-          for (std::string f; std::getline(ss, f, ':');) searchOverlaps.push_back(std::stod(f));
+          for (std::string f; std::getline(ss, f, ':');) list.push_back(std::stod(f));
           continue;
         }
         const double v = std::stod(kv.substr(eq + 1));
@@ -380,6 +383,10 @@ int main(int argc, char** argv) {
         else if (key == "searchOverlapExponent") searchOverlapExponent = v;
         else if (key == "fitOverlapExponent") fitOverlapExponent = v;
         else if (key == "keep") searchParams.keep = static_cast<std::size_t>(v);
+        else if (key == "translationRadius") searchParams.translationRadius = v;
+        else if (key == "translationStep") searchParams.translationStep = v;
+        else if (key == "translationPoints") searchParams.translationPoints = static_cast<std::size_t>(v);
+        else if (key == "translationRefineLevels") searchParams.translationRefineLevels = static_cast<int>(v);
         else throw std::invalid_argument("unknown search key " + key);
       }
     }

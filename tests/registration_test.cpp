@@ -199,6 +199,19 @@ TEST(Registration, PartialScansWithoutAnOverlapHint) {
   EXPECT_LT(b.targetOverlap, 0.97);
 }
 
+TEST(Registration, BothCutScansWithOffsetFrames) {
+  // Each cloud misses a different fifth (cuts by two planes), so their centroids move apart: at the true
+  // rotation the normalised clouds are offset by a third of their RMS radius and the rotation-only energy
+  // ranks wrong rotations first (this pair landed 93° off). The search's translation step recentres each
+  // surviving rotation on the part the clouds share.
+  const PointCloud full = scan("joint", 6000, 204), target0 = scan("joint", 20000, 304);
+  const Eigen::Matrix4d pose = similarity(1.7, 95, {1.61, 0.6, 1.1}, Eigen::Vector3d(1, -2, 0.5));
+  const PointCloud source = moved(cutByPlane(full, Eigen::Vector3d(0.92, 0.57, -0.63), 0.2), pose);
+  const PointCloud target = cutByPlane(target0, Eigen::Vector3d(1.49, -1.31, -0.05), 0.2);
+  const auto r = registerClouds(source, target, RegistrationParams{});
+  expectRecovered(r, pose.inverse(), source, target, "both cut, offset frames");
+}
+
 TEST(Registration, IdenticalInputsGiveTheIdentity) {
   // The same cloud twice (larger than maxInputPerSample·M, so it is thinned) must come back as the identity
   // within ICP's tolerance: both clouds are thinned and resampled alike.

@@ -77,6 +77,13 @@ double penalisedQuantile(std::vector<double>& d2, const std::vector<TrimLevel>& 
 double boundedPartialHausdorff(const std::vector<Eigen::Vector3d>& from, const Eigen::Matrix3d& rotation,
                                const KnnIndex& to, const std::vector<TrimLevel>& levels, double bound,
                                std::vector<double>& scratch, std::size_t* visited, std::size_t* level) {
+  return boundedPartialHausdorff(from, rotation, Eigen::Vector3d::Zero(), to, levels, bound, scratch, visited, level);
+}
+
+double boundedPartialHausdorff(const std::vector<Eigen::Vector3d>& from, const Eigen::Matrix3d& linear,
+                               const Eigen::Vector3d& translation, const KnnIndex& to,
+                               const std::vector<TrimLevel>& levels, double bound, std::vector<double>& scratch,
+                               std::size_t* visited, std::size_t* level) {
   constexpr std::size_t kMaxLevels = 16;
   if (levels.empty() || levels.size() > kMaxLevels)
     throw std::invalid_argument("boundedPartialHausdorff: between 1 and 16 levels");
@@ -94,7 +101,7 @@ double boundedPartialHausdorff(const std::vector<Eigen::Vector3d>& from, const E
   std::size_t i = 0;
   for (; i < from.size(); ++i) {
     double d2 = 0;
-    to.nearest(rotation * from[i], &d2);
+    to.nearest(linear * from[i] + translation, &d2);
     for (std::size_t j = 0; j < levels.size(); ++j)
       if (d2 > limit2[j] && over[j]++ == levels[j].outliers) --alive;
     if (alive == 0) {

@@ -205,7 +205,8 @@ Refined refineCandidates(const std::vector<Eigen::Vector3d>& ns, const std::vect
   for (std::size_t c = 0; c < nc; ++c) {
     if (params.progress) params.progress("icp", static_cast<double>(c) / static_cast<double>(nc + 1));
     Eigen::Matrix4d init = Eigen::Matrix4d::Identity();
-    init.topLeftCorner<3, 3>() = found.candidates[c].rotation;
+    init.topLeftCorner<3, 3>() = found.candidates[c].scale * found.candidates[c].rotation;
+    init.topRightCorner<3, 1>() = found.candidates[c].translation;
     out.icp[c] = similarityIcp(ns, nt, targetTree, init, screen);
     out.score[c] = scorePose(ns, nt, targetTree, out.icp[c].T_target_source, params);
   }

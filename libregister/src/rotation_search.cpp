@@ -40,6 +40,12 @@ std::vector<Eigen::Vector3d> shuffled(std::vector<Eigen::Vector3d> points, std::
   return points;
 }
 
+/// The part of a pose besides the rotation: S is mapped to scale·R·S + translation.
+struct Offset {
+  Eigen::Vector3d translation = Eigen::Vector3d::Zero();
+  double scale = 1.0;
+};
+
 struct Scored {
   double energy;
   std::size_t index;
@@ -66,47 +72,111 @@ void RotationSearchParams::validate() const {
   if (!(minSeparationDeg >= 0.0)) throw std::invalid_argument("rotation search: minSeparationDeg must be >= 0");
   if (refineLevels < 0) throw std::invalid_argument("rotation search: refineLevels must be >= 0");
   if (!(refineStepDeg > 0.0)) throw std::invalid_argument("rotation search: refineStepDeg must be positive");
+  if (!(translationRadius >= 0.0)) throw std::invalid_argument("rotation search: translationRadius must be >= 0");
+  if (!(translationStep > 0.0)) throw std::invalid_argument("rotation search: translationStep must be positive");
+  if (translationScales.empty()) throw std::invalid_argument("rotation search: translationScales is empty");
+  for (double scale : translationScales)
+    if (!(scale > 0.0)) throw std::invalid_argument("rotation search: translationScales must be positive");
+  if (translationPoints < 8) throw std::invalid_argument("rotation search: translationPoints must be at least 8");
+  if (translationRefineLevels < 0)
+    throw std::invalid_argument("rotation search: translationRefineLevels must be >= 0");
 }
 
 struct RotationSearch::Impl {
   RotationSearchParams params;
   std::vector<Eigen::Vector3d> source, target;              // shuffled copies (visit order)
   std::vector<Eigen::Vector3d> sourceCoarse, targetCoarse;  // their first coarsePoints
+  std::vector<Eigen::Vector3d> sourceShift, targetShift;    // their first translationPoints
   std::unique_ptr<KnnIndex> sourceTree, targetTree;
-  std::vector<TrimLevel> sourceLevels, targetLevels, sourceCoarseLevels, targetCoarseLevels;
+  std::vector<TrimLevel> sourceLevels, targetLevels, sourceCoarseLevels, targetCoarseLevels, sourceShiftLevels,
+      targetShiftLevels;
+  std::vector<Eigen::Vector3d> lattice;  // translation lattice, nearest to the origin first (origin excluded)
   mutable std::atomic<std::size_t> queries{0};
 
-  // E(R) = max(h(R·S → T), h(Rᵀ·T → S)), eq. (11); Rᵀ·T → S has the same distances as T → R·S.
-  // fs, ft (optional) receive the overlap level each direction chose.
+  // E(R, t, s) = max(h(s·R·S + t → T), s·h(Rᵀ(T − t)/s → S)), eq. (11) with a translation and a scale;
+  // the second term has the same distances as T → s·R·S + t. fs, ft (optional) receive the overlap level
+  // each direction chose.
   double eval(const std::vector<Eigen::Vector3d>& s, const std::vector<TrimLevel>& sl,
               const std::vector<Eigen::Vector3d>& t, const std::vector<TrimLevel>& tl, const Eigen::Matrix3d& r,
-              double bound, double* fs = nullptr, double* ft = nullptr) const {
+              const Offset& o, double bound, double* fs = nullptr, double* ft = nullptr) const {
     thread_local std::vector<double> scratch;
     std::size_t visited = 0, visited2 = 0, ls = 0, lt = 0;
-    const double a = boundedPartialHausdorff(s, r, *targetTree, sl, bound, scratch, &visited, &ls);
+    const double a =
+        boundedPartialHausdorff(s, o.scale * r, o.translation, *targetTree, sl, bound, scratch, &visited, &ls);
     if (!std::isfinite(a)) {
       queries.fetch_add(visited, std::memory_order_relaxed);
       return kInf;
     }
-    const double b = boundedPartialHausdorff(t, r.transpose(), *sourceTree, tl, bound, scratch, &visited2, &lt);
+    const Eigen::Matrix3d inverse = r.transpose() / o.scale;
+    const double b = o.scale * boundedPartialHausdorff(t, inverse, -(inverse * o.translation), *sourceTree, tl,
+                                                       bound / o.scale, scratch, &visited2, &lt);
     queries.fetch_add(visited + visited2, std::memory_order_relaxed);
     if (fs && std::isfinite(b)) *fs = sl[ls].overlap;
     if (ft && std::isfinite(b)) *ft = tl[lt].overlap;
     return std::max(a, b);
   }
-  double full(const Eigen::Matrix3d& r, double bound, double* fs = nullptr, double* ft = nullptr) const {
-    return eval(source, sourceLevels, target, targetLevels, r, bound, fs, ft);
+  double full(const Eigen::Matrix3d& r, const Offset& o, double bound, double* fs = nullptr,
+              double* ft = nullptr) const {
+    return eval(source, sourceLevels, target, targetLevels, r, o, bound, fs, ft);
   }
-  double coarse(const Eigen::Matrix3d& r, double bound) const {
-    return eval(sourceCoarse, sourceCoarseLevels, targetCoarse, targetCoarseLevels, r, bound);
+  double coarse(const Eigen::Matrix3d& r, const Offset& o, double bound) const {
+    return eval(sourceCoarse, sourceCoarseLevels, targetCoarse, targetCoarseLevels, r, o, bound);
+  }
+  double offsetEnergy(const Eigen::Matrix3d& r, const Offset& o, double bound) const {
+    return eval(sourceShift, sourceShiftLevels, targetShift, targetShiftLevels, r, o, bound);
   }
 
-  /// The best @p keepCount of @p order (indices into @p rotations) by energy @p fn, with early exit against
-  /// the keepCount-th best so far, block by block (deterministic for any thread count).
+  /// The translation and scale minimising E(R, t, s) on the translationPoints subsets: for each scale of
+  /// translationScales the lattice (early exit against the best so far), then at the best scale a pattern
+  /// search of ±h along each axis, h halved translationRefineLevels times. Serial.
+  Offset bestOffset(const Eigen::Matrix3d& r, double* energy) const {
+    Offset best;
+    double e = offsetEnergy(r, best, kInf);
+    for (double scale : params.translationScales) {
+      Offset o;
+      o.scale = scale;
+      auto consider = [&](const Offset& candidate) {
+        const double v = offsetEnergy(r, candidate, e);
+        if (v < e) {
+          e = v;
+          best = candidate;
+        }
+      };
+      if (scale != 1.0) consider(o);  // the origin at scale 1 is the starting point
+      for (const auto& t : lattice) {
+        o.translation = t;
+        consider(o);
+      }
+    }
+    double h = params.translationStep;
+    for (int level = 0; level < params.translationRefineLevels && !lattice.empty(); ++level) {
+      h *= 0.5;
+      for (int moves = 0; moves < 8; ++moves) {
+        Offset next = best;
+        for (int axis = 0; axis < 3; ++axis)
+          for (double sign : {-1.0, 1.0}) {
+            Offset o = best;
+            o.translation += sign * h * Eigen::Vector3d::Unit(axis);
+            const double v = offsetEnergy(r, o, e);
+            if (v < e) {
+              e = v;
+              next = o;
+            }
+          }
+        if (next.translation == best.translation) break;
+        best = next;
+      }
+    }
+    *energy = e;
+    return best;
+  }
+
+  /// The best @p keepCount of @p order (candidate indices) by energy @p fn(index, bound), with early exit
+  /// against the keepCount-th best so far, block by block (deterministic for any thread count).
   /// @p onBlock(done) after each block (progress).
   template <typename Fn, typename OnBlock>
-  std::vector<Scored> bestOf(const std::vector<Eigen::Matrix3d>& rotations, const std::vector<std::size_t>& order,
-                             std::size_t keepCount, Fn&& fn, std::size_t* evaluations, OnBlock&& onBlock) const {
+  std::vector<Scored> bestOf(const std::vector<std::size_t>& order, std::size_t keepCount, Fn&& fn,
+                             std::size_t* evaluations, OnBlock&& onBlock) const {
     std::vector<Scored> top;
     double bound = kInf;
     std::vector<double> e(std::max(kBlock, keepCount));
@@ -114,7 +184,7 @@ struct RotationSearch::Impl {
     for (std::size_t start = 0, block = std::min(keepCount, kBlock); start < order.size();
          start += block, block = kBlock) {
       const std::size_t count = std::min(block, order.size() - start);
-      parallelEach(count, params.threads, [&](std::size_t j) { e[j] = fn(rotations[order[start + j]], bound); });
+      parallelEach(count, params.threads, [&](std::size_t j) { e[j] = fn(order[start + j], bound); });
       if (evaluations) *evaluations += count;
       for (std::size_t j = 0; j < count; ++j)
         if (std::isfinite(e[j])) top.push_back({e[j], order[start + j]});
@@ -139,6 +209,8 @@ RotationSearch::RotationSearch(const std::vector<Eigen::Vector3d>& source, const
   m.target = shuffled(target, params.seed * 2 + 2);
   m.sourceCoarse.assign(m.source.begin(), m.source.begin() + std::min(params.coarsePoints, m.source.size()));
   m.targetCoarse.assign(m.target.begin(), m.target.begin() + std::min(params.coarsePoints, m.target.size()));
+  m.sourceShift.assign(m.source.begin(), m.source.begin() + std::min(params.translationPoints, m.source.size()));
+  m.targetShift.assign(m.target.begin(), m.target.begin() + std::min(params.translationPoints, m.target.size()));
   // Visit the points farthest from the centroid first: a wrong rotation moves them most, so early exits
   // come sooner. (Stable sort: ties keep the seeded order.)
   auto outerFirst = [](std::vector<Eigen::Vector3d>& p) {
@@ -148,6 +220,8 @@ RotationSearch::RotationSearch(const std::vector<Eigen::Vector3d>& source, const
   };
   outerFirst(m.sourceCoarse);
   outerFirst(m.targetCoarse);
+  outerFirst(m.sourceShift);
+  outerFirst(m.targetShift);
   outerFirst(m.source);
   outerFirst(m.target);
   m.sourceTree = std::make_unique<KnnIndex>(m.source);
@@ -156,17 +230,35 @@ RotationSearch::RotationSearch(const std::vector<Eigen::Vector3d>& source, const
   m.targetLevels = trimLevels(m.target.size(), params.overlaps, params.overlapExponent);
   m.sourceCoarseLevels = trimLevels(m.sourceCoarse.size(), params.overlaps, params.overlapExponent);
   m.targetCoarseLevels = trimLevels(m.targetCoarse.size(), params.overlaps, params.overlapExponent);
+  m.sourceShiftLevels = trimLevels(m.sourceShift.size(), params.overlaps, params.overlapExponent);
+  m.targetShiftLevels = trimLevels(m.targetShift.size(), params.overlaps, params.overlapExponent);
+  // Lattice points k·step with 0 < |k·step| ≤ radius, nearest first (ties in lattice order: deterministic).
+  const int reach = static_cast<int>(std::floor(params.translationRadius / params.translationStep + 1e-9));
+  for (int x = -reach; x <= reach; ++x)
+    for (int y = -reach; y <= reach; ++y)
+      for (int z = -reach; z <= reach; ++z) {
+        const Eigen::Vector3d t = params.translationStep * Eigen::Vector3d(x, y, z);
+        if ((x || y || z) && t.norm() <= params.translationRadius + 1e-9) m.lattice.push_back(t);
+      }
+  std::stable_sort(m.lattice.begin(), m.lattice.end(),
+                   [](const Eigen::Vector3d& a, const Eigen::Vector3d& b) { return a.norm() < b.norm() - 1e-12; });
 }
 
 RotationSearch::~RotationSearch() = default;
 
 double RotationSearch::energy(const Eigen::Matrix3d& rotation, double bound, double* sourceOverlap,
                               double* targetOverlap) const {
-  return impl_->full(rotation, bound, sourceOverlap, targetOverlap);
+  return impl_->full(rotation, Offset{}, bound, sourceOverlap, targetOverlap);
+}
+
+double RotationSearch::energy(const Eigen::Matrix3d& rotation, const Eigen::Vector3d& translation, double scale,
+                              double bound, double* sourceOverlap, double* targetOverlap) const {
+  if (!(scale > 0.0)) throw std::invalid_argument("rotation search: the scale of a pose must be positive");
+  return impl_->full(rotation, Offset{translation, scale}, bound, sourceOverlap, targetOverlap);
 }
 
 double RotationSearch::coarseEnergy(const Eigen::Matrix3d& rotation, double bound) const {
-  return impl_->coarse(rotation, bound);
+  return impl_->coarse(rotation, Offset{}, bound);
 }
 
 RotationSearchResult RotationSearch::search(const std::vector<Eigen::Matrix3d>& grid) const {
@@ -187,14 +279,25 @@ RotationSearchResult RotationSearch::search(const std::vector<Eigen::Matrix3d>& 
   };
   report(0.0);
   const auto coarse = m.bestOf(
-      grid, all, p.coarseKeep, [&](const Eigen::Matrix3d& r, double b) { return m.coarse(r, b); }, nullptr,
+      all, p.coarseKeep, [&](std::size_t i, double b) { return m.coarse(grid[i], Offset{}, b); }, nullptr,
       [&](std::size_t done) { report(0.9 * static_cast<double>(done) / static_cast<double>(grid.size())); });
 
-  // Exact energy of the survivors, best coarse first (so the bound tightens early).
+  // Translation (and scale) search around each survivor (one survivor per task: deterministic), then the
+  // survivors ordered by that energy so that the exact pass's bound tightens early.
+  std::vector<Scored> shifted(coarse.size());
+  std::vector<Offset> offsetOf(grid.size());
+  parallelEach(coarse.size(), p.threads, [&](std::size_t j) {
+    double e = kInf;
+    offsetOf[coarse[j].index] = m.bestOffset(grid[coarse[j].index], &e);
+    shifted[j] = {e, coarse[j].index};
+  });
+  std::sort(shifted.begin(), shifted.end());
+
+  // Exact energy of the survivors at their offset.
   std::vector<std::size_t> survivors;
-  for (const auto& s : coarse) survivors.push_back(s.index);
-  const auto exact = m.bestOf(grid, survivors, p.fullKeep,
-                              [&](const Eigen::Matrix3d& r, double b) { return m.full(r, b); },
+  for (const auto& s : shifted) survivors.push_back(s.index);
+  const auto exact = m.bestOf(survivors, p.fullKeep,
+                              [&](std::size_t i, double b) { return m.full(grid[i], offsetOf[i], b); },
                               &result.exactEvaluations, [](std::size_t) {});
   report(0.95);
 
@@ -211,6 +314,8 @@ RotationSearchResult RotationSearch::search(const std::vector<Eigen::Matrix3d>& 
     c.gridRotation = grid[s.index];
     c.gridEnergy = s.energy;
     c.rotation = c.gridRotation;
+    c.translation = offsetOf[s.index].translation;
+    c.scale = offsetOf[s.index].scale;
     c.energy = s.energy;
     result.candidates.push_back(c);
   }
@@ -227,7 +332,7 @@ RotationSearchResult RotationSearch::search(const std::vector<Eigen::Matrix3d>& 
     for (int level = 0; level < p.refineLevels && moves < 64;) {
       const Eigen::Matrix3d current = c.rotation;
       parallelEach(steps.size(), p.threads, [&](std::size_t j) {
-        e[j] = m.full(expMap(h * steps[j].normalized()) * current, c.energy);
+        e[j] = m.full(expMap(h * steps[j].normalized()) * current, Offset{c.translation, c.scale}, c.energy);
       });
       result.exactEvaluations += steps.size();
       std::size_t best = steps.size();
@@ -243,7 +348,8 @@ RotationSearchResult RotationSearch::search(const std::vector<Eigen::Matrix3d>& 
       c.energy = e[best];
     }
   }
-  for (auto& c : result.candidates) m.full(c.rotation, kInf, &c.sourceOverlap, &c.targetOverlap);
+  for (auto& c : result.candidates)
+    m.full(c.rotation, Offset{c.translation, c.scale}, kInf, &c.sourceOverlap, &c.targetOverlap);
   std::stable_sort(result.candidates.begin(), result.candidates.end(),
                    [](const RotationCandidate& a, const RotationCandidate& b) { return a.energy < b.energy; });
   report(1.0);

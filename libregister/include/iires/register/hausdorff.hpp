@@ -81,4 +81,11 @@ double boundedPartialHausdorff(const std::vector<Eigen::Vector3d>& from, const E
                                std::vector<double>& scratch, std::size_t* visited = nullptr,
                                std::size_t* level = nullptr);
 
+/// @brief boundedPartialHausdorff() of the affinely mapped set L·A + @p translation to B (L = @p linear, e.g. a
+/// rotation times a scale): the search's energy at a pose with a translation.
+double boundedPartialHausdorff(const std::vector<Eigen::Vector3d>& from, const Eigen::Matrix3d& linear,
+                               const Eigen::Vector3d& translation, const KnnIndex& to,
+                               const std::vector<TrimLevel>& levels, double bound, std::vector<double>& scratch,
+                               std::size_t* visited = nullptr, std::size_t* level = nullptr);
+
 }  // namespace iires::reg

@@ -3,7 +3,8 @@
 /// @file registration.hpp
 /// @brief Scale-free registration without features (paper §5, eq. 11–12; DESIGN §4): resample both clouds to
 /// M isotropic points → normalise (centroid, unit RMS radius) → rotation-grid search for the minimum
-/// (trimmed) Hausdorff energy → ICP with scale on the best few → a similarity T_target_source in original units.
+/// (trimmed) Hausdorff energy, each surviving rotation recentred by a translation search → ICP with scale on
+/// the best few → a similarity T_target_source in original units.
 
 #include <Eigen/Core>
 #include <cstddef>
