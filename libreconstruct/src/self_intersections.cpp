@@ -61,7 +61,7 @@ bool facesIntersect(const Eigen::Vector3i& f, const Eigen::Vector3i& g, const st
 /// floating point with a margin (kMargin radians) no rounding can cross; fans that fail it get the exact tests.
 std::vector<char> separatedFans(const TriangleMesh& mesh) {
   constexpr double kMargin = 1e-9, kMinLean = 0.5;  // cos 60°
-  const std::size_t nv = mesh.vertices.size(), nf = mesh.triangles.size();
+  const std::size_t nv = mesh.vertices.size();
   const detail::VertexFaces vf = detail::vertexFaces(mesh);
   const std::vector<std::uint32_t>&start = vf.start, &incident = vf.incident;
   std::vector<char> good(nv, 0);
