@@ -15,6 +15,7 @@
 #include <stdexcept>
 #include <tuple>
 
+#include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 
 #include "iires/knn.hpp"
@@ -35,7 +36,10 @@ constexpr double kOffSurfaceLimit = 0.6;  // MlsSurface::project's offSurface be
 // lets a sample sit 0.6 kernel widths (≈ 2 input spacings) from the nearest input point, which at an open
 // boundary of a sparse input is several output spacings past the data (upsampling).
 constexpr double kBeyondLimit = 0.05;
-constexpr double kCarryShare = 0.05;     // edits touching more than this share of samples restart the relaxation
+constexpr double kCarryShare = 0.05;
+constexpr std::size_t kWiderQuery = 3;   // candidates queried for a sample the rule refuses some of
+constexpr double kCellSheetHeight = 1.25;
+constexpr double kLayerGapSpacings = 1.5;  // voxel thinning: an empty band this many input spacings wide splits a cell  // voxel cells: another sheet lies this × the sheet height off a plane     // edits touching more than this share of samples restart the relaxation
 
 /// The working sample set S.
 struct Samples {
@@ -88,7 +92,8 @@ struct Edge {
 /// normals, the normal's dominant signed axis is part of the cell key, so facing sheets of a thin part that
 /// share a cell (a gap narrower than the cell) each keep a point.
 std::vector<std::uint32_t> voxelThin(const std::vector<Eigen::Vector3d>& pts, const std::vector<Eigen::Vector3d>& normals,
-                                     std::size_t target, double cell, std::uint64_t seed, int threads) {
+                                     std::size_t target, double cell, std::uint64_t seed, int threads,
+                                     double sheetHeight = 0, bool keepLayers = false) {
   Eigen::Vector3d lo = pts[0], hi = pts[0];
   for (const auto& p : pts) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
   // A seed shifts the grid by a fraction of a cell in each axis (seed 0: no shift).
@@ -141,13 +146,64 @@ std::vector<std::uint32_t> voxelThin(const std::vector<Eigen::Vector3d>& pts, co
     cell *= std::sqrt(std::clamp(ratio, 0.25, 4.0));
   }
   sortCells(cell);  // (already sorted when the loop stopped on it)
+  // A cell whose points form two layers (a gap wider than layerGap between their heights along the cell's
+  // thinnest direction, with at least two points on each side) holds two sheets closer than the cell is wide.
+  double layerGap = 0;
+  if (keepLayers) {
+    // The input spacing (mean nearest-neighbour distance ≈ half the grid spacing of a random sampling), from
+    // the occupied cells: each holds about cell² of surface.
+    std::size_t cells = 0;
+    for (std::size_t r = 0; r < n; ++r) cells += r == 0 || byCell[r].first != byCell[r - 1].first;
+    layerGap = kLayerGapSpacings * 0.5 * cell / std::sqrt(static_cast<double>(n) / static_cast<double>(cells));
+  }
+  std::vector<double> heights;
+  auto layered = [&](std::size_t begin, std::size_t end) {
+    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+    for (std::size_t x = begin; x < end; ++x) mean += pts[byCell[x].second];
+    mean /= static_cast<double>(end - begin);
+    Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+    for (std::size_t x = begin; x < end; ++x) {
+      const Eigen::Vector3d d = pts[byCell[x].second] - mean;
+      cov.noalias() += d * d.transpose();
+    }
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
+    eig.computeDirect(cov);
+    const Eigen::Vector3d axis = eig.eigenvectors().col(0);
+    heights.clear();
+    for (std::size_t x = begin; x < end; ++x) heights.push_back(axis.dot(pts[byCell[x].second] - mean));
+    std::sort(heights.begin(), heights.end());
+    for (std::size_t x = 2; x + 1 < heights.size(); ++x)
+      if (heights[x] - heights[x - 1] > layerGap) return true;
+    return false;
+  };
   // Per cell the point nearest its centre (ties: the lowest index, the first of its run), returned in index
-  // order.
+  // order. With a sheet height, per cell one point per sheet: the points off the planes of the cell's points
+  // picked so far by more than it (another sheet a gap away, e.g. the same way facing) are picked too, nearest
+  // the centre first.
   std::vector<char> picked(n, 0);
-  for (std::size_t r = 0, best = 0; r < n; ++r) {
+  std::vector<std::uint32_t> run, reps;
+  for (std::size_t r = 0, best = 0, first = 0; r < n; ++r) {
     const std::uint32_t i = byCell[r].second;
-    if (r == 0 || byCell[r].first != byCell[r - 1].first || toCentre[i] < toCentre[best]) best = i;
-    if (r + 1 == n || byCell[r + 1].first != byCell[r].first) picked[best] = 1;
+    if (r == 0 || byCell[r].first != byCell[r - 1].first) first = r;
+    if (r == first || toCentre[i] < toCentre[best]) best = i;
+    if (r + 1 < n && byCell[r + 1].first == byCell[r].first) continue;
+    picked[best] = 1;
+    if (layerGap > 0 && r + 1 - first >= 4 && layered(first, r + 1)) {
+      for (std::size_t x = first; x <= r; ++x) picked[byCell[x].second] = 1;  // two sheets: not thinned
+      continue;
+    }
+    if (sheetHeight <= 0 || normals.empty() || r == first) continue;
+    run.clear();
+    for (std::size_t x = first; x <= r; ++x) run.push_back(byCell[x].second);
+    std::sort(run.begin(), run.end(), [&](std::uint32_t a, std::uint32_t b) {
+      return toCentre[a] != toCentre[b] ? toCentre[a] < toCentre[b] : a < b;
+    });
+    reps.assign(1, static_cast<std::uint32_t>(best));
+    for (std::uint32_t j : run)
+      if (std::all_of(reps.begin(), reps.end(), [&](std::uint32_t q) {
+            return std::abs(normals[q].dot(pts[j] - pts[q])) > sheetHeight;
+          }))
+        reps.push_back(j), picked[j] = 1;
   }
   std::vector<std::uint32_t> chosen;
   for (std::size_t i = 0; i < n; ++i)
@@ -306,6 +362,17 @@ Rings Resampler::computeRings(const Samples& s, double cellRadius, Relaxation* r
     const auto candidates = r.candidates.begin() + static_cast<long>(i * stride);
     if (requery || (stale && (*stale)[i])) {
       index->knn(s.pos[i], stride, idx, d2);
+      // Samples the rule refuses (another sheet a gap away, narrower than the spacing) take the places of
+      // neighbours: then a wider query, of which the first stride accepted ones are kept.
+      std::size_t refused = 0;
+      for (const std::uint32_t j : idx) refused += j != i && !rule_.accept(i, j);
+      if (refused > 0) {
+        index->knn(s.pos[i], kWiderQuery * stride, idx, d2);
+        std::size_t w = 0;
+        for (std::size_t c = 0; c < idx.size() && w < stride; ++c)
+          if (idx[c] == i || rule_.accept(i, idx[c])) idx[w] = idx[c], d2[w] = d2[c], ++w;
+        idx.resize(w), d2.resize(w);
+      }
     } else {
       byDistance.clear();
       for (std::size_t c = 0; c < stride; ++c)
@@ -768,8 +835,13 @@ std::vector<std::uint32_t> initialCandidates(const PointCloud& cloud, const MlsS
     std::iota(all.begin(), all.end(), 0u);
     return all;
   }
+  // Intrinsic control: one candidate per sheet in each cell (sheets.hpp's height, without the slope term:
+  // a cell spans several spacings, and a curved sheet split in two only adds a candidate).
+  const double sheetHeight = params.intrinsic ? kCellSheetHeight * params.preprocessing.sheet.heightSpacings *
+                                                    surface.meanSpacing()
+                                              : 0.0;
   return voxelThin(cloud.points, cloud.normals, count, std::sqrt(surface.area() / static_cast<double>(count)),
-                   params.seed, threads);
+                   params.seed, threads, sheetHeight);
 }
 
 Samples Resampler::initialise(const std::vector<std::uint32_t>& chosen, ResampleResult& result) {
@@ -979,6 +1051,7 @@ std::string ResampleResult::toJson() const {
      << ",\n  \"relax_iterations\": " << relaxIterations << ",\n  \"splits\": " << splits
      << ",\n  \"collapses\": " << collapses << ",\n  \"target_length\": " << jsonNumber(targetLength)
      << ",\n  \"components\": " << components << ",\n  \"satellites\": " << satellites
+     << ",\n  \"sheets\": " << sheets.toJson()
      << ",\n  \"feature_points\": " << featurePoints << ",\n  \"feature_samples\": " << featureSamples
      << ",\n  \"points_per_level\": " << jsonArray(pointsPerLevel)
      << ",\n  \"spacing_per_level\": " << jsonArray(spacingPerLevel)
@@ -1018,9 +1091,11 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
     // Far denser than the output: thin first, so every O(n) stage below works on ≈ maxInputPerSample·N points.
     t = clock.begin("thin");
     const std::size_t target = workingTarget;
+    // Intrinsic control: cells holding two sheets (a gap the input resolves, narrower than a cell) keep all
+    // their points, so that no later stage sees the sheets merged.
     cloud = select(cloud, voxelThin(cloud.points, cloud.normals, target,
                                     bboxDiagonal(cloud.points) / std::sqrt(static_cast<double>(target)), 0,
-                                    params.threads));
+                                    params.threads, 0.0, params.intrinsic));
     clock.end("thin", t);
   }
   result.thinnedPoints = cloud.size();
@@ -1043,6 +1118,19 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
   const std::size_t tableK = std::max(preprocessing ? preprocessNeighbours(pp) : std::size_t{0}, laterK);
   std::optional<NeighbourTable> neighbours(std::in_place, *index, cloud.points, tableK, params.threads);
   clock.end("neighbours", t);
+  // The sheet rule (intrinsic control from the first graph on): every stage below reads neighbours on each
+  // point's own sheet only, and a cloud without normals gets them from that graph (estimated and oriented).
+  SheetParams sp = params.preprocessing.sheet;
+  sp.threads = params.threads;
+  pp.sheets = params.intrinsic;
+  const bool sheets = params.intrinsic && cloud.size() > static_cast<std::size_t>(sp.pcaNeighbours);
+  if (sheets) {
+    t = clock.begin("sheets");
+    std::vector<Eigen::Vector3d> normals;
+    result.sheets = separateSheets(cloud.points, *neighbours, normals, sp, cloud.hasNormals() ? &cloud.normals : nullptr);
+    cloud.normals = std::move(normals);
+    clock.end("sheets", t);
+  }
   if (preprocessing) {
     t = clock.begin("preprocess");
     result.preprocessing = iires::preprocess(cloud, pp, &*neighbours);
@@ -1053,6 +1141,12 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
       neighbours.reset();
       index.reset();
       cloud = std::move(result.preprocessing.cloud);
+      if (sheets) {  // the later stages' table, on the final positions and through the sheet rule again
+        index.emplace(cloud.points);
+        neighbours.emplace(*index, cloud.points, laterK, params.threads);
+        std::vector<Eigen::Vector3d> normals;
+        separateSheets(cloud.points, *neighbours, normals, sp, &cloud.normals);
+      }
     }
     result.preprocessing.cloud = {};
     clock.end("preprocess", t);
@@ -1081,6 +1175,7 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
     auto t = clock.begin("surface");
     MlsParams mp = params.mls;
     mp.threads = threads;
+    if (!params.intrinsic) mp.sheetHeight = 0;  // straight-line neighbourhoods
     surface.emplace(cloud.points, cloud.normals, mp, index ? &*index : pointIndex,
                     neighbours ? &*neighbours : nullptr);
     neighbours.reset();  // read by nothing after the surface and the geodesic graph (memory at 5M)

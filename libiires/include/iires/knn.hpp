@@ -8,6 +8,8 @@
 #include <memory>
 #include <vector>
 
+#include "iires/parallel.hpp"
+
 namespace iires {
 
 /// @brief A static k-d tree over points. The referenced vector must outlive the index and stay unchanged.
@@ -61,6 +63,12 @@ class NeighbourTable {
   /// @brief Keeps the first @p k neighbours of every row and frees the rest, for readers that need no more
   /// (get() with up to @p k gives what it gave). No effect when k ≥ k().
   void truncate(std::size_t k);
+  /// @brief Keeps, in every row, the neighbours @p keep(i, j) accepts (in their order; the point itself is
+  /// always kept), so that every reader of the table sees only those (e.g. the sheet rule, sheets.hpp).
+  /// Rows in which fewer than @p minKept neighbours besides the point itself would remain are left whole.
+  /// @p keep is called concurrently. @return the number of (directed) entries removed.
+  template <typename Keep>
+  std::size_t filter(Keep keep, std::size_t minKept, int threads = 0);
 
  private:
   const std::vector<Eigen::Vector3d>& points_;
@@ -68,6 +76,29 @@ class NeighbourTable {
   std::vector<std::uint32_t> rows_;  // size()·k, row-major
   std::vector<std::uint8_t> found_;  // per row (≤ k ≤ 255)
 };
+
+template <typename Keep>
+std::size_t NeighbourTable::filter(Keep keep, std::size_t minKept, int threads) {
+  std::vector<std::uint8_t> kept(found_.size());
+  std::vector<std::uint32_t> scratch(rows_.size());
+  parallelFor(found_.size(), threads, [&](std::size_t i) {
+    const std::uint32_t* row = rows_.data() + i * k_;
+    std::uint32_t* out = scratch.data() + i * k_;
+    std::size_t w = 0, others = 0;
+    for (std::size_t a = 0; a < found_[i]; ++a)
+      if (row[a] == i || keep(i, static_cast<std::size_t>(row[a]))) {
+        others += row[a] != i;
+        out[w++] = row[a];
+      }
+    kept[i] = static_cast<std::uint8_t>(others >= minKept ? w : found_[i]);
+    if (others < minKept) std::copy_n(row, found_[i], out);
+  });
+  std::size_t removed = 0;
+  for (std::size_t i = 0; i < found_.size(); ++i) removed += found_[i] - kept[i];
+  rows_.swap(scratch);
+  found_.swap(kept);
+  return removed;
+}
 
 /// @brief A permutation that puts points in Morton (Z-curve) order: points close in space end up close in
 /// memory, so loops over them and k-d tree queries from them stay in cache. Ties keep index order.
