@@ -10,6 +10,7 @@
 
 #include "iires/knn.hpp"
 #include "iires/preprocess.hpp"
+#include "iires/reconstruct/reconstruct.hpp"
 #include "iires/resample.hpp"
 #include "thin_shapes.hpp"
 
@@ -162,6 +163,29 @@ TEST(Sheets, DenoiseOnlyKeepsSheetsApart) {
               r.sheets.toJson().c_str());
   EXPECT_EQ(r.cloud.size(), t.cloud.size());
   EXPECT_LE(mean, 0.05);
+}
+
+// iires-reconstruct on near-contact surfaces: two spheres 2.5 spacings apart and a sphere inside a sphere
+// 3 spacings apart give two closed genus-0 components, no face joining the two surfaces (before: one component,
+// genus 1 for the two spheres — a handle across the gap — and one component for the nested ones).
+TEST(Sheets, ReconstructKeepsNearSurfacesApart) {
+  for (const ThinCase& t : {test::twoSpheres(40000, 2.5, 0.0, 12), test::nestedSpheres(40000, 3.0, 0.0, 13)}) {
+    ReconstructParams params;
+    params.targetCount = 2000;
+    const ReconstructResult r = reconstruct(positionsOnly(t), params);
+    std::size_t joining = 0;
+    for (const auto& f : r.mesh.triangles) {
+      const int s0 = t.side(r.mesh.vertices[f[0]]);
+      joining += t.side(r.mesh.vertices[f[1]]) != s0 || t.side(r.mesh.vertices[f[2]]) != s0;
+    }
+    std::printf("  %s: %zu faces, components %zu, genus %lld, closed %d, faces joining the surfaces %zu\n",
+                t.name.c_str(), r.mesh.triangles.size(), r.quality.components, r.quality.genus,
+                r.quality.closed ? 1 : 0, joining);
+    EXPECT_EQ(r.quality.components, 2u) << t.name;
+    EXPECT_EQ(r.quality.genus, 0) << t.name;
+    EXPECT_TRUE(r.quality.closed) << t.name;
+    EXPECT_EQ(joining, 0u) << t.name;
+  }
 }
 
 }  // namespace

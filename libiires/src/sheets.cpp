@@ -8,8 +8,6 @@
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
-#include <cstdio>
-#include <cstdlib>
 
 #include "iires/disjoint_sets.hpp"
 #include "iires/normals.hpp"
@@ -170,9 +168,9 @@ struct SheetState {
     return sameSheet(points[i], normals[i], points[j], normals[j], tolerance, minDot);
   }
   bool loose(std::size_t i, std::size_t j) const { return same(i, j, params.heightSpacings); }
-  /// The final rule: two points whose whole rows lie on their planes are on one sheet.
+  /// The final rule: a point whose whole row lies on its plane has only its sheet's points in it.
   bool final(std::size_t i, std::size_t j) const {
-    return (plain[i] && plain[j]) || same(i, j, params.finalHeightSpacings);
+    return plain[i] || plain[j] || same(i, j, params.finalHeightSpacings);
   }
   /// PCA normal of point i over its first pcaK same-sheet (loose) neighbours, or its normal when too few.
   Eigen::Vector3d sheetFit(std::size_t i) const {
@@ -241,10 +239,6 @@ void estimateSheetNormals(SheetState& st, int threads) {
   std::vector<std::uint32_t> fitted;  // the points that are not plain: all further work is theirs
   for (std::size_t i = 0; i < n; ++i)
     if (!st.plain[i]) fitted.push_back(static_cast<std::uint32_t>(i));
-  static auto P0 = std::chrono::steady_clock::now();
-  auto plap = [&](const char* w) { if (getenv("SHEETPROF")) { auto t1 = std::chrono::steady_clock::now(); fprintf(stderr, " %s %.4f\n", w, std::chrono::duration<double>(t1 - P0).count()); P0 = t1; } };
-  plap("plain+robust");
-  if (getenv("SHEETPROF")) fprintf(stderr, "fitted %zu of %zu\n", fitted.size(), n);
   std::vector<Eigen::Vector3d> next(fitted.size());
   auto update = [&](auto&& fn) {  // Jacobi: every point reads the previous normals
     parallelFor(fitted.size(), threads, [&](std::size_t x) { next[x] = fn(fitted[x]); });
@@ -267,7 +261,6 @@ void estimateSheetNormals(SheetState& st, int threads) {
     return st.normals[i];
   });
   update([&](std::size_t i) { return st.sheetFit(i); });
-  plap("refits");
   // Consensus: a few neighbouring points whose fits all chose a plane across both sheets (a slab their sampling
   // happens to support) confirm each other, but their neighbourhoods hold mostly points of the sheet's normal.
   for (int pass = 0; pass < kConsensusPasses; ++pass)
@@ -330,10 +323,7 @@ SheetReport separateSheets(const std::vector<Eigen::Vector3d>& points, Neighbour
   st.plain.assign(st.n, 0);
   SheetReport report;
   report.points = st.n;
-  auto T0 = std::chrono::steady_clock::now();
-  auto lap = [&](const char* what) { if (getenv("SHEETPROF")) { auto t1 = std::chrono::steady_clock::now(); fprintf(stderr, "%s %.4f\n", what, std::chrono::duration<double>(t1 - T0).count()); T0 = t1; } };
   readRows(st, table, threads);
-  lap("rows");
   if (st.n > 0) {
     std::vector<double> sorted = st.spacing;
     std::nth_element(sorted.begin(), sorted.begin() + static_cast<long>(st.n / 2), sorted.end());
@@ -350,7 +340,6 @@ SheetReport separateSheets(const std::vector<Eigen::Vector3d>& points, Neighbour
     });
   } else {
     estimateSheetNormals(st, threads);
-    lap("normals");
     // Orientation over the same-sheet graph only (an edge across a gap would carry one sheet's orientation to
     // the other at no cost: the pair is parallel), on each point's kOrientNeighbours nearest.
     const std::size_t orientK = std::min<std::size_t>(st.K, kOrientNeighbours + 1);
@@ -362,13 +351,10 @@ SheetReport separateSheets(const std::vector<Eigen::Vector3d>& points, Neighbour
       }
     });
     orientNormals(points, normals, graph, orientK, orientK, threads);
-    lap("orient");
   }
   report.crossPairs = table.filter([&](std::size_t i, std::size_t j) { return st.final(i, j); },
                                    params.minNeighbours, threads);
-  lap("filter");
   countZones(st, report, threads);
-  lap("zones");
   report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return report;
 }
