@@ -17,6 +17,7 @@ constexpr double kMaxQuadricHeight = 2.0;     // kernel widths: a quadric fit be
 // Input spacing (mean nearest-neighbour distance) per kernel width: a uniform sampling's 8th neighbour lies
 // √(8/π) grid spacings away, its nearest half a grid spacing.
 const double kSpacingPerWidth = 0.5 / std::sqrt(8.0 / M_PI);
+const double kGapParallelCos = std::cos(25.0 * M_PI / 180.0);  // SheetParams::gapAngleDeg
 
 /// Distance from the origin to the segment [p, r].
 double segmentDistance(const Eigen::Vector2d& p, const Eigen::Vector2d& r) {
@@ -152,20 +153,18 @@ Eigen::Vector3d MlsSurface::project(const Eigen::Vector3d& x0, Eigen::Vector3d* 
     // gets no weight either.
     Eigen::Vector3d anchor = x, anchorNormal = normal;
     double anchorSpacing = 0;
-    if (params_.sheetHeight > 0) {
+    if (params_.sheetGap > 0) {
       std::size_t first = 0;
       while (first + 1 < found && !facing(idx[first])) ++first;
       anchorSpacing = kSpacingPerWidth * h_[idx[first]];
       if (it == 0) anchor = points_[idx[first]], anchorNormal = normals_[idx[first]];
     }
     auto onSheet = [&](std::uint32_t j) {
-      if (params_.sheetHeight <= 0) return true;
-      const double d = (points_[j] - anchor).norm();
-      return sameSheet(anchor, anchorNormal, points_[j], normals_[j],
-                       params_.sheetHeight * std::max(anchorSpacing, kSpacingPerWidth * h_[j]) +
-                           sheetTolerance(params_.sheetSlope, d, anchorNormal, normals_[j]));
+      if (params_.sheetGap <= 0) return true;
+      return !acrossGap(anchor, anchorNormal, points_[j], normals_[j],
+                        params_.sheetGap * std::max(anchorSpacing, kSpacingPerWidth * h_[j]), kGapParallelCos);
     };
-    bool gate = params_.sheetHeight > 0;
+    bool gate = params_.sheetGap > 0;
     if (gate && std::none_of(idx.begin(), idx.end(), [&](std::uint32_t j) { return facing(j) && onSheet(j); }))
       gate = false;
     h = 0;

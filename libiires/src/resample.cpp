@@ -1175,7 +1175,7 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
     auto t = clock.begin("surface");
     MlsParams mp = params.mls;
     mp.threads = threads;
-    if (!params.intrinsic) mp.sheetHeight = 0;  // straight-line neighbourhoods
+    if (!params.intrinsic) mp.sheetGap = 0;  // straight-line neighbourhoods
     surface.emplace(cloud.points, cloud.normals, mp, index ? &*index : pointIndex,
                     neighbours ? &*neighbours : nullptr);
     neighbours.reset();  // read by nothing after the surface and the geodesic graph (memory at 5M)

@@ -16,9 +16,11 @@
 namespace iires {
 namespace {
 
-constexpr std::size_t kSpacingRow = 16;
-constexpr int kConsensusPasses = 2;       // normal averaging passes over the same-sheet neighbours
-constexpr std::size_t kOrientNeighbours = 8;  // neighbours per point in the orientation's spanning tree  // local spacing: mean nearest-neighbour distance over these row entries
+constexpr std::size_t kSpacingRow = 16;       // local spacing: mean nearest-neighbour distance over these row entries
+constexpr int kConsensusPasses = 2;           // normal averaging passes over the same-sheet neighbours
+constexpr std::size_t kOrientNeighbours = 8;  // neighbours per point in the orientation's spanning tree
+constexpr std::size_t kLayerPoints = 3;       // a second sheet: at least this many row entries across the gap
+constexpr double kLayerSpread = 0.5;          // whose heights' standard deviation is under this × the spacing
 
 /// Unit PCA normal of @p p and the points @p idx (fewer than 2 neighbours: @p fallback).
 Eigen::Vector3d pcaNormal(const std::vector<Eigen::Vector3d>& points, std::size_t p,
@@ -127,7 +129,8 @@ void SheetParams::validate() const {
   if (pcaNeighbours < 2 || pcaNeighbours > 128) fail("pcaNeighbours must be in [2, 128]");
   if (firstNeighbours < 2 || firstNeighbours > pcaNeighbours) fail("firstNeighbours must be in [2, pcaNeighbours]");
   if (refits < 0 || refits > 8) fail("refits must be in [0, 8]");
-  if (!(finalHeightSpacings > 0) || !std::isfinite(finalHeightSpacings)) fail("finalHeightSpacings must be finite and > 0");
+  if (!(gapSpacings > 0) || !std::isfinite(gapSpacings)) fail("gapSpacings must be finite and > 0");
+  if (!(gapAngleDeg > 0 && gapAngleDeg < 90)) fail("gapAngleDeg must be in (0, 90)");
   if (!(heightSpacings > 0) || !std::isfinite(heightSpacings)) fail("heightSpacings must be finite and > 0");
   if (!(heightSlope >= 0) || !std::isfinite(heightSlope)) fail("heightSlope must be finite and >= 0");
   if (!(maxNormalAngleDeg > 0 && maxNormalAngleDeg <= 180)) fail("maxNormalAngleDeg must be in (0, 180]");
@@ -156,21 +159,28 @@ struct SheetState {
   std::size_t n = 0, K = 0, pcaK = 0;
   std::vector<std::uint32_t> rows;
   std::vector<std::uint8_t> found, plain;
+  std::vector<std::uint8_t> layer;  // the row holds a second layer parallel to the point's plane (findLayers)
   std::vector<double> spacing;
   double minDot = -1.0;
+  double gapCos = 1.0;  // cos(gapAngleDeg)
 
   const std::uint32_t* row(std::size_t i) const { return rows.data() + i * K; }
   /// The rule with a height tolerance of @p heightSpacings local spacings (plus the slope term).
   bool same(std::size_t i, std::size_t j, double heightSpacings) const {
     const double d = (points[j] - points[i]).norm();
     const double tolerance = heightSpacings * std::min(spacing[i], spacing[j]) +
-                             sheetTolerance(params.heightSlope, d, normals[i], normals[j]);
+                             params.heightSlope * d;
     return sameSheet(points[i], normals[i], points[j], normals[j], tolerance, minDot);
   }
   bool loose(std::size_t i, std::size_t j) const { return same(i, j, params.heightSpacings); }
-  /// The final rule: a point whose whole row lies on its plane has only its sheet's points in it.
+  /// The final rule: apart only across a gap; a point whose whole row lies on its plane has only its sheet's
+  /// points in it.
   bool final(std::size_t i, std::size_t j) const {
-    return plain[i] || plain[j] || same(i, j, params.finalHeightSpacings);
+    return plain[i] || plain[j] ||
+           (normals[i].dot(normals[j]) >= minDot &&
+            !((layer[i] || layer[j]) &&
+              acrossGap(points[i], normals[i], points[j], normals[j],
+                        params.gapSpacings * std::min(spacing[i], spacing[j]), gapCos)));
   }
   /// PCA normal of point i over its first pcaK same-sheet (loose) neighbours, or its normal when too few.
   Eigen::Vector3d sheetFit(std::size_t i) const {
@@ -275,6 +285,33 @@ void estimateSheetNormals(SheetState& st, int threads) {
     });
 }
 
+/// Which points see a second sheet in their row: at least kLayerPoints row entries on one side of the point's
+/// plane, each at least the gap off it, whose heights agree within kLayerSpread local spacings (a layer parallel
+/// to the plane). Where one surface turns at a crease whose normals the fits blended, the other face's points
+/// rise steadily off the plane; noise scatters them; neither forms a layer.
+void findLayers(SheetState& st, int threads) {
+  st.layer.assign(st.n, 0);
+  parallelFor(st.n, threads, [&](std::size_t i) {
+    if (st.plain[i]) return;
+    const double gap = st.params.gapSpacings * st.spacing[i];
+    std::array<double, 256> above, below;
+    std::size_t na = 0, nb = 0;
+    for (std::size_t a = 0; a < st.found[i]; ++a) {
+      const double h = st.normals[i].dot(st.points[st.row(i)[a]] - st.points[i]);
+      if (h >= gap) above[na++] = h;
+      if (h <= -gap) below[nb++] = h;
+    }
+    for (const auto& [side, m] : {std::make_pair(&above, na), std::make_pair(&below, nb)}) {
+      if (m < kLayerPoints) continue;
+      double sum = 0, sum2 = 0;
+      for (std::size_t a = 0; a < m; ++a) sum += (*side)[a], sum2 += (*side)[a] * (*side)[a];
+      const double mean = sum / static_cast<double>(m);
+      const double spread = std::sqrt(std::max(0.0, sum2 / static_cast<double>(m) - mean * mean));
+      if (spread <= kLayerSpread * st.spacing[i]) st.layer[i] = 1;
+    }
+  });
+}
+
 /// Near-contact zones (points with a Euclidean neighbour on another sheet, connected through same-sheet
 /// edges) and the distinct pairs of zones that face each other across a gap.
 void countZones(const SheetState& st, SheetReport& report, int threads) {
@@ -321,6 +358,7 @@ SheetReport separateSheets(const std::vector<Eigen::Vector3d>& points, Neighbour
   st.K = table.k();
   st.pcaK = std::min<std::size_t>(st.K, static_cast<std::size_t>(params.pcaNeighbours) + 1);
   st.plain.assign(st.n, 0);
+  st.gapCos = std::cos(params.gapAngleDeg * M_PI / 180.0);
   SheetReport report;
   report.points = st.n;
   readRows(st, table, threads);
@@ -338,8 +376,10 @@ SheetReport separateSheets(const std::vector<Eigen::Vector3d>& points, Neighbour
       normals[i] = len > 0 ? Eigen::Vector3d((*givenNormals)[i] / len) : Eigen::Vector3d::UnitZ();
       st.plain[i] = rowOnPlane(st, i, normals[i]);
     });
+    findLayers(st, threads);
   } else {
     estimateSheetNormals(st, threads);
+    findLayers(st, threads);
     // Orientation over the same-sheet graph only (an edge across a gap would carry one sheet's orientation to
     // the other at no cost: the pair is parallel), on each point's kOrientNeighbours nearest.
     const std::size_t orientK = std::min<std::size_t>(st.K, kOrientNeighbours + 1);

@@ -17,10 +17,9 @@ struct MlsParams {
   int degree = 2;       ///< 1 = weighted tangent plane (paper eq. 1–3), 2 = plane + quadric height field
   int iterations = 2;   ///< projection steps per query (each re-centres the fit on the last estimate)
   int threads = 0;      ///< for the construction (kernel widths); 0 = all cores
-  /// Sheet rule (sheets.hpp) in every fit: input points off the query's sheet by more than sheetHeight local
-  /// spacings + sheetSlope × their distance get no weight (0 = off: the normals' sign test only).
-  double sheetHeight = 1.0;
-  double sheetSlope = 0.1;  ///< see sheetHeight (and sheets.hpp, sheetTolerance)
+  /// Sheet rule (sheets.hpp, acrossGap) in every fit: input points on a near-parallel sheet at least sheetGap
+  /// local spacings off the query's get no weight (0 = off: the normals' sign test only).
+  double sheetGap = 1.25;
 };
 
 /// @brief The input neighbourhood of a previous projection, kept by a caller that projects the same moving

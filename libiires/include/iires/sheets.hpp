@@ -8,12 +8,11 @@
 /// and oriented, and which every later stage reads (outliers, denoising, the MLS kernel widths, the geodesic
 /// graph) instead of the straight-line neighbourhood.
 ///
-/// Test: q is on p's sheet when each lies within a height of the other's tangent plane,
-///   |n_p·(q − p)| ≤ τ and |n_q·(p − q)| ≤ τ,  τ = heightSpacings·s + |q − p|·(heightSlope + sin(θ/2)),
-/// s the local spacing (mean nearest-neighbour distance); and, with oriented normals, when the normals do not
-/// face each other (angle ≤ maxNormalAngleDeg). Across a gap of g ≥ 2.5 spacings the height is ≈ g; on one
-/// sheet it is noise, curvature (|q − p|²/2R ≈ |q − p|·θ/2, θ the angle between the normals) and the
-/// normals' error (the slope term).
+/// Two tests. The normals' fits take a point's neighbours within a height of its tangent plane (sameSheet,
+/// sheetTolerance: noise, the normals' error and the sheet's bend). The final rule, on the settled normals,
+/// parts a pair only on positive evidence of a gap between them (acrossGap): two near-parallel planes, each
+/// point beyond the other's, offset by more than noise can explain — so creases, bends and noise keep their
+/// rows, and the straight-line neighbourhood stays wherever no second sheet is near.
 
 #include <Eigen/Core>
 #include <cstddef>
@@ -33,11 +32,12 @@ struct SheetParams {
   int refits = 1;                ///< refits over the same-sheet neighbours by the last normals
   double heightSpacings = 1.0;   ///< height tolerance, in local spacings (a gap must exceed ≈ 2 of them)
   double heightSlope = 0.1;      ///< plus this × the pair's distance (normal error, curvature; ≈ 6°)
-  /// The final rule (the rows every later stage reads), with the normals settled: height tolerance
-  /// finalHeightSpacings·s + heightSlope·|q − p|, tight so that a normal the fit got a little wrong leaves no
-  /// pair across a gap. Two points whose whole rows lie within the first tolerance of their planes (no other
-  /// sheet near either) are neighbours without it, so a curved or noisy sheet keeps its rows.
-  double finalHeightSpacings = 0.5;
+  /// The final rule (the rows every later stage reads), with the normals settled: a pair is apart when it
+  /// lies across a gap (acrossGap): near-parallel planes (within gapAngleDeg) on opposite sides of each
+  /// other, offset by at least gapSpacings local spacings. A point whose whole row lies within the first
+  /// tolerance of its plane (no other sheet near) keeps its row.
+  double gapSpacings = 1.25;
+  double gapAngleDeg = 25.0;
   double maxNormalAngleDeg = 120.0;  ///< oriented normals: pairs whose normals differ by more are apart
   std::size_t minNeighbours = 3;  ///< a row left with fewer same-sheet neighbours keeps its Euclidean row
   int threads = 0;               ///< 0 = all cores; the result does not depend on it
@@ -78,12 +78,28 @@ inline double sheetTolerance(double slope, double d, const Eigen::Vector3d& np, 
   return d * (slope + std::sqrt(std::max(0.0, 0.5 * (1.0 - std::abs(np.dot(nq))))));
 }
 
-/// @brief The sheet test for one pair: @p tolerance is τ (absolute units), @p minNormalDot the cosine of the
-/// largest normal angle (−1 for unoriented normals: then only the heights count).
+/// @brief The sheet test for one pair p, q with unit normals @p np, @p nq: each lies within @p tolerance of
+/// the other's tangent plane, and (oriented normals) the normals differ by at most acos(@p minNormalDot) (−1
+/// for unoriented normals: then only the heights count). The loose test of the normals' fits.
 inline bool sameSheet(const Eigen::Vector3d& p, const Eigen::Vector3d& np, const Eigen::Vector3d& q,
                       const Eigen::Vector3d& nq, double tolerance, double minNormalDot = -1.0) {
   const Eigen::Vector3d d = q - p;
   return std::abs(np.dot(d)) <= tolerance && std::abs(nq.dot(d)) <= tolerance && np.dot(nq) >= minNormalDot;
+}
+
+/// @brief Whether p and q (unit normals @p np, @p nq, either orientation) lie on two sheets across a gap:
+/// their tangent planes are near parallel (|n_p·n_q| ≥ @p minParallelCos), each point lies on the far side
+/// of the other's plane — q above p's plane and p below q's, n_q turned to agree with n_p — and both offsets
+/// are at least @p minGap. One surface, where it bends or folds over a crease, puts each point on the same side
+/// of the other's plane (or turns the normals apart); noise and a normal's error offset the planes by less
+/// than the gap.
+inline bool acrossGap(const Eigen::Vector3d& p, const Eigen::Vector3d& np, const Eigen::Vector3d& q,
+                      const Eigen::Vector3d& nq, double minGap, double minParallelCos) {
+  const double c = np.dot(nq);
+  if (std::abs(c) < minParallelCos) return false;
+  const Eigen::Vector3d d = q - p;
+  const double hp = np.dot(d), hq = c >= 0 ? -nq.dot(d) : nq.dot(d);
+  return hp * hq < 0 && std::min(std::abs(hp), std::abs(hq)) >= minGap;
 }
 
 }  // namespace iires
