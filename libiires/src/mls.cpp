@@ -83,8 +83,14 @@ double beyondHull(const std::vector<Eigen::Vector3d>& points, const std::vector<
 
 MlsSurface::MlsSurface(const std::vector<Eigen::Vector3d>& points,
                        const std::vector<Eigen::Vector3d>& normals, const MlsParams& params,
-                       const KnnIndex* index, const NeighbourTable* table)
-    : points_(points), normals_(normals), params_(params), index_(index ? index : &own_.emplace(points)) {
+                       const KnnIndex* index, const NeighbourTable* table, std::vector<std::uint8_t> nearSheets)
+    : points_(points),
+      normals_(normals),
+      params_(params),
+      index_(index ? index : &own_.emplace(points)),
+      nearSheets_(std::move(nearSheets)) {
+  if (!nearSheets_.empty() && nearSheets_.size() != points.size())
+    throw std::invalid_argument("MlsSurface: nearSheets must hold one flag per point");
   const std::size_t n = points.size();
   h_.assign(n, 0.0);
   std::vector<double> nearest(n, 0.0);
@@ -153,14 +159,16 @@ Eigen::Vector3d MlsSurface::project(const Eigen::Vector3d& x0, Eigen::Vector3d* 
     // gets no weight either.
     Eigen::Vector3d anchor = x, anchorNormal = normal;
     double anchorSpacing = 0;
+    bool anchorNear = nearSheets_.empty();
     if (params_.sheetGap > 0) {
       std::size_t first = 0;
       while (first + 1 < found && !facing(idx[first])) ++first;
       anchorSpacing = kSpacingPerWidth * h_[idx[first]];
+      anchorNear = anchorNear || nearSheets_[idx[first]];
       if (it == 0) anchor = points_[idx[first]], anchorNormal = normals_[idx[first]];
     }
     auto onSheet = [&](std::uint32_t j) {
-      if (params_.sheetGap <= 0) return true;
+      if (params_.sheetGap <= 0 || !(anchorNear || nearSheets_[j])) return true;
       return !acrossGap(anchor, anchorNormal, points_[j], normals_[j],
                         params_.sheetGap * std::max(anchorSpacing, kSpacingPerWidth * h_[j]), kGapParallelCos);
     };

@@ -1124,11 +1124,15 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
   sp.threads = params.threads;
   pp.sheets = params.intrinsic;
   const bool sheets = params.intrinsic && cloud.size() > static_cast<std::size_t>(sp.pcaNeighbours);
+  std::vector<std::uint8_t> nearSheets;  // per point of the final working cloud (the MLS surface's gate)
   if (sheets) {
     t = clock.begin("sheets");
     std::vector<Eigen::Vector3d> normals;
-    result.sheets = separateSheets(cloud.points, *neighbours, normals, sp, cloud.hasNormals() ? &cloud.normals : nullptr);
-    cloud.normals = std::move(normals);
+    result.sheets = separateSheets(cloud.points, *neighbours, normals, sp, cloud.hasNormals() ? &cloud.normals : nullptr,
+                                   &nearSheets);
+    // Pre-processing fits its own normals over the filtered rows (as the feature detector expects them);
+    // without it, these are the cloud's.
+    if (!preprocessing) cloud.normals = std::move(normals);
     clock.end("sheets", t);
   }
   if (preprocessing) {
@@ -1145,7 +1149,7 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
         index.emplace(cloud.points);
         neighbours.emplace(*index, cloud.points, laterK, params.threads);
         std::vector<Eigen::Vector3d> normals;
-        separateSheets(cloud.points, *neighbours, normals, sp, &cloud.normals);
+        separateSheets(cloud.points, *neighbours, normals, sp, &cloud.normals, &nearSheets);
       }
     }
     result.preprocessing.cloud = {};
@@ -1177,7 +1181,7 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
     mp.threads = threads;
     if (!params.intrinsic) mp.sheetGap = 0;  // straight-line neighbourhoods
     surface.emplace(cloud.points, cloud.normals, mp, index ? &*index : pointIndex,
-                    neighbours ? &*neighbours : nullptr);
+                    neighbours ? &*neighbours : nullptr, std::move(nearSheets));
     neighbours.reset();  // read by nothing after the surface and the geodesic graph (memory at 5M)
     clock.end("surface", t);
     t = clock.begin("candidates");

@@ -19,8 +19,10 @@ namespace {
 constexpr std::size_t kSpacingRow = 16;       // local spacing: mean nearest-neighbour distance over these row entries
 constexpr int kConsensusPasses = 2;           // normal averaging passes over the same-sheet neighbours
 constexpr std::size_t kOrientNeighbours = 8;  // neighbours per point in the orientation's spanning tree
+constexpr std::size_t kPlainNormalRow = 13;   // the point and NormalParams' default 12 neighbours
 constexpr std::size_t kLayerPoints = 3;       // a second sheet: at least this many row entries across the gap
-constexpr double kLayerSpread = 0.5;          // whose heights' standard deviation is under this × the spacing
+constexpr double kLayerSpread = 0.5;          // a layer: heights' standard deviation under this × the spacing
+constexpr double kEmptyBand = 0.2;            // the band between two layers: this × the far one's height of mid-gap
 
 /// Unit PCA normal of @p p and the points @p idx (fewer than 2 neighbours: @p fallback).
 Eigen::Vector3d pcaNormal(const std::vector<Eigen::Vector3d>& points, std::size_t p,
@@ -168,8 +170,7 @@ struct SheetState {
   /// The rule with a height tolerance of @p heightSpacings local spacings (plus the slope term).
   bool same(std::size_t i, std::size_t j, double heightSpacings) const {
     const double d = (points[j] - points[i]).norm();
-    const double tolerance = heightSpacings * std::min(spacing[i], spacing[j]) +
-                             params.heightSlope * d;
+    const double tolerance = heightSpacings * std::min(spacing[i], spacing[j]) + params.heightSlope * d;
     return sameSheet(points[i], normals[i], points[j], normals[j], tolerance, minDot);
   }
   bool loose(std::size_t i, std::size_t j) const { return same(i, j, params.heightSpacings); }
@@ -285,36 +286,50 @@ void estimateSheetNormals(SheetState& st, int threads) {
     });
 }
 
-/// Which points see a second sheet in their row: at least kLayerPoints row entries on one side of the point's
-/// plane, each at least the gap off it, whose heights agree within kLayerSpread local spacings (a layer parallel
-/// to the plane). Where one surface turns at a crease whose normals the fits blended, the other face's points
-/// rise steadily off the plane; noise scatters them; neither forms a layer.
+/// Standard deviation of the values @p v[0..m) passing @p keep (0 when none).
+template <typename Keep>
+double spreadOf(const double* v, std::size_t m, Keep keep) {
+  double sum = 0, sum2 = 0, count = 0;
+  for (std::size_t a = 0; a < m; ++a)
+    if (keep(v[a])) sum += v[a], sum2 += v[a] * v[a], ++count;
+  if (count == 0) return 0.0;
+  const double mean = sum / count;
+  return std::sqrt(std::max(0.0, sum2 / count - mean * mean));
+}
+
+/// Which points see a second sheet in their row: heights (off the point's plane) that form two thin layers
+/// with an empty band between them — the point's own (|h| small) and at least kLayerPoints entries at least
+/// the gap off, on one side, each layer's heights within kLayerSpread local spacings, and at most a quarter as
+/// many entries within kEmptyBand × the far layer's height of mid-gap. Where one surface turns at a crease
+/// whose normals the fits blended, the other face's points rise steadily off the plane; noise of the order of
+/// the gap spreads the point's own layer and fills the band; neither forms two layers.
 void findLayers(SheetState& st, int threads) {
   st.layer.assign(st.n, 0);
   parallelFor(st.n, threads, [&](std::size_t i) {
     if (st.plain[i]) return;
-    const double gap = st.params.gapSpacings * st.spacing[i];
-    std::array<double, 256> above, below;
-    std::size_t na = 0, nb = 0;
-    for (std::size_t a = 0; a < st.found[i]; ++a) {
-      const double h = st.normals[i].dot(st.points[st.row(i)[a]] - st.points[i]);
-      if (h >= gap) above[na++] = h;
-      if (h <= -gap) below[nb++] = h;
-    }
-    for (const auto& [side, m] : {std::make_pair(&above, na), std::make_pair(&below, nb)}) {
-      if (m < kLayerPoints) continue;
-      double sum = 0, sum2 = 0;
-      for (std::size_t a = 0; a < m; ++a) sum += (*side)[a], sum2 += (*side)[a] * (*side)[a];
-      const double mean = sum / static_cast<double>(m);
-      const double spread = std::sqrt(std::max(0.0, sum2 / static_cast<double>(m) - mean * mean));
-      if (spread <= kLayerSpread * st.spacing[i]) st.layer[i] = 1;
+    const double gap = st.params.gapSpacings * st.spacing[i], thin = kLayerSpread * st.spacing[i];
+    std::array<double, 256> heights;
+    const std::size_t m = st.found[i];
+    for (std::size_t a = 0; a < m; ++a) heights[a] = st.normals[i].dot(st.points[st.row(i)[a]] - st.points[i]);
+    for (const double side : {1.0, -1.0}) {
+      auto far = [&](double h) { return side * h >= gap; };
+      const auto count = static_cast<std::size_t>(std::count_if(heights.begin(), heights.begin() + m, far));
+      if (count < kLayerPoints) continue;
+      double mean = 0;
+      for (std::size_t a = 0; a < m; ++a) mean += far(heights[a]) ? heights[a] : 0.0;
+      mean /= static_cast<double>(count);
+      auto own = [&](double h) { return h / mean < 0.5 - kEmptyBand && h / mean > -(0.5 - kEmptyBand); };
+      auto band = [&](double h) { return h / mean >= 0.5 - kEmptyBand && h / mean <= 0.5 + kEmptyBand; };
+      const auto inBand = static_cast<std::size_t>(std::count_if(heights.begin(), heights.begin() + m, band));
+      if (spreadOf(heights.data(), m, far) <= thin && spreadOf(heights.data(), m, own) <= thin && 4 * inBand <= count)
+        st.layer[i] = 1;
     }
   });
 }
 
 /// Near-contact zones (points with a Euclidean neighbour on another sheet, connected through same-sheet
-/// edges) and the distinct pairs of zones that face each other across a gap.
-void countZones(const SheetState& st, SheetReport& report, int threads) {
+/// edges) and the distinct pairs of zones that face each other across a gap; returns which points are near.
+std::vector<std::uint8_t> countZones(const SheetState& st, SheetReport& report, int threads) {
   const std::size_t n = st.n;
   std::vector<std::uint8_t> near(n, 0);
   parallelFor(n, threads, [&](std::size_t i) {
@@ -342,13 +357,28 @@ void countZones(const SheetState& st, SheetReport& report, int threads) {
   }
   std::sort(pairs.begin(), pairs.end());
   report.sheetPairs = static_cast<std::size_t>(std::unique(pairs.begin(), pairs.end()) - pairs.begin());
+  return near;
+}
+
+/// Where no other sheet is near — none of the point and its kPlainNormalRow nearest has a neighbour on another
+/// sheet — the point's Euclidean row is its sheet's, and its normal is the plain PCA normal of that row (what
+/// estimateNormals gives: across a crease it averages the two faces, as the feature detector expects), turned
+/// to the sheet rule's orientation.
+void plainNormalsAwayFromGaps(SheetState& st, const std::vector<std::uint8_t>& near, int threads) {
+  parallelFor(st.n, threads, [&](std::size_t i) {
+    if (st.plain[i]) return;
+    const std::size_t count = std::min<std::size_t>(st.found[i], kPlainNormalRow);
+    if (std::any_of(st.row(i), st.row(i) + count, [&](std::uint32_t j) { return near[j] != 0; })) return;
+    const Eigen::Vector3d n = pcaNormal(st.points, i, st.row(i), count, st.normals[i]);
+    st.normals[i] = n.dot(st.normals[i]) < 0 ? Eigen::Vector3d(-n) : n;
+  });
 }
 
 }  // namespace
 
 SheetReport separateSheets(const std::vector<Eigen::Vector3d>& points, NeighbourTable& table,
                            std::vector<Eigen::Vector3d>& normals, const SheetParams& params,
-                           const std::vector<Eigen::Vector3d>* givenNormals) {
+                           const std::vector<Eigen::Vector3d>* givenNormals, std::vector<std::uint8_t>* near) {
   params.validate();
   const auto start = std::chrono::steady_clock::now();
   if (table.size() != points.size()) throw std::invalid_argument("separateSheets: the table is not of these points");
@@ -394,7 +424,9 @@ SheetReport separateSheets(const std::vector<Eigen::Vector3d>& points, Neighbour
   }
   report.crossPairs = table.filter([&](std::size_t i, std::size_t j) { return st.final(i, j); },
                                    params.minNeighbours, threads);
-  countZones(st, report, threads);
+  std::vector<std::uint8_t> nearPoints = countZones(st, report, threads);
+  if (!given) plainNormalsAwayFromGaps(st, nearPoints, threads);
+  if (near) *near = std::move(nearPoints);
   report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return report;
 }

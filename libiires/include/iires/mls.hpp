@@ -43,9 +43,11 @@ class MlsSurface {
 
   /// @param table (optional) neighbour lists of exactly these points (k ≥ kWidthNeighbours), borrowed while
   /// constructing, to save the kernel widths' k-NN search
+  /// @param nearSheets (optional) per point, 1 where the sheet rule found another sheet near (separateSheets):
+  /// the sheet gate (MlsParams::sheetGap) applies only there; without it, everywhere
   MlsSurface(const std::vector<Eigen::Vector3d>& points, const std::vector<Eigen::Vector3d>& normals,
              const MlsParams& params = {}, const KnnIndex* index = nullptr,
-             const NeighbourTable* table = nullptr);
+             const NeighbourTable* table = nullptr, std::vector<std::uint8_t> nearSheets = {});
   ~MlsSurface();
 
   /// @brief Project @p x onto the surface. @p normal (optional) receives the surface normal there,
@@ -81,6 +83,7 @@ class MlsSurface {
   std::optional<KnnIndex> own_;
   const KnnIndex* index_;
   std::vector<double> h_;
+  std::vector<std::uint8_t> nearSheets_;  // empty: the sheet gate everywhere
   double meanSpacing_ = 0;
   double area_ = 0;
 };

@@ -65,10 +65,12 @@ struct SheetReport {
 /// @param table neighbour lists of exactly @p points, the point itself included (k ≥ pcaNeighbours + 1)
 /// @param normals out: estimated (PCA over same-sheet neighbours, refined once, then oriented by a minimum
 /// spanning tree over the same-sheet graph) unless @p givenNormals holds one normal per point (then a copy)
+/// @param near (optional) out: per point, 1 where a neighbour was found on another sheet
 /// @note O(n k). Deterministic for any thread count.
 SheetReport separateSheets(const std::vector<Eigen::Vector3d>& points, NeighbourTable& table,
                            std::vector<Eigen::Vector3d>& normals, const SheetParams& params = {},
-                           const std::vector<Eigen::Vector3d>* givenNormals = nullptr);
+                           const std::vector<Eigen::Vector3d>* givenNormals = nullptr,
+                           std::vector<std::uint8_t>* near = nullptr);
 
 /// @brief The distance-dependent part of the sheet tolerance for a pair @p d apart with unit normals @p np,
 /// @p nq: slope·d for the normals' error, plus d·sin(θ/2) for the bend between them (θ the angle between the
@@ -89,8 +91,8 @@ inline bool sameSheet(const Eigen::Vector3d& p, const Eigen::Vector3d& np, const
 
 /// @brief Whether p and q (unit normals @p np, @p nq, either orientation) lie on two sheets across a gap:
 /// their tangent planes are near parallel (|n_p·n_q| ≥ @p minParallelCos), each point lies on the far side
-/// of the other's plane — q above p's plane and p below q's, n_q turned to agree with n_p — and both offsets
-/// are at least @p minGap. One surface, where it bends or folds over a crease, puts each point on the same side
+/// of the other's plane — q above p's plane and p below q's, n_q turned to agree with n_p — and the mean
+/// offset is at least @p minGap (a normal tilted by the fit shortens one offset and lengthens the other). One surface, where it bends or folds over a crease, puts each point on the same side
 /// of the other's plane (or turns the normals apart); noise and a normal's error offset the planes by less
 /// than the gap.
 inline bool acrossGap(const Eigen::Vector3d& p, const Eigen::Vector3d& np, const Eigen::Vector3d& q,
@@ -99,7 +101,7 @@ inline bool acrossGap(const Eigen::Vector3d& p, const Eigen::Vector3d& np, const
   if (std::abs(c) < minParallelCos) return false;
   const Eigen::Vector3d d = q - p;
   const double hp = np.dot(d), hq = c >= 0 ? -nq.dot(d) : nq.dot(d);
-  return hp * hq < 0 && std::min(std::abs(hp), std::abs(hq)) >= minGap;
+  return hp * hq < 0 && std::abs(hp - hq) >= 2 * minGap;
 }
 
 }  // namespace iires
