@@ -174,10 +174,16 @@ struct SheetState {
     return sameSheet(points[i], normals[i], points[j], normals[j], tolerance, minDot);
   }
   bool loose(std::size_t i, std::size_t j) const { return same(i, j, params.heightSpacings); }
-  /// The final rule: apart only across a gap; a point whose whole row lies on its plane has only its sheet's
-  /// points in it.
+  /// Whether q lies within the loose tolerance of point i's plane (rowOnPlane's test for one entry).
+  bool onPlane(std::size_t i, const Eigen::Vector3d& q) const {
+    const Eigen::Vector3d d = q - points[i];
+    return std::abs(normals[i].dot(d)) <= params.heightSpacings * spacing[i] + params.heightSlope * d.norm();
+  }
+  /// The final rule: apart only across a gap. A point whose whole row lies on its plane ("plain") has only its
+  /// sheet's points in it, and keeps whoever lies on that plane — but not a point from whose (asymmetric)
+  /// row it comes, across a gap, off its plane: that pair takes the gap test.
   bool final(std::size_t i, std::size_t j) const {
-    return plain[i] || plain[j] ||
+    return (plain[i] && onPlane(i, points[j])) || (plain[j] && onPlane(j, points[i])) ||
            (normals[i].dot(normals[j]) >= minDot &&
             !((layer[i] || layer[j]) &&
               acrossGap(points[i], normals[i], points[j], normals[j],
