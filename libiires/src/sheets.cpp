@@ -45,9 +45,9 @@ Eigen::Vector3d pcaNormal(const std::vector<Eigen::Vector3d>& points, std::size_
 /// A normal that ignores the neighbours on another sheet: of the planes through the point and two of its
 /// kCandidates nearest, the one that most of the neighbours @p idx support (see below), refitted by PCA to
 /// those within the sheet tolerance of it. Where two sheets are close the point's own sheet holds most of its
-/// neighbours, so the plane with most support is its own.
+/// neighbours, so the plane with most support is its own. @p gap: the smallest gap between two sheets.
 Eigen::Vector3d robustNormal(const std::vector<Eigen::Vector3d>& points, std::size_t p, const std::uint32_t* idx,
-                             std::size_t count, double height, double slope) {
+                             std::size_t count, double height, double slope, double gap) {
   constexpr std::size_t kCandidates = 6;
   std::array<std::uint32_t, 129> others{};
   std::size_t m = 0;
@@ -69,7 +69,9 @@ Eigen::Vector3d robustNormal(const std::vector<Eigen::Vector3d>& points, std::si
   // sheet (whose far points it still holds within the tolerance) scores below the sheet's own. Where two
   // sheets are close a plane across both (along the gap's direction) can hold as many points in a strip as a
   // noisy sheet's own plane: the points off the plane count too when they form a second layer parallel to it
-  // (within the tolerance of their median height, on the side that has more of them).
+  // (within the tolerance of their median height, on the side that has more of them), at least the rule's
+  // smallest gap off (@p gap). At a free edge the local spacing grows (the nearest lie on one side only), and
+  // two sheets 2.5 spacings apart are less than 2 of those spacings apart there.
   auto support = [&](const Eigen::Vector3d& n) {
     const double inv2 = 1.0 / (height * height);
     std::array<double, 129> above, below;
@@ -78,8 +80,8 @@ Eigen::Vector3d robustNormal(const std::vector<Eigen::Vector3d>& points, std::si
     for (std::size_t a = 0; a < m; ++a) {
       const double h = n.dot(points[others[a]] - o);
       sum += std::max(0.0, 1.0 - h * h * inv2);
-      if (h > 2 * height) above[na++] = h;
-      if (h < -2 * height) below[nb++] = h;
+      if (h >= gap) above[na++] = h;
+      if (h <= -gap) below[nb++] = h;
     }
     std::array<double, 129>& layer = na >= nb ? above : below;
     const std::size_t nl = std::max(na, nb);
@@ -251,7 +253,8 @@ void estimateSheetNormals(SheetState& st, int threads) {
     st.plain[i] = rowOnPlane(st, i, n0);
     st.normals[i] = st.plain[i] ? n0
                                 : robustNormal(st.points, i, st.row(i), count,
-                                               st.params.heightSpacings * st.spacing[i], st.params.heightSlope);
+                                               st.params.heightSpacings * st.spacing[i], st.params.heightSlope,
+                                               st.params.gapSpacings * st.spacing[i]);
   });
   std::vector<std::uint32_t> fitted;  // the points that are not plain: all further work is theirs
   for (std::size_t i = 0; i < n; ++i)
