@@ -36,10 +36,10 @@ constexpr double kOffSurfaceLimit = 0.6;  // MlsSurface::project's offSurface be
 // lets a sample sit 0.6 kernel widths (≈ 2 input spacings) from the nearest input point, which at an open
 // boundary of a sparse input is several output spacings past the data (upsampling).
 constexpr double kBeyondLimit = 0.05;
-constexpr double kCarryShare = 0.05;
+constexpr double kCarryShare = 0.05;      // edits touching more than this share of samples restart the relaxation
 constexpr std::size_t kWiderQuery = 3;   // candidates queried for a sample the rule refuses some of
-constexpr double kCellSheetHeight = 1.25;
-constexpr double kLayerGapSpacings = 1.5;  // voxel thinning: an empty band this many input spacings wide splits a cell  // voxel cells: another sheet lies this × the sheet height off a plane     // edits touching more than this share of samples restart the relaxation
+constexpr double kCellSheetHeight = 1.25;  // voxel cells: another sheet lies this × the sheet height off a plane
+constexpr double kLayerGapSpacings = 1.5;  // voxel thinning: an empty band this many input spacings wide splits a cell
 
 /// The working sample set S.
 struct Samples {
