@@ -2,6 +2,7 @@
 #pragma once
 // Synthetic shapes with known answers for the tests.
 #include <Eigen/Core>
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <vector>
@@ -22,6 +23,33 @@ inline PointCloud sphereCloud(std::size_t n, double radius = 1.0, std::uint64_t 
     c.points.push_back(centre + radius * d);
     c.normals.push_back(d);
   }
+  return c;
+}
+
+/// A closed box [0,1]² × [0, t] sampled uniformly by area on all six faces, t = @p thicknessSpacings times the
+/// sampling's spacing (0.5/√density, the mean nearest-neighbour distance); positions only. @p spacing receives it.
+inline PointCloud thinBoxCloud(std::size_t n, double thicknessSpacings, std::uint64_t seed, double* spacing = nullptr,
+                               double* thickness = nullptr) {
+  double t = 0, s = 0;
+  for (int it = 0; it < 20; ++it) {  // the thickness changes the area, which changes the spacing
+    s = 0.5 / std::sqrt(static_cast<double>(n) / (2.0 + 4.0 * t));
+    t = thicknessSpacings * s;
+  }
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  PointCloud c;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double pick = u(rng) * (2.0 + 4.0 * t), a = u(rng), b = u(rng);
+    if (pick < 2.0) {
+      c.points.emplace_back(a, b, pick < 1.0 ? 0.0 : t);
+      continue;
+    }
+    const int face = std::min(3, static_cast<int>((pick - 2.0) / t));  // which rim face
+    const Eigen::Vector3d rim[4] = {{0, a, b * t}, {1, a, b * t}, {a, 0, b * t}, {a, 1, b * t}};
+    c.points.push_back(rim[face]);
+  }
+  if (spacing) *spacing = s;
+  if (thickness) *thickness = t;
   return c;
 }
 

@@ -57,16 +57,19 @@ std::vector<PointAttribute> carryAttributes(const PointCloud& input, const std::
 }
 
 /// Exit 0 promises points on the input's surface. Each axis of the working cloud's bounding box is enlarged by
-/// three output spacings, but by no more than a tenth of its own extent (a sample 20 units off a ribbon 2 wide
-/// is off the surface, however long the ribbon); a sample outside has left the surface (projection diverged
-/// on a degenerate cloud), and the run fails instead of writing it.
+/// a tenth of its own extent, or one input spacing where that is more (the MLS surface is resolved to about the
+/// input's spacing: at the rim of a plate a few spacings thick a sample may sit 0.6 of one out) but never more
+/// than a quarter of the extent, and in any case by at most three output spacings (a sample 20 units off a ribbon
+/// 2 wide is off the surface, however long the ribbon). A sample outside has left the surface (projection
+/// diverged on a degenerate cloud), and the run fails instead of writing it.
 void checkWithinInput(const std::vector<Eigen::Vector3d>& samples, const std::vector<Eigen::Vector3d>& input,
-                      double spacing) {
+                      double spacing, double inputSpacing) {
   Eigen::AlignedBox3d box;
   for (const Eigen::Vector3d& p : input) box.extend(p);
   const Eigen::Vector3d extent = box.sizes();
+  const Eigen::Vector3d resolved = (0.25 * extent).cwiseMin(inputSpacing);
   const Eigen::Vector3d margin =
-      (0.1 * extent).cwiseMin(3 * spacing).array() + 1e-9 * extent.norm();  // the 1e-9: rounding
+      (0.1 * extent).cwiseMax(resolved).cwiseMin(3 * spacing).array() + 1e-9 * extent.norm();  // 1e-9: rounding
   box.min() -= margin;
   box.max() += margin;
   std::size_t outside = 0;
@@ -317,7 +320,7 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
   result.cloud.normals = std::move(s.nrm);
   t = clock.begin("report");
   result.spacing = spacingStats(result.cloud.points, params.threads);
-  checkWithinInput(result.cloud.points, cloud.points, result.spacing.mean);
+  checkWithinInput(result.cloud.points, cloud.points, result.spacing.mean, surface->meanSpacing());
   if (curvature) reportLevels(*curvature, surface->index(), result);
   clock.end("report", t);
   if (!attributeSource.attributes.empty()) {
