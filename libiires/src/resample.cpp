@@ -998,12 +998,13 @@ std::string jsonArray(const std::vector<T>& values) {
 /// is off the surface, however long the ribbon); a sample outside has left the surface (projection diverged
 /// on a degenerate cloud), and the run fails instead of writing it.
 void checkWithinInput(const std::vector<Eigen::Vector3d>& samples, const std::vector<Eigen::Vector3d>& input,
-                      double spacing) {
+                      double spacing, double inputSpacing) {
   Eigen::AlignedBox3d box;
   for (const Eigen::Vector3d& p : input) box.extend(p);
   const Eigen::Vector3d extent = box.sizes();
+  const Eigen::Vector3d resolved = (0.25 * extent).cwiseMin(inputSpacing);
   const Eigen::Vector3d margin =
-      (0.1 * extent).cwiseMin(3 * spacing).array() + 1e-9 * extent.norm();  // the 1e-9: rounding
+      (0.1 * extent).cwiseMax(resolved).cwiseMin(3 * spacing).array() + 1e-9 * extent.norm();  // 1e-9: rounding
   box.min() -= margin;
   box.max() += margin;
   std::size_t outside = 0;
@@ -1251,7 +1252,7 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
   result.cloud.normals = std::move(s.nrm);
   t = clock.begin("report");
   result.spacing = spacingStats(result.cloud.points, params.threads);
-  checkWithinInput(result.cloud.points, cloud.points, result.spacing.mean);
+  checkWithinInput(result.cloud.points, cloud.points, result.spacing.mean, surface->meanSpacing());
   if (curvature) {  // points and mean spacing per level (each output point takes its nearest input's level)
     const std::size_t levels = curvature->pointsPerLevel.size();
     result.pointsPerLevel.assign(levels, 0);
