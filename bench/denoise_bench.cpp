@@ -20,6 +20,7 @@
 #include <CGAL/property_map.h>
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <chrono>
 #include <ctime>
 #include <cstdio>
@@ -31,6 +32,7 @@
 #include <vector>
 
 #include "iires/denoise.hpp"
+#include "iires/features.hpp"
 #include "iires/io.hpp"
 #include "iires/knn.hpp"
 #include "iires/metrics.hpp"
@@ -68,32 +70,6 @@ struct Options {
 
 using iires::bench::split;
 
-/// Points sampled every @p step along the mesh edges whose dihedral angle exceeds @p degrees.
-std::vector<Eigen::Vector3d> sharpEdgeSamples(const iires::TriangleMesh& mesh, double degrees, double step) {
-  std::map<std::pair<int, int>, std::vector<int>> faces;
-  std::vector<Eigen::Vector3d> fn(mesh.triangles.size());
-  for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
-    const auto& t = mesh.triangles[f];
-    const auto& V = mesh.vertices;
-    fn[f] = (V[t[1]] - V[t[0]]).cross(V[t[2]] - V[t[0]]).normalized();
-    for (int e = 0; e < 3; ++e) {
-      int a = t[e], b = t[(e + 1) % 3];
-      if (a > b) std::swap(a, b);
-      faces[{a, b}].push_back(static_cast<int>(f));
-    }
-  }
-  const double cosLimit = std::cos(degrees * M_PI / 180.0);
-  std::vector<Eigen::Vector3d> out;
-  for (const auto& [edge, fs] : faces) {
-    if (fs.size() != 2 || !fn[fs[0]].allFinite() || !fn[fs[1]].allFinite()) continue;
-    if (fn[fs[0]].dot(fn[fs[1]]) > cosLimit) continue;  // normals within 45°: not sharp
-    const Eigen::Vector3d a = mesh.vertices[edge.first], b = mesh.vertices[edge.second];
-    const int steps = std::max(1, static_cast<int>(std::ceil((b - a).norm() / step)));
-    for (int s = 0; s <= steps; ++s) out.push_back(a + (b - a) * (static_cast<double>(s) / steps));
-  }
-  return out;
-}
-
 struct Error {
   double mean = 0, edge = 0;
 };
@@ -129,42 +105,28 @@ std::vector<Eigen::Vector3d> fromCgal(const std::vector<PointNormal>& c) {
   return out;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  Options opt;
+/// @return false (after printing the usage) on an unknown argument. @throws std::invalid_argument for a missing
+/// value.
+bool parseOptions(int argc, char** argv, Options& opt) {
   for (int a = 1; a < argc; ++a) {
     const std::string arg = argv[a];
     auto value = [&]() -> std::string {
       if (a + 1 >= argc) throw std::invalid_argument(arg + " needs a value");
       return argv[++a];
     };
-    if (arg == "--models")
-      opt.models = split(value());
-    else if (arg == "--count")
-      opt.count = std::stoul(value());
-    else if (arg == "--outliers")
-      opt.outlierFraction = std::stod(value());
-    else if (arg == "--sign")
-      opt.symmetric = value() != "onesided";
-    else if (arg == "--normals")
-      opt.estimatedNormals = value() != "sampled";
-    else if (arg == "--speed-count")
-      opt.speedCount = std::stoul(value());
-    else if (arg == "--threads")
-      opt.threads = std::stoi(value());
-    else if (arg == "--dn-k")
-      opt.pre.denoise.neighbours = std::stoi(value());
-    else if (arg == "--dn-kernel")
-      opt.pre.denoise.kernelNeighbour = std::stoi(value());
-    else if (arg == "--dn-iterations")
-      opt.pre.denoise.iterations = std::stoi(value());
-    else if (arg == "--dn-sharpness")
-      opt.pre.denoise.sharpnessAngle = std::stod(value());
-    else if (arg == "--dn-degree")
-      opt.pre.denoise.degree = std::stoi(value());
-    else if (arg == "--no-cgal")
-      opt.cgal = false;
+    if (arg == "--models") opt.models = split(value());
+    else if (arg == "--count") opt.count = std::stoul(value());
+    else if (arg == "--outliers") opt.outlierFraction = std::stod(value());
+    else if (arg == "--sign") opt.symmetric = value() != "onesided";
+    else if (arg == "--normals") opt.estimatedNormals = value() != "sampled";
+    else if (arg == "--speed-count") opt.speedCount = std::stoul(value());
+    else if (arg == "--threads") opt.threads = std::stoi(value());
+    else if (arg == "--dn-k") opt.pre.denoise.neighbours = std::stoi(value());
+    else if (arg == "--dn-kernel") opt.pre.denoise.kernelNeighbour = std::stoi(value());
+    else if (arg == "--dn-iterations") opt.pre.denoise.iterations = std::stoi(value());
+    else if (arg == "--dn-sharpness") opt.pre.denoise.sharpnessAngle = std::stod(value());
+    else if (arg == "--dn-degree") opt.pre.denoise.degree = std::stoi(value());
+    else if (arg == "--no-cgal") opt.cgal = false;
     else if (arg == "--noises") {
       opt.noises.clear();
       for (const auto& s : split(value())) opt.noises.push_back(std::stod(s));
@@ -173,173 +135,206 @@ int main(int argc, char** argv) {
           stderr,
           "usage: denoise_bench [--models a,b] [--count N] [--outliers F] [--sign symmetric|onesided]\n"
           "       [--normals estimated|sampled] [--noises 0.33,0.66] [--speed-count N] [--threads T]\n");
-      return 2;
+      return false;
     }
   }
+  return true;
+}
+
+/// One model's clean sampling, its spacing l and which points lie within 2·l of a sharp edge (dihedral > 45°).
+struct ModelCase {
+  std::string name;
+  iires::TriangleMesh mesh;
+  iires::PointCloud clean;
+  double l = 0;
+  std::vector<std::uint8_t> nearEdge;  // empty: no sharp edge
+  std::size_t edgePoints = 0;
+};
+
+ModelCase loadCase(const std::string& model, const Options& opt) {
+  ModelCase c;
+  c.name = model;
+  c.mesh = iires::readMesh(std::string(IIRES_DATA_DIR) + "/meshes/" + model + ".off");
+  iires::MeshSamplingParams sp;
+  sp.count = opt.count;
+  sp.seed = 7;
+  c.clean = iires::sampleMesh(c.mesh, sp);
+  c.l = iires::meanNeighbourSpacing(c.clean.points, 6, opt.threads);
+  const auto edges = iires::sampleSegments(iires::sharpMeshEdges(c.mesh, 45.0), 0.25 * c.l);
+  if (!edges.empty()) {
+    const iires::KnnIndex edgeTree(edges);
+    c.nearEdge.assign(c.clean.size(), 0);
+    for (std::size_t i = 0; i < c.clean.size(); ++i) {
+      double d2 = 0;
+      edgeTree.nearest(c.clean.points[i], &d2);
+      c.nearEdge[i] = std::sqrt(d2) <= 2.0 * c.l ? 1 : 0;
+      c.edgePoints += c.nearEdge[i];
+    }
+  }
+  return c;
+}
+
+/// The noisy input: offsets along the true normal of magnitude uniform in [0, noise·l] (random sign unless
+/// one-sided), and a share of outliers moved ±[3, 6]·l along it (marked in @p injected).
+iires::PointCloud noisyInput(const ModelCase& c, double noise, double outlierFraction, bool symmetric,
+                             std::vector<std::uint8_t>& injected) {
+  const std::size_t n = c.clean.size();
+  std::mt19937_64 rng(1000 + static_cast<std::uint64_t>(noise * 100) + (outlierFraction > 0 ? 1 : 0));
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  iires::PointCloud noisy = c.clean;
+  injected.assign(n, 0);
+  for (std::size_t i = 0; i < n; ++i) {
+    const double sign = symmetric && unit(rng) < 0.5 ? -1.0 : 1.0;
+    noisy.points[i] += sign * unit(rng) * noise * c.l * c.clean.normals[i];
+  }
+  const auto outliers = static_cast<std::size_t>(std::llround(outlierFraction * static_cast<double>(n)));
+  std::vector<std::size_t> order(n);
+  std::iota(order.begin(), order.end(), 0);
+  for (std::size_t k = 0; k < outliers; ++k) {
+    std::swap(order[k], order[std::uniform_int_distribution<std::size_t>(k, n - 1)(rng)]);
+    const std::size_t i = order[k];
+    injected[i] = 1;
+    const double sign = unit(rng) < 0.5 ? -1.0 : 1.0;
+    noisy.points[i] = c.clean.points[i] + sign * (3.0 + 3.0 * unit(rng)) * c.l * c.clean.normals[i];
+  }
+  return noisy;
+}
+
+/// iires' pre-processing (outliers pulled, then MLS denoising) on @p noisy, with the outlier detection's recall
+/// and false-positive rate (a detection-only run of the same rule) appended to the report line.
+template <typename Report>
+void runIires(const ModelCase& c, const iires::PointCloud& noisy, const std::vector<std::uint8_t>& injected,
+              double normalSeconds, const Options& opt, const iires::MeshDistance& md, Report&& report) {
+  const std::size_t n = c.clean.size();
+  iires::PreprocessParams pp = opt.pre;
+  pp.threads = opt.threads;
+  const auto t0 = Clock::now();
+  const iires::PreprocessResult r = iires::preprocess(noisy, pp);
+  const double seconds = since(t0);
+  iires::OutlierParams op = pp.outliers;
+  op.mode = iires::OutlierMode::kKeep;
+  op.threads = opt.threads;
+  const iires::OutlierResult det = iires::processOutliers(noisy, op);
+  const auto outliers = static_cast<std::size_t>(std::count(injected.begin(), injected.end(), 1));
+  std::size_t truePos = 0;
+  for (std::uint32_t i : det.outliers) truePos += injected[i];
+  const std::size_t falsePos = det.found - truePos;
+  std::size_t within = 0;
+  for (std::size_t i = 0; i < n; ++i)
+    if (injected[i] && md.distance(r.cloud.points[i]) <= c.l) ++within;
+  std::ostringstream extra;
+  extra.precision(4);
+  extra << " found=" << det.found << " injected=" << outliers;
+  if (outliers) extra << " recall=" << double(truePos) / double(outliers);
+  extra << " false_pos_rate=" << double(falsePos) / double(n - outliers);
+  if (outliers) extra << " pulled_within_l=" << double(within) / double(outliers);
+  extra << " normals_s=" << normalSeconds;
+  report("iires", r.cloud.points, seconds, extra.str());
+}
+
+/// One model, every noise level (with and without outliers): the input, iires, CGAL jet and bilateral smoothing.
+void runModel(const ModelCase& c, const Options& opt) {
+  const iires::MeshDistance md(c.mesh);
+  const double diag = md.diagonal(), l = c.l;
   const int T = opt.threads;
+  std::printf("model=%s points=%zu l=%.6g l_over_diag=%.6g edge_points=%zu\n", c.name.c_str(), c.clean.size(), l,
+              l / diag, c.edgePoints);
+  std::fflush(stdout);
+  for (double noise : opt.noises) {
+    for (double outlierFraction : {0.0, opt.outlierFraction}) {
+      std::vector<std::uint8_t> injected;
+      iires::PointCloud noisy = noisyInput(c, noise, outlierFraction, opt.symmetric, injected);
+      double normalSeconds = 0;
+      if (opt.estimatedNormals) {
+        const auto t0 = Clock::now();
+        iires::NormalParams np;
+        np.threads = T;
+        noisy.normals = iires::estimateNormals(noisy.points, np);
+        normalSeconds = since(t0);
+      }
+      const std::string tag = "model=" + c.name + " noise=" + std::to_string(noise).substr(0, 4) +
+                              " outliers=" + std::to_string(outlierFraction).substr(0, 5);
+      auto report = [&](const char* method, const std::vector<Eigen::Vector3d>& pts, double seconds,
+                        const std::string& extra) {
+        const Error e = measure(md, pts, c.nearEdge, T);
+        std::printf("%s method=%s mean_err_diag=%.4e mean_err_l=%.4f", tag.c_str(), method, e.mean / diag,
+                    e.mean / l);
+        if (c.edgePoints) std::printf(" edge_err_diag=%.4e edge_err_l=%.4f", e.edge / diag, e.edge / l);
+        std::printf(" time_s=%.3f%s\n", seconds, extra.c_str());
+        std::fflush(stdout);
+      };
+      report("input", noisy.points, 0.0, "");
+      runIires(c, noisy, injected, normalSeconds, opt, md, report);
+      if (opt.cgal) {
+        // CGAL jet smoothing, k = 24, documented defaults (degree_fitting 2, degree_monge 2).
+        auto pts = toCgal(noisy);
+        auto t0 = Clock::now();
+        CGAL::jet_smooth_point_set<CGAL::Sequential_tag>(
+            pts, static_cast<unsigned>(opt.cgalK),
+            CGAL::parameters::point_map(CGAL::First_of_pair_property_map<PointNormal>()));
+        report("cgal_jet", fromCgal(pts), since(t0), "");
+        // CGAL bilateral smoothing, k = 24, documented defaults (sharpness_angle 30°), one call.
+        pts = toCgal(noisy);
+        t0 = Clock::now();
+        CGAL::bilateral_smooth_point_set<CGAL::Sequential_tag>(
+            pts, static_cast<unsigned>(opt.cgalK),
+            CGAL::parameters::point_map(CGAL::First_of_pair_property_map<PointNormal>())
+                .normal_map(CGAL::Second_of_pair_property_map<PointNormal>()));
+        report("cgal_bilateral", fromCgal(pts), since(t0), "");
+      }
+      if (opt.outlierFraction <= 0) break;
+    }
+  }
+}
+
+/// Speed: --speed-count points of bunny00 with 0.33·l noise and 2 % outliers, no normals; denoising and the full
+/// pre-processing on --threads cores, wall and process CPU time (on a shared machine CPU / threads is the
+/// quiet-machine wall time).
+void runSpeed(const Options& opt) {
+  const int T = opt.threads;
+  const iires::TriangleMesh mesh = iires::readMesh(std::string(IIRES_DATA_DIR) + "/meshes/bunny00.off");
+  iires::MeshSamplingParams sp;
+  sp.count = opt.speedCount;
+  sp.seed = 9;
+  const iires::PointCloud clean = iires::sampleMesh(mesh, sp);
+  const double l = iires::meanNeighbourSpacing(clean.points, 6, T);
+  sp.noise = 0.33 * l;
+  sp.gaussianNoise = false;
+  sp.outlierFraction = 0.02;
+  sp.outlierMin = 3 * l;
+  sp.outlierMax = 6 * l;
+  iires::PointCloud noisy = iires::sampleMesh(mesh, sp);
+  noisy.normals.clear();
+  iires::DenoiseParams dp = opt.pre.denoise;
+  dp.threads = T;
+  auto run = [&](const char* what, auto&& fn) {
+    const auto t0 = Clock::now();
+    const std::clock_t c0 = std::clock();
+    fn();
+    std::printf(" %s_s=%.3f %s_cpu_s=%.3f", what, since(t0), what,
+                static_cast<double>(std::clock() - c0) / CLOCKS_PER_SEC);
+  };
+  std::printf("speed points=%zu threads=%d", noisy.size(), T);
+  iires::DenoiseResult d;
+  run("denoise", [&] { d = iires::denoise(noisy, dp); });
+  std::printf(" neighbours_s=%.3f sweeps_s=%.3f orient_s=%.3f iterations=%d", d.neighbourSeconds, d.sweepSeconds,
+              d.orientSeconds, d.iterations);
+  iires::PreprocessParams pp = opt.pre;
+  pp.threads = T;
+  iires::PreprocessResult r;
+  run("preprocess", [&] { r = iires::preprocess(noisy, pp); });
+  std::printf(" outliers_s=%.3f denoise_in_preprocess_s=%.3f\n", r.outlierSeconds, r.denoiseSeconds);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Options opt;
+  if (!parseOptions(argc, argv, opt)) return 2;
   std::printf("config count=%zu outliers=%.3f sign=%s normals=%s threads=%d cgal_k=%d\n", opt.count,
               opt.outlierFraction, opt.symmetric ? "symmetric" : "onesided",
-              opt.estimatedNormals ? "estimated" : "sampled", T, opt.cgalK);
-
-  for (const std::string& model : opt.models) {
-    const iires::TriangleMesh mesh =
-        iires::readMesh(std::string(IIRES_DATA_DIR) + "/meshes/" + model + ".off");
-    const iires::MeshDistance md(mesh);
-    const double diag = md.diagonal();
-    iires::MeshSamplingParams sp;
-    sp.count = opt.count;
-    sp.seed = 7;
-    const iires::PointCloud clean = iires::sampleMesh(mesh, sp);
-    const double l = iires::meanNeighbourSpacing(clean.points, 6, T);
-    const std::size_t n = clean.size();
-
-    // Points within 2·l of a sharp edge (dihedral > 45°), judged from their clean positions.
-    std::vector<std::uint8_t> nearEdge;
-    const auto edges = sharpEdgeSamples(mesh, 45.0, 0.25 * l);
-    std::size_t edgePoints = 0;
-    if (!edges.empty()) {
-      const iires::KnnIndex edgeTree(edges);
-      nearEdge.assign(n, 0);
-      for (std::size_t i = 0; i < n; ++i) {
-        double d2 = 0;
-        edgeTree.nearest(clean.points[i], &d2);
-        nearEdge[i] = std::sqrt(d2) <= 2.0 * l ? 1 : 0;
-        edgePoints += nearEdge[i];
-      }
-    }
-    std::printf("model=%s points=%zu l=%.6g l_over_diag=%.6g edge_points=%zu\n", model.c_str(), n, l,
-                l / diag, edgePoints);
-    std::fflush(stdout);
-
-    for (double noise : opt.noises) {
-      for (double outlierFraction : {0.0, opt.outlierFraction}) {
-        // The noisy input: offsets along the true normal; outliers replace the noise of the points they hit.
-        std::mt19937_64 rng(1000 + static_cast<std::uint64_t>(noise * 100) + (outlierFraction > 0 ? 1 : 0));
-        std::uniform_real_distribution<double> unit(0.0, 1.0);
-        iires::PointCloud noisy = clean;
-        std::vector<std::uint8_t> injected(n, 0);
-        for (std::size_t i = 0; i < n; ++i) {
-          const double sign = opt.symmetric && unit(rng) < 0.5 ? -1.0 : 1.0;
-          noisy.points[i] += sign * unit(rng) * noise * l * clean.normals[i];
-        }
-        const auto outliers =
-            static_cast<std::size_t>(std::llround(outlierFraction * static_cast<double>(n)));
-        std::vector<std::size_t> order(n);
-        std::iota(order.begin(), order.end(), 0);
-        for (std::size_t k = 0; k < outliers; ++k) {
-          std::swap(order[k], order[std::uniform_int_distribution<std::size_t>(k, n - 1)(rng)]);
-          const std::size_t i = order[k];
-          injected[i] = 1;
-          const double sign = unit(rng) < 0.5 ? -1.0 : 1.0;
-          noisy.points[i] = clean.points[i] + sign * (3.0 + 3.0 * unit(rng)) * l * clean.normals[i];
-        }
-        double normalSeconds = 0;
-        if (opt.estimatedNormals) {
-          const auto t0 = Clock::now();
-          iires::NormalParams np;
-          np.threads = T;
-          noisy.normals = iires::estimateNormals(noisy.points, np);
-          normalSeconds = since(t0);
-        }
-        const std::string tag = "model=" + model + " noise=" + std::to_string(noise).substr(0, 4) +
-                                " outliers=" + std::to_string(outlierFraction).substr(0, 5);
-        auto report = [&](const char* method, const std::vector<Eigen::Vector3d>& pts, double seconds,
-                          const std::string& extra) {
-          const Error e = measure(md, pts, nearEdge, T);
-          std::printf("%s method=%s mean_err_diag=%.4e mean_err_l=%.4f", tag.c_str(), method, e.mean / diag,
-                      e.mean / l);
-          if (edgePoints) std::printf(" edge_err_diag=%.4e edge_err_l=%.4f", e.edge / diag, e.edge / l);
-          std::printf(" time_s=%.3f%s\n", seconds, extra.c_str());
-          std::fflush(stdout);
-        };
-        report("input", noisy.points, 0.0, "");
-
-        // iires: outliers (pull) then MLS denoising.
-        {
-          iires::PreprocessParams pp = opt.pre;
-          pp.threads = T;
-          const auto t0 = Clock::now();
-          const iires::PreprocessResult r = iires::preprocess(noisy, pp);
-          const double seconds = since(t0);
-          // Outlier statistics from a detection-only run (same rule; keep mode reports the indices).
-          iires::OutlierParams op = pp.outliers;
-          op.mode = iires::OutlierMode::kKeep;
-          op.threads = T;
-          const iires::OutlierResult det = iires::processOutliers(noisy, op);
-          std::size_t truePos = 0;
-          for (std::uint32_t i : det.outliers) truePos += injected[i];
-          const std::size_t falsePos = det.found - truePos;
-          std::size_t within = 0;
-          for (std::size_t i = 0; i < n; ++i)
-            if (injected[i] && md.distance(r.cloud.points[i]) <= l) ++within;
-          std::ostringstream extra;
-          extra.precision(4);
-          extra << " found=" << det.found << " injected=" << outliers;
-          if (outliers) extra << " recall=" << double(truePos) / double(outliers);
-          extra << " false_pos_rate=" << double(falsePos) / double(n - outliers);
-          if (outliers) extra << " pulled_within_l=" << double(within) / double(outliers);
-          extra << " normals_s=" << normalSeconds;
-          report("iires", r.cloud.points, seconds, extra.str());
-        }
-        // CGAL jet smoothing, k = 24, documented defaults (degree_fitting 2, degree_monge 2).
-        if (opt.cgal) {
-          auto pts = toCgal(noisy);
-          const auto t0 = Clock::now();
-          CGAL::jet_smooth_point_set<CGAL::Sequential_tag>(
-              pts, static_cast<unsigned>(opt.cgalK),
-              CGAL::parameters::point_map(CGAL::First_of_pair_property_map<PointNormal>()));
-          report("cgal_jet", fromCgal(pts), since(t0), "");
-        }
-        // CGAL bilateral smoothing, k = 24, documented defaults (sharpness_angle 30°), one call.
-        if (opt.cgal) {
-          auto pts = toCgal(noisy);
-          const auto t0 = Clock::now();
-          CGAL::bilateral_smooth_point_set<CGAL::Sequential_tag>(
-              pts, static_cast<unsigned>(opt.cgalK),
-              CGAL::parameters::point_map(CGAL::First_of_pair_property_map<PointNormal>())
-                  .normal_map(CGAL::Second_of_pair_property_map<PointNormal>()));
-          report("cgal_bilateral", fromCgal(pts), since(t0), "");
-        }
-        if (opt.outlierFraction <= 0) break;
-      }
-    }
-  }
-
-  // Speed: 200k points of bunny00 with 0.33·l noise, denoise and full pre-processing on --threads cores.
-  if (opt.speedCount > 0) {
-    const iires::TriangleMesh mesh = iires::readMesh(std::string(IIRES_DATA_DIR) + "/meshes/bunny00.off");
-    iires::MeshSamplingParams sp;
-    sp.count = opt.speedCount;
-    sp.seed = 9;
-    const iires::PointCloud clean = iires::sampleMesh(mesh, sp);
-    const double l = iires::meanNeighbourSpacing(clean.points, 6, T);
-    sp.noise = 0.33 * l;
-    sp.gaussianNoise = false;
-    sp.outlierFraction = 0.02;
-    sp.outlierMin = 3 * l;
-    sp.outlierMax = 6 * l;
-    iires::PointCloud noisy = iires::sampleMesh(mesh, sp);
-    noisy.normals.clear();  // as a scan: no normals
-    iires::DenoiseParams dp = opt.pre.denoise;
-    dp.threads = T;
-    // Wall and process CPU time (the machine may be shared: CPU / threads is the quiet-machine wall time).
-    auto run = [&](const char* what, auto&& fn) {
-      const auto t0 = Clock::now();
-      const std::clock_t c0 = std::clock();
-      fn();
-      std::printf(" %s_s=%.3f %s_cpu_s=%.3f", what, since(t0), what,
-                  static_cast<double>(std::clock() - c0) / CLOCKS_PER_SEC);
-    };
-    std::printf("speed points=%zu threads=%d", noisy.size(), T);
-    iires::DenoiseResult d;
-    run("denoise", [&] { d = iires::denoise(noisy, dp); });
-    std::printf(" neighbours_s=%.3f sweeps_s=%.3f orient_s=%.3f iterations=%d", d.neighbourSeconds,
-                d.sweepSeconds, d.orientSeconds, d.iterations);
-    iires::PreprocessParams pp = opt.pre;
-    pp.threads = T;
-    iires::PreprocessResult r;
-    run("preprocess", [&] { r = iires::preprocess(noisy, pp); });
-    std::printf(" outliers_s=%.3f denoise_in_preprocess_s=%.3f\n", r.outlierSeconds, r.denoiseSeconds);
-  }
+              opt.estimatedNormals ? "estimated" : "sampled", opt.threads, opt.cgalK);
+  for (const std::string& model : opt.models) runModel(loadCase(model, opt), opt);
+  if (opt.speedCount > 0) runSpeed(opt);
   return 0;
 }

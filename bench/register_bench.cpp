@@ -309,204 +309,239 @@ void print(const std::string& model, const std::string& method, const Tally& t, 
   std::fflush(stdout);
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+/// The benchmark's command line.
+struct Options {
   std::vector<std::string> models = {"bunny00", "armadillo", "fandisk", "hand", "kitten", "knot1"};
   std::vector<std::string> methods = {"iires", "o3d-fpfh", "o3d-fpfh-norm", "o3d-icp"};
-  int trials = 50, threads = 0;
+  int trials = 50, firstTrial = 0, threads = 0;
   bool verbose = false;
   double cut = 0, targetCut = 0, outliers = 0, overlapHint = 0;  // 0 = no cut / no outliers / no hint
   std::vector<std::string> symmetric = {"knot1"};
   std::uint64_t seed = 1;
   std::size_t sourceCount = 5000, targetCount = 30000;
-  const iires::reg::RegistrationParams defaults;
-  std::size_t samples = defaults.samples, so3Count = defaults.so3Count, thin = defaults.maxInputPerSample,
-              icpCandidates = defaults.icpCandidates;
-  int firstTrial = 0;
-  iires::ResampleParams resampleParams = defaults.resample;
-  iires::reg::RotationSearchParams searchParams = defaults.search;
-  int screenIterations = defaults.screenIterations;
-  std::vector<double> searchOverlaps = defaults.searchOverlaps;
-  double searchOverlapExponent = defaults.searchOverlapExponent, fitOverlapExponent = defaults.fitOverlapExponent;
+  iires::reg::RegistrationParams reg;  // iires' settings (--samples, --resample, --search, ...); seed per trial
+};
+
+/// --resample key=value,...: the registration's resampler settings.
+void parseResampleKeys(const std::string& list, iires::ResampleParams& rp) {
+  for (const auto& kv : split(list)) {
+    const auto eq = kv.find('=');
+    const std::string key = kv.substr(0, eq);
+    const double v = std::stod(kv.substr(eq + 1));
+    if (key == "preprocess") rp.preprocess = v != 0;
+    else if (key == "intrinsic") rp.intrinsic = v != 0;
+    else if (key == "maxPasses") rp.maxPasses = static_cast<int>(v);
+    else if (key == "relaxPerPass") rp.relaxPerPass = static_cast<int>(v);
+    else if (key == "maxRelaxIterations") rp.maxRelaxIterations = static_cast<int>(v);
+    else if (key == "relaxPatience") rp.relaxPatience = static_cast<int>(v);
+    else if (key == "candidateFactor") rp.candidateFactor = v;
+    else throw std::invalid_argument("unknown resample key " + key);
+  }
+}
+
+/// --search key=value,...: the rotation search's settings (lists separated by ':').
+void parseSearchKeys(const std::string& list, iires::reg::RegistrationParams& p) {
+  iires::reg::RotationSearchParams& sp = p.search;
+  for (const auto& kv : split(list)) {
+    const auto eq = kv.find('=');
+    const std::string key = kv.substr(0, eq);
+    if (key == "searchOverlaps" || key == "translationScales") {
+      std::vector<double>& values = key == "searchOverlaps" ? p.searchOverlaps : sp.translationScales;
+      values.clear();
+      std::stringstream ss(kv.substr(eq + 1));
+      for (std::string f; std::getline(ss, f, ':');) values.push_back(std::stod(f));
+      continue;
+    }
+    const double v = std::stod(kv.substr(eq + 1));
+    if (key == "coarsePoints") sp.coarsePoints = static_cast<std::size_t>(v);
+    else if (key == "coarseKeep") sp.coarseKeep = static_cast<std::size_t>(v);
+    else if (key == "fullKeep") sp.fullKeep = static_cast<std::size_t>(v);
+    else if (key == "minSeparationDeg") sp.minSeparationDeg = v;
+    else if (key == "refineLevels") sp.refineLevels = static_cast<int>(v);
+    else if (key == "screenIterations") p.screenIterations = static_cast<int>(v);
+    else if (key == "searchOverlapExponent") p.searchOverlapExponent = v;
+    else if (key == "fitOverlapExponent") p.fitOverlapExponent = v;
+    else if (key == "keep") sp.keep = static_cast<std::size_t>(v);
+    else if (key == "translationRadius") sp.translationRadius = v;
+    else if (key == "translationStep") sp.translationStep = v;
+    else if (key == "translationPoints") sp.translationPoints = static_cast<std::size_t>(v);
+    else if (key == "translationRefineLevels") sp.translationRefineLevels = static_cast<int>(v);
+    else throw std::invalid_argument("unknown search key " + key);
+  }
+}
+
+/// @throws std::invalid_argument for an unknown argument or a missing value.
+Options parseOptions(int argc, char** argv) {
+  Options o;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     auto next = [&]() -> std::string {
       if (i + 1 >= argc) throw std::invalid_argument(a + " needs a value");
       return argv[++i];
     };
-    if (a == "--models") models = split(next());
-    else if (a == "--methods") methods = split(next());
-    else if (a == "--trials") trials = std::stoi(next());
-    else if (a == "--threads") threads = std::stoi(next());
-    else if (a == "--seed") seed = std::stoull(next());
-    else if (a == "--source-count") sourceCount = std::stoul(next());
-    else if (a == "--target-count") targetCount = std::stoul(next());
-    else if (a == "--samples") samples = std::stoul(next());
-    else if (a == "--so3-count") so3Count = std::stoul(next());
-    else if (a == "--thin") thin = std::stoul(next());
-    else if (a == "--icp-candidates") icpCandidates = std::stoul(next());
-    else if (a == "--first-trial") firstTrial = std::stoi(next());
-    else if (a == "--resample") {  // override the registration's resampler settings: key=value,...
-      for (const auto& kv : split(next())) {
-        const auto eq = kv.find('=');
-        const std::string key = kv.substr(0, eq);
-        const double v = std::stod(kv.substr(eq + 1));
-        if (key == "preprocess") resampleParams.preprocess = v != 0;
-        else if (key == "intrinsic") resampleParams.intrinsic = v != 0;
-        else if (key == "maxPasses") resampleParams.maxPasses = static_cast<int>(v);
-        else if (key == "relaxPerPass") resampleParams.relaxPerPass = static_cast<int>(v);
-        else if (key == "maxRelaxIterations") resampleParams.maxRelaxIterations = static_cast<int>(v);
-        else if (key == "relaxPatience") resampleParams.relaxPatience = static_cast<int>(v);
-        else if (key == "candidateFactor") resampleParams.candidateFactor = v;
-        else throw std::invalid_argument("unknown resample key " + key);
-      }
-    }
-    else if (a == "--search") {  // override the rotation search's settings: key=value,...
-      for (const auto& kv : split(next())) {
-        const auto eq = kv.find('=');
-        const std::string key = kv.substr(0, eq);
-        if (key == "searchOverlaps" || key == "translationScales") {  // values separated by ':'
-          std::vector<double>& list = key == "searchOverlaps" ? searchOverlaps : searchParams.translationScales;
-          list.clear();
-          std::stringstream ss(kv.substr(eq + 1));
-          for (std::string f; std::getline(ss, f, ':');) list.push_back(std::stod(f));
-          continue;
-        }
-        const double v = std::stod(kv.substr(eq + 1));
-        if (key == "coarsePoints") searchParams.coarsePoints = static_cast<std::size_t>(v);
-        else if (key == "coarseKeep") searchParams.coarseKeep = static_cast<std::size_t>(v);
-        else if (key == "fullKeep") searchParams.fullKeep = static_cast<std::size_t>(v);
-        else if (key == "minSeparationDeg") searchParams.minSeparationDeg = v;
-        else if (key == "refineLevels") searchParams.refineLevels = static_cast<int>(v);
-        else if (key == "screenIterations") screenIterations = static_cast<int>(v);
-        else if (key == "searchOverlapExponent") searchOverlapExponent = v;
-        else if (key == "fitOverlapExponent") fitOverlapExponent = v;
-        else if (key == "keep") searchParams.keep = static_cast<std::size_t>(v);
-        else if (key == "translationRadius") searchParams.translationRadius = v;
-        else if (key == "translationStep") searchParams.translationStep = v;
-        else if (key == "translationPoints") searchParams.translationPoints = static_cast<std::size_t>(v);
-        else if (key == "translationRefineLevels") searchParams.translationRefineLevels = static_cast<int>(v);
-        else throw std::invalid_argument("unknown search key " + key);
-      }
-    }
-    else if (a == "--partial") cut = 0.25;
-    else if (a == "--cut") cut = std::stod(next());
-    else if (a == "--target-cut") targetCut = std::stod(next());
-    else if (a == "--outliers") outliers = std::stod(next());
-    else if (a == "--overlap") overlapHint = std::stod(next());
-    else if (a == "--symmetric") symmetric = split(next());
-    else if (a == "--verbose") verbose = true;
-    else {
-      std::cerr << "unknown argument " << a << "\n";
-      return 2;
-    }
+    if (a == "--models") o.models = split(next());
+    else if (a == "--methods") o.methods = split(next());
+    else if (a == "--trials") o.trials = std::stoi(next());
+    else if (a == "--threads") o.threads = std::stoi(next());
+    else if (a == "--seed") o.seed = std::stoull(next());
+    else if (a == "--source-count") o.sourceCount = std::stoul(next());
+    else if (a == "--target-count") o.targetCount = std::stoul(next());
+    else if (a == "--samples") o.reg.samples = std::stoul(next());
+    else if (a == "--so3-count") o.reg.so3Count = std::stoul(next());
+    else if (a == "--thin") o.reg.maxInputPerSample = std::stoul(next());
+    else if (a == "--icp-candidates") o.reg.icpCandidates = std::stoul(next());
+    else if (a == "--first-trial") o.firstTrial = std::stoi(next());
+    else if (a == "--resample") parseResampleKeys(next(), o.reg.resample);
+    else if (a == "--search") parseSearchKeys(next(), o.reg);
+    else if (a == "--partial") o.cut = 0.25;
+    else if (a == "--cut") o.cut = std::stod(next());
+    else if (a == "--target-cut") o.targetCut = std::stod(next());
+    else if (a == "--outliers") o.outliers = std::stod(next());
+    else if (a == "--overlap") o.overlapHint = std::stod(next());
+    else if (a == "--symmetric") o.symmetric = split(next());
+    else if (a == "--verbose") o.verbose = true;
+    else throw std::invalid_argument("unknown argument " + a);
   }
-  const bool partial = cut > 0 || targetCut > 0;
-  std::printf("config cut=%.3f target_cut=%.3f outliers=%.3f overlap_hint=%.3f\n", cut, targetCut, outliers,
-              overlapHint);
+  o.reg.threads = o.threads;
+  return o;
+}
+
+/// One trial's inputs: the source moved by a random similarity M (its surface points and, before the cut, its
+/// whole surface: a symmetric pose may land there), the target, and the truth T_target_source = M⁻¹.
+struct Trial {
+  Cloud source, sourceSurface, sourceWhole;
+  iires::PointCloud target;
+  Eigen::Matrix4d truth;
+  double diag = 0, scale = 1;
+};
+
+Trial makeTrial(const Model& model, const std::string& name, int trial, const Options& o) {
+  std::mt19937_64 rng(o.seed * 1000003 + std::hash<std::string>{}(name) % 100000 + trial);
+  const bool swap = trial % 2 == 1;  // alternate which cloud is the dense one
+  iires::PointCloud src = sampleModel(model, swap ? o.targetCount : o.sourceCount, rng());
+  Trial t;
+  t.target = sampleModel(model, swap ? o.sourceCount : o.targetCount, rng());
+  t.diag = iires::bboxDiagonal(t.target.points);
+  const iires::PointCloud whole = src;
+  if (o.cut > 0) src = cutByPlane(src, o.cut, rng);
+  if (o.targetCut > 0) t.target = cutByPlane(t.target, o.targetCut, rng);
+  const std::size_t sourceSurfacePoints = src.size();
+  addOutliers(src, o.outliers, rng);
+  addOutliers(t.target, o.outliers, rng);
+  std::uniform_real_distribution<double> u(0, 1);
+  const Eigen::Matrix3d R = randomRotation(rng);
+  t.scale = std::exp(std::log(0.2) + u(rng) * (std::log(5.0) - std::log(0.2)));
+  std::normal_distribution<double> g(0, 1);
+  const Vec shift = Vec(g(rng), g(rng), g(rng)).normalized() * t.diag * (1 + 2 * u(rng));
+  Eigen::Matrix4d M = Eigen::Matrix4d::Identity();
+  M.topLeftCorner<3, 3>() = t.scale * R;
+  M.topRightCorner<3, 1>() = shift;
+  t.truth = M.inverse();
+  t.source = transformed(src.points, M);
+  t.sourceWhole = transformed(whole.points, M);
+  // The errors are measured on the source's surface points (its outliers have no true position).
+  t.sourceSurface.assign(t.source.begin(), t.source.begin() + static_cast<std::ptrdiff_t>(sourceSurfacePoints));
+  return t;
+}
+
+/// What one method estimated on one trial.
+struct Estimate {
+  Eigen::Matrix4d T = Eigen::Matrix4d::Identity();
+  bool ambiguous = false;
+  double overlap = 0;
+  std::vector<iires::StageTime> timings;  // iires only
+};
+
+/// @throws std::invalid_argument for an unknown method; other exceptions are the method's failures.
+Estimate runMethod(const std::string& method, const Trial& t, int trial, const Options& o) {
+  Estimate e;
+  const std::uint64_t seed = o.seed + static_cast<std::uint64_t>(trial);
+  const Cloud& target = t.target.points;
+  if (method == "iires" || method == "iires-euler") {
+    iires::reg::RegistrationParams p = o.reg;
+    p.seed = seed;
+    if (o.overlapHint > 0) p.overlap = o.overlapHint;
+    if (method == "iires-euler") p.grid = iires::reg::RotationGridType::kEuler;
+    iires::PointCloud sc;
+    sc.points = t.source;
+    const auto r = iires::reg::registerClouds(sc, t.target, p);
+    e.T = r.T_target_source;
+    e.ambiguous = r.ambiguous;
+    e.overlap = r.sourceOverlap;
+    e.timings = r.timings;
+    if (o.verbose) {
+      std::printf("stages");
+      for (const auto& st : r.timings) std::printf(" %s=%.3f", st.name.c_str(), st.seconds);
+      std::printf(" queries=%zu icp_iterations=%d rank=%zu second_ratio=%.3f\n", r.pointQueries, r.icpIterations,
+                  r.candidateRank, r.secondBestScoreRatio);
+    }
+  } else if (method == "o3d-fpfh") {
+    e.T = o3dFpfh(t.source, target, t.diag / 50, seed);
+  } else if (method == "o3d-fpfh-norm") {
+    e.T = normalisedThen(t.source, target, [&](const Cloud& a, const Cloud& b) {
+      return o3dFpfh(a, b, iires::bboxDiagonal(b) / 50, seed);
+    });
+  } else if (method == "o3d-icp") {
+    e.T = o3dIcp(t.source, target, t.diag / 10);
+  } else {
+    throw std::invalid_argument("unknown method " + method);
+  }
+  return e;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Options o;
+  try {
+    o = parseOptions(argc, argv);
+    for (const auto& method : o.methods)
+      if (method != "iires" && method != "iires-euler" && method != "o3d-fpfh" && method != "o3d-fpfh-norm" &&
+          method != "o3d-icp")
+        throw std::invalid_argument("unknown method " + method);
+  } catch (const std::exception& ex) {
+    std::cerr << ex.what() << "\n";
+    return 2;
+  }
+  const bool partial = o.cut > 0 || o.targetCut > 0;
+  std::printf("config cut=%.3f target_cut=%.3f outliers=%.3f overlap_hint=%.3f\n", o.cut, o.targetCut, o.outliers,
+              o.overlapHint);
   open3d::utility::SetVerbosityLevel(open3d::utility::VerbosityLevel::Error);
   std::map<std::string, Tally> overall;
-  for (const auto& name : models) {
+  for (const auto& name : o.models) {
     const Model model = loadModel(name);
-    const bool bySurface = std::find(symmetric.begin(), symmetric.end(), name) != symmetric.end();
+    const bool bySurface = std::find(o.symmetric.begin(), o.symmetric.end(), name) != o.symmetric.end();
     std::map<std::string, Tally> tally;
-    for (int trial = firstTrial; trial < firstTrial + trials; ++trial) {
-      std::mt19937_64 rng(seed * 1000003 + std::hash<std::string>{}(name) % 100000 + trial);
-      const bool swap = trial % 2 == 1;  // alternate which cloud is the dense one
-      iires::PointCloud src = sampleModel(model, swap ? targetCount : sourceCount, rng());
-      iires::PointCloud tgt = sampleModel(model, swap ? sourceCount : targetCount, rng());
-      const double diag = iires::bboxDiagonal(tgt.points);
-      const iires::PointCloud whole = src;  // before the cut: the surface a symmetric pose may land on
-      if (cut > 0) src = cutByPlane(src, cut, rng);
-      if (targetCut > 0) tgt = cutByPlane(tgt, targetCut, rng);
-      const std::size_t sourceSurfacePoints = src.size();
-      addOutliers(src, outliers, rng);
-      addOutliers(tgt, outliers, rng);
-      // Pose: the source is moved by M = (sR | t); the truth is T_target_source = M⁻¹.
-      std::uniform_real_distribution<double> u(0, 1);
-      const Eigen::Matrix3d R = randomRotation(rng);
-      const double s = std::exp(std::log(0.2) + u(rng) * (std::log(5.0) - std::log(0.2)));
-      std::normal_distribution<double> g(0, 1);
-      const Vec t = Vec(g(rng), g(rng), g(rng)).normalized() * diag * (1 + 2 * u(rng));
-      Eigen::Matrix4d M = Eigen::Matrix4d::Identity();
-      M.topLeftCorner<3, 3>() = s * R;
-      M.topRightCorner<3, 1>() = t;
-      const Eigen::Matrix4d truth = M.inverse();
-      const Cloud source = transformed(src.points, M), sourceWhole = transformed(whole.points, M);
-      // The errors are measured on the source's surface points (its outliers have no true position).
-      const Cloud sourceSurface(source.begin(), source.begin() + static_cast<std::ptrdiff_t>(sourceSurfacePoints));
-      const Cloud& target = tgt.points;
-      for (const auto& method : methods) {
+    for (int trial = o.firstTrial; trial < o.firstTrial + o.trials; ++trial) {
+      const Trial t = makeTrial(model, name, trial, o);
+      for (const auto& method : o.methods) {
         const auto t0 = Clock::now();
         const double cpu0 = cpuSeconds();
-        Eigen::Matrix4d est = Eigen::Matrix4d::Identity();
-        bool ambiguous = false;
-        double overlapEstimate = 0;
+        Estimate est;
         try {
-          if (method == "iires" || method == "iires-euler") {
-            iires::reg::RegistrationParams p;
-            p.samples = samples;
-            p.so3Count = so3Count;
-            p.maxInputPerSample = thin;
-            p.icpCandidates = icpCandidates;
-            p.resample = resampleParams;
-            p.search = searchParams;
-            p.screenIterations = screenIterations;
-            p.searchOverlaps = searchOverlaps;
-            p.searchOverlapExponent = searchOverlapExponent;
-            p.fitOverlapExponent = fitOverlapExponent;
-            p.threads = threads;
-            p.seed = seed + trial;
-            if (overlapHint > 0) p.overlap = overlapHint;
-            if (method == "iires-euler") p.grid = iires::reg::RotationGridType::kEuler;
-            iires::PointCloud sc;
-            sc.points = source;
-            const auto r = iires::reg::registerClouds(sc, tgt, p);
-            est = r.T_target_source;
-            ambiguous = r.ambiguous;
-            overlapEstimate = r.sourceOverlap;
-            tally[method].addStages(r.timings);
-            overall[method].addStages(r.timings);
-            if (verbose) {
-              std::printf("stages");
-              for (const auto& st : r.timings) std::printf(" %s=%.3f", st.name.c_str(), st.seconds);
-              std::printf(" queries=%zu icp_iterations=%d rank=%zu second_ratio=%.3f\n", r.pointQueries,
-                          r.icpIterations, r.candidateRank, r.secondBestScoreRatio);
-            }
-          } else if (method == "o3d-fpfh") {
-            est = o3dFpfh(source, target, diag / 50, seed + trial);
-          } else if (method == "o3d-fpfh-norm") {
-            est = normalisedThen(source, target, [&](const Cloud& a, const Cloud& b) {
-              return o3dFpfh(a, b, iires::bboxDiagonal(b) / 50, seed + trial);
-            });
-          } else if (method == "o3d-icp") {
-            est = o3dIcp(source, target, diag / 10);
-          } else {
-            std::cerr << "unknown method " << method << "\n";
-            return 2;
-          }
+          est = runMethod(method, t, trial, o);
         } catch (const std::exception& ex) {
           std::cerr << name << " trial " << trial << " " << method << ": " << ex.what() << "\n";
-          est = Eigen::Matrix4d::Constant(std::nan(""));
+          est.T = Eigen::Matrix4d::Constant(std::nan(""));
         }
         const double secs = std::chrono::duration<double>(Clock::now() - t0).count();
-        Errors e = evaluate(est, truth, sourceSurface, sourceWhole, diag, secs);
+        Errors e = evaluate(est.T, t.truth, t.sourceSurface, t.sourceWhole, t.diag, secs);
         e.cpu = cpuSeconds() - cpu0;
-        e.overlap = overlapEstimate;
-        tally[method].add(e, bySurface);
-        tally[method].ambiguous += ambiguous;
-        overall[method].add(e, bySurface);
-        overall[method].ambiguous += ambiguous;
-        if (verbose)
+        e.overlap = est.overlap;
+        for (Tally* tl : {&tally[method], &overall[method]}) {
+          tl->addStages(est.timings);
+          tl->add(e, bySurface);
+          tl->ambiguous += est.ambiguous;
+        }
+        if (o.verbose)
           std::printf("trial model=%s method=%s trial=%d scale=%.3f rot_err=%.3f trans_err=%.4f scale_err=%.4f "
                       "surface_err=%.4f ok=%d ok_surface=%d ambiguous=%d overlap=%.3f time_s=%.3f\n",
-                      name.c_str(), method.c_str(), trial, s, e.rotDeg, e.trans, e.scale, e.surface, e.ok ? 1 : 0,
-                      e.okSurface ? 1 : 0, ambiguous ? 1 : 0, overlapEstimate, secs);
+                      name.c_str(), method.c_str(), trial, t.scale, e.rotDeg, e.trans, e.scale, e.surface,
+                      e.ok ? 1 : 0, e.okSurface ? 1 : 0, est.ambiguous ? 1 : 0, est.overlap, secs);
       }
     }
-    for (const auto& method : methods) print(name, method, tally[method], partial);
+    for (const auto& method : o.methods) print(name, method, tally[method], partial);
   }
-  for (const auto& method : methods) print("all", method, overall[method], partial);
+  for (const auto& method : o.methods) print("all", method, overall[method], partial);
   return 0;
 }
