@@ -78,6 +78,7 @@ int main(int argc, char** argv) {
     params.progress = progress.callback();
     params.preprocessing.outliers.mode = iires::parseOutlierMode(outlierMode);
     params.preprocessing.runDenoise = !noDenoise;
+    params.preprocessing.sheets = !noIntrinsic;  // the sheet rule, also for --denoise-only
     if (denoiseOnly) {
       progress.update("read", 0.0);
       const iires::PointCloud cloud = iires::readPointCloud(input, columns);

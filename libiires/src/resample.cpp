@@ -97,9 +97,11 @@ PointCloud workingCloud(PointCloud cloud, const ResampleParams& params, const St
   if (params.maxInputPerSample > 0 && cloud.size() > workingTarget) {
     const auto t = clock.begin("thin");
     const std::size_t target = workingTarget;
+    // Intrinsic control: cells holding two sheets (a gap the input resolves, narrower than a cell) keep all
+    // their points, so that no later stage sees the sheets merged.
     cloud = select(cloud, voxelThin(cloud.points, cloud.normals, target,
                                     bboxDiagonal(cloud.points) / std::sqrt(static_cast<double>(target)), 0,
-                                    params.threads));
+                                    params.threads, 0.0, params.intrinsic));
     clock.end("thin", t);
   }
   return select(cloud, mortonOrder(cloud.points, params.threads));
@@ -173,6 +175,7 @@ std::string ResampleResult::toJson() const {
   j.member("working_points", thinnedPoints).member("initial_samples", initialSamples).member("passes", passes);
   j.member("relax_iterations", relaxIterations).member("splits", splits).member("collapses", collapses);
   j.member("target_length", targetLength).member("components", components).member("satellites", satellites);
+  j.key("sheets").embed(sheets.toJson());
   j.member("feature_points", featurePoints).member("feature_samples", featureSamples);
   j.array("points_per_level", pointsPerLevel).array("spacing_per_level", spacingPerLevel);
   j.key("preprocess").embed(preprocessing.toJson());
@@ -224,6 +227,23 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
   const std::size_t tableK = std::max(preprocessing ? preprocessNeighbours(pp) : std::size_t{0}, laterK);
   std::optional<NeighbourTable> neighbours(std::in_place, *index, cloud.points, tableK, params.threads);
   clock.end("neighbours", t);
+  // The sheet rule (intrinsic control from the first graph on): every stage below reads neighbours on each
+  // point's own sheet only, and a cloud without normals gets them from that graph (estimated and oriented).
+  SheetParams sp = params.preprocessing.sheet;
+  sp.threads = params.threads;
+  pp.sheets = params.intrinsic;
+  const bool sheets = params.intrinsic && cloud.size() > static_cast<std::size_t>(sp.pcaNeighbours);
+  std::vector<std::uint8_t> nearSheets;  // per point of the final working cloud (the MLS surface's gate)
+  if (sheets) {
+    t = clock.begin("sheets");
+    std::vector<Eigen::Vector3d> normals;
+    result.sheets = separateSheets(cloud.points, *neighbours, normals, sp, cloud.hasNormals() ? &cloud.normals : nullptr,
+                                   &nearSheets);
+    // Pre-processing fits its own normals over the filtered rows (as the feature detector expects them);
+    // without it, these are the cloud's.
+    if (!preprocessing) cloud.normals = std::move(normals);
+    clock.end("sheets", t);
+  }
   if (preprocessing) {
     t = clock.begin("preprocess");
     result.preprocessing = iires::preprocess(cloud, pp, &*neighbours);
@@ -234,6 +254,12 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
       neighbours.reset();
       index.reset();
       cloud = std::move(result.preprocessing.cloud);
+      if (sheets) {  // the later stages' table, on the final positions and through the sheet rule again
+        index.emplace(cloud.points);
+        neighbours.emplace(*index, cloud.points, laterK, params.threads);
+        std::vector<Eigen::Vector3d> normals;
+        separateSheets(cloud.points, *neighbours, normals, sp, &cloud.normals, &nearSheets);
+      }
     }
     result.preprocessing.cloud = {};
     clock.end("preprocess", t);
@@ -262,8 +288,9 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
     auto t = clock.begin("surface");
     MlsParams mp = params.mls;
     mp.threads = threads;
+    if (!params.intrinsic) mp.sheetGap = 0;  // straight-line neighbourhoods
     surface.emplace(cloud.points, cloud.normals, mp, index ? &*index : pointIndex,
-                    neighbours ? &*neighbours : nullptr);
+                    neighbours ? &*neighbours : nullptr, std::move(nearSheets));
     neighbours.reset();  // read by nothing after the surface and the geodesic graph (memory at 5M)
     clock.end("surface", t);
     t = clock.begin("candidates");

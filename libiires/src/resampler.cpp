@@ -28,6 +28,8 @@ constexpr double kOffSurfaceLimit = 0.6;  // MlsSurface::project's offSurface be
 // boundary of a sparse input is several output spacings past the data (upsampling).
 constexpr double kBeyondLimit = 0.05;
 constexpr double kCarryShare = 0.05;     // edits touching more than this share of samples restart the relaxation
+constexpr std::size_t kWiderQuery = 3;   // candidates queried for a sample the rule refuses some of
+constexpr double kCellSheetHeight = 1.25;  // voxel cells: another sheet lies this × the sheet height off a plane
 
 /// The samples of @p s not marked in @p removed, in Morton order (loops over samples and their k-NN queries then
 /// stay in cache).
@@ -134,6 +136,17 @@ Rings Resampler::computeRings(const Samples& s, double cellRadius, Relaxation* r
     const auto candidates = r.candidates.begin() + static_cast<long>(i * stride);
     if (requery || (stale && (*stale)[i])) {
       index->knn(s.pos[i], stride, idx, d2);
+      // Samples the rule refuses (another sheet a gap away, narrower than the spacing) take the places of
+      // neighbours: then a wider query, of which the first stride accepted ones are kept.
+      std::size_t refused = 0;
+      for (const std::uint32_t j : idx) refused += j != i && !rule_.accept(i, j);
+      if (refused > 0) {
+        index->knn(s.pos[i], kWiderQuery * stride, idx, d2);
+        std::size_t w = 0;
+        for (std::size_t c = 0; c < idx.size() && w < stride; ++c)
+          if (idx[c] == i || rule_.accept(i, idx[c])) idx[w] = idx[c], d2[w] = d2[c], ++w;
+        idx.resize(w), d2.resize(w);
+      }
     } else {
       byDistance.clear();
       for (std::size_t c = 0; c < stride; ++c)
@@ -594,8 +607,13 @@ std::vector<std::uint32_t> initialCandidates(const PointCloud& cloud, const MlsS
     std::iota(all.begin(), all.end(), 0u);
     return all;
   }
+  // Intrinsic control: one candidate per sheet in each cell (sheets.hpp's height, without the slope term:
+  // a cell spans several spacings, and a curved sheet split in two only adds a candidate).
+  const double sheetHeight = params.intrinsic ? kCellSheetHeight * params.preprocessing.sheet.heightSpacings *
+                                                    surface.meanSpacing()
+                                              : 0.0;
   return voxelThin(cloud.points, cloud.normals, count, std::sqrt(surface.area() / static_cast<double>(count)),
-                   params.seed, threads);
+                   params.seed, threads, sheetHeight);
 }
 
 Samples Resampler::initialise(const std::vector<std::uint32_t>& chosen, ResampleResult& result) {
