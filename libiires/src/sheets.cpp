@@ -23,7 +23,8 @@ constexpr std::size_t kOrientNeighbours = 8;  // neighbours per point in the ori
 constexpr std::size_t kPlainNormalRow = 13;   // the point and NormalParams' default 12 neighbours
 constexpr std::size_t kLayerPoints = 3;       // a second sheet: at least this many row entries across the gap
 constexpr double kLayerSpread = 0.5;          // a layer: heights' standard deviation under this × the spacing
-constexpr double kEmptyBand = 0.2;            // the band between two layers: this × the far one's height of mid-gap
+constexpr double kMinorSpread = 0.5;          // a plane's inliers: spread across it at least this × the spacing
+constexpr double kBandPerNoise = 2.0;         // the empty band between two layers: wider than this × their spread
 
 /// Unit PCA normal of @p p and the points @p idx (fewer than 2 neighbours: @p fallback).
 Eigen::Vector3d pcaNormal(const std::vector<Eigen::Vector3d>& points, std::size_t p,
@@ -71,22 +72,36 @@ Eigen::Vector3d robustNormal(const std::vector<Eigen::Vector3d>& points, std::si
   // sheets are close a plane across both (along the gap's direction) can hold as many points in a strip as a
   // noisy sheet's own plane: the points off the plane count too when they form a second layer parallel to it
   // (within the tolerance of their median height, on the side that has more of them), at least the rule's
-  // smallest gap off (@p gap). At a free edge the local spacing grows (the nearest lie on one side only), and
+  // smallest gap off (@p gap), and only while the other side holds no layer: a plane with points beyond the gap
+  // on both sides runs between two sheets (along a rim joining them), not on one of them. At a free edge the local spacing grows (the nearest lie on one side only), and
   // two sheets 2.5 spacings apart are less than 2 of those spacings apart there.
   auto support = [&](const Eigen::Vector3d& n) {
     const double inv2 = 1.0 / (height * height);
     std::array<double, 129> above, below;
     std::size_t na = 0, nb = 0;
     double sum = 0;
+    const Eigen::Vector3d u = n.unitOrthogonal(), v = n.cross(u);
+    Eigen::Matrix2d spread = Eigen::Matrix2d::Zero();  // the inliers' weighted second moment within the plane
     for (std::size_t a = 0; a < m; ++a) {
-      const double h = n.dot(points[others[a]] - o);
-      sum += std::max(0.0, 1.0 - h * h * inv2);
+      const Eigen::Vector3d d = points[others[a]] - o;
+      const double h = n.dot(d), w = std::max(0.0, 1.0 - h * h * inv2);
+      const Eigen::Vector2d t(u.dot(d), v.dot(d));
+      sum += w;
+      spread.noalias() += w * t * t.transpose();
       if (h >= gap) above[na++] = h;
       if (h <= -gap) below[nb++] = h;
     }
+    // Points along one line (a strip across a rim between two sheets) support every plane through it: a plane
+    // counts in full only where its inliers spread over it in both directions.
+    if (sum > 0) {
+      const double minor = 0.5 * (spread.trace() - std::sqrt(std::max(
+                                      0.0, (spread(0, 0) - spread(1, 1)) * (spread(0, 0) - spread(1, 1)) +
+                                               4 * spread(0, 1) * spread(0, 1))));
+      sum *= std::min(1.0, std::sqrt(std::max(0.0, minor) / sum) / (kMinorSpread * height));
+    }
     std::array<double, 129>& layer = na >= nb ? above : below;
     const std::size_t nl = std::max(na, nb);
-    if (nl >= 2) {
+    if (nl >= 2 && std::min(na, nb) < kLayerPoints) {
       std::nth_element(layer.begin(), layer.begin() + static_cast<long>(nl / 2), layer.begin() + static_cast<long>(nl));
       const double median = layer[nl / 2];
       for (std::size_t a = 0; a < nl; ++a) sum += std::max(0.0, 1.0 - (layer[a] - median) * (layer[a] - median) * inv2);
@@ -295,44 +310,48 @@ void estimateSheetNormals(SheetState& st, int threads) {
     });
 }
 
-/// Standard deviation of the values @p v[0..m) passing @p keep (0 when none).
-template <typename Keep>
-double spreadOf(const double* v, std::size_t m, Keep keep) {
-  double sum = 0, sum2 = 0, count = 0;
-  for (std::size_t a = 0; a < m; ++a)
-    if (keep(v[a])) sum += v[a], sum2 += v[a] * v[a], ++count;
-  if (count == 0) return 0.0;
-  const double mean = sum / count;
-  return std::sqrt(std::max(0.0, sum2 / count - mean * mean));
-}
-
-/// Which points see a second sheet in their row: heights (off the point's plane) that form two thin layers
-/// with an empty band between them — the point's own (|h| small) and at least kLayerPoints entries at least
-/// the gap off, on one side, each layer's heights within kLayerSpread local spacings, and at most a quarter as
-/// many entries within kEmptyBand × the far layer's height of mid-gap. Where one surface turns at a crease
-/// whose normals the fits blended, the other face's points rise steadily off the plane; noise of the order of
-/// the gap spreads the point's own layer and fills the band; neither forms two layers.
+/// Which points see a second sheet in their row. The heights of the row's entries off the point's plane,
+/// sorted, are cut at their widest empty band (at least kLayerPoints entries on either side) into two layers;
+/// the row holds two sheets when the layers' mean heights lie at least the gap apart, each layer is thin (its
+/// heights' standard deviation within kLayerSpread local spacings: a sheet's own noise) and the band is empty
+/// over more than kBandPerNoise × that spread. One sheet has no such band: noise fills the heights
+/// continuously, and noise thick enough to leave a band between its tail and its bulk makes the bulk too thick
+/// to be a layer. Where one surface turns at a crease whose normals the fits blended, the other face's points
+/// rise steadily off the plane.
 void findLayers(SheetState& st, int threads) {
   st.layer.assign(st.n, 0);
+  std::vector<std::uint8_t> seen(st.n, 0);
   parallelFor(st.n, threads, [&](std::size_t i) {
     if (st.plain[i]) return;
-    const double gap = st.params.gapSpacings * st.spacing[i], thin = kLayerSpread * st.spacing[i];
-    std::array<double, 256> heights;
     const std::size_t m = st.found[i];
-    for (std::size_t a = 0; a < m; ++a) heights[a] = st.normals[i].dot(st.points[st.row(i)[a]] - st.points[i]);
-    for (const double side : {1.0, -1.0}) {
-      auto far = [&](double h) { return side * h >= gap; };
-      const auto count = static_cast<std::size_t>(std::count_if(heights.begin(), heights.begin() + m, far));
-      if (count < kLayerPoints) continue;
-      double mean = 0;
-      for (std::size_t a = 0; a < m; ++a) mean += far(heights[a]) ? heights[a] : 0.0;
-      mean /= static_cast<double>(count);
-      auto own = [&](double h) { return h / mean < 0.5 - kEmptyBand && h / mean > -(0.5 - kEmptyBand); };
-      auto band = [&](double h) { return h / mean >= 0.5 - kEmptyBand && h / mean <= 0.5 + kEmptyBand; };
-      const auto inBand = static_cast<std::size_t>(std::count_if(heights.begin(), heights.begin() + m, band));
-      if (spreadOf(heights.data(), m, far) <= thin && spreadOf(heights.data(), m, own) <= thin && 4 * inBand <= count)
-        st.layer[i] = 1;
-    }
+    if (m < 2 * kLayerPoints) return;
+    const double gap = st.params.gapSpacings * st.spacing[i], thin = kLayerSpread * st.spacing[i];
+    std::array<double, 256> h;
+    for (std::size_t a = 0; a < m; ++a) h[a] = st.normals[i].dot(st.points[st.row(i)[a]] - st.points[i]);
+    std::sort(h.begin(), h.begin() + static_cast<long>(m));
+    std::size_t cut = kLayerPoints;  // the upper layer starts at h[cut]
+    for (std::size_t x = kLayerPoints + 1; x + kLayerPoints <= m; ++x)
+      if (h[x] - h[x - 1] > h[cut] - h[cut - 1]) cut = x;
+    auto moments = [&](std::size_t begin, std::size_t end) {  // mean and standard deviation of h[begin, end)
+      double sum = 0, sum2 = 0;
+      for (std::size_t a = begin; a < end; ++a) sum += h[a], sum2 += h[a] * h[a];
+      const double count = static_cast<double>(end - begin), mean = sum / count;
+      return std::pair{mean, std::sqrt(std::max(0.0, sum2 / count - mean * mean))};
+    };
+    const auto [lowMean, lowSpread] = moments(0, cut);
+    const auto [highMean, highSpread] = moments(cut, m);
+    const double spread = std::max(lowSpread, highSpread);
+    seen[i] = highMean - lowMean >= gap && spread <= thin && h[cut] - h[cut - 1] > kBandPerNoise * spread;
+  });
+  // A second sheet within a few spacings is seen from the points around it too (a near-contact zone is a
+  // region, not a point): a layer that fewer than kLayerPoints of the row's other points see is one sheet's
+  // noise.
+  parallelFor(st.n, threads, [&](std::size_t i) {
+    if (!seen[i]) return;
+    std::size_t seeing = 0;
+    for (std::size_t a = 0; a < st.found[i]; ++a)
+      if (const std::uint32_t j = st.row(i)[a]; j != i) seeing += seen[j];
+    st.layer[i] = seeing >= kLayerPoints;
   });
 }
 
@@ -383,6 +402,28 @@ void plainNormalsAwayFromGaps(SheetState& st, const std::vector<std::uint8_t>& n
   });
 }
 
+/// Orientation over the same-sheet graph only (the filtered @p table: an edge across a gap would carry one
+/// sheet's orientation to the other at no cost, the pair being parallel), on each point's kOrientNeighbours
+/// nearest. The spanning tree carries the signs of PCA normals over the filtered rows, which turn gradually
+/// over a crease or a tight fold where the sheet fits turn at once (and a sign carried across a right angle is
+/// a guess); each normal then takes its PCA normal's side.
+void orientSheets(SheetState& st, const NeighbourTable& table, int threads) {
+  const std::size_t orientK = std::min<std::size_t>(table.k(), kOrientNeighbours + 1);
+  std::vector<std::uint32_t> graph(st.n * orientK);
+  std::vector<Eigen::Vector3d> guide(st.n);
+  parallelFor(st.n, threads, [&](std::size_t i) {
+    thread_local std::vector<std::uint32_t> idx;
+    thread_local std::vector<double> d2;
+    const std::size_t f = table.get(i, std::min(table.k(), kPlainNormalRow), idx, d2);
+    guide[i] = pcaNormal(st.points, i, idx.data(), f, st.normals[i]);
+    for (std::size_t a = 0; a < orientK; ++a) graph[i * orientK + a] = a < f ? idx[a] : static_cast<std::uint32_t>(i);
+  });
+  orientNormals(st.points, guide, graph, orientK, orientK, threads, true);
+  parallelFor(st.n, threads, [&](std::size_t i) {
+    if (st.normals[i].dot(guide[i]) < 0) st.normals[i] = -st.normals[i];
+  });
+}
+
 }  // namespace
 
 SheetReport separateSheets(const std::vector<Eigen::Vector3d>& points, NeighbourTable& table,
@@ -419,20 +460,10 @@ SheetReport separateSheets(const std::vector<Eigen::Vector3d>& points, Neighbour
   } else {
     estimateSheetNormals(st, threads);
     findLayers(st, threads);
-    // Orientation over the same-sheet graph only (an edge across a gap would carry one sheet's orientation to
-    // the other at no cost: the pair is parallel), on each point's kOrientNeighbours nearest.
-    const std::size_t orientK = std::min<std::size_t>(st.K, kOrientNeighbours + 1);
-    std::vector<std::uint32_t> graph(st.n * orientK);
-    parallelFor(st.n, threads, [&](std::size_t i) {
-      for (std::size_t a = 0; a < orientK; ++a) {
-        const std::uint32_t j = st.row(i)[a];
-        graph[i * orientK + a] = j == i || st.final(i, j) ? j : static_cast<std::uint32_t>(i);
-      }
-    });
-    orientNormals(points, normals, graph, orientK, orientK, threads);
   }
   report.crossPairs = table.filter([&](std::size_t i, std::size_t j) { return st.final(i, j); },
                                    params.minNeighbours, threads);
+  if (!given) orientSheets(st, table, threads);
   std::vector<std::uint8_t> nearPoints = countZones(st, report, threads);
   if (!given) plainNormalsAwayFromGaps(st, nearPoints, threads);
   if (near) *near = std::move(nearPoints);
