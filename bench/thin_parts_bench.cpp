@@ -3,7 +3,7 @@
 // spheres nearly touching, a sphere inside a sphere — generated with fixed seeds (tests/shapes.hpp),
 // positions only (like a raw .xyz scan), resampled with the default parameters (the CLI's defaults).
 // Prints one key=value line per (case, input, gap, noise, N) and per --denoise-only run.
-// Usage: thin_parts_bench CASE INPUT_COUNT GAP_SPACINGS NOISE_SPACINGS N [N ...] [--threads T] [--no-intrinsic] [--input-per-sample X] [--write-input FILE.xyz]
+// Usage: thin_parts_bench CASE INPUT_COUNT GAP_SPACINGS NOISE_SPACINGS [N ...] [--threads T] [--no-intrinsic] [--input-per-sample X] [--write-input FILE.xyz]
 //   CASE: sheets | plate | spheres | nested
 #include <chrono>
 #include <cmath>
@@ -41,9 +41,9 @@ double expectedShare(const iires::test::ThinCase& t) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc < 6) {
+  if (argc < 5) {
     std::fprintf(stderr,
-                 "usage: thin_parts_bench CASE INPUT_COUNT GAP_SPACINGS NOISE_SPACINGS N [N ...] [--threads T] "
+                 "usage: thin_parts_bench CASE INPUT_COUNT GAP_SPACINGS NOISE_SPACINGS [N ...] [--threads T] "
                  "[--no-intrinsic]\n");
     return 2;
   }

@@ -254,11 +254,13 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
       neighbours.reset();
       index.reset();
       cloud = std::move(result.preprocessing.cloud);
-      if (sheets) {  // the later stages' table, on the final positions and through the sheet rule again
+      if (sheets) {  // the later stages' table, on the final positions and through the sheet rule again (on
+                     // rows as long as the first time: shorter ones would not reach a sheet as far off)
         index.emplace(cloud.points);
-        neighbours.emplace(*index, cloud.points, laterK, params.threads);
+        neighbours.emplace(*index, cloud.points, tableK, params.threads);
         std::vector<Eigen::Vector3d> normals;
         separateSheets(cloud.points, *neighbours, normals, sp, &cloud.normals, &nearSheets);
+        neighbours->truncate(laterK);
       }
     }
     result.preprocessing.cloud = {};
