@@ -23,7 +23,6 @@ constexpr std::size_t kOrientNeighbours = 8;  // neighbours per point in the ori
 constexpr std::size_t kPlainNormalRow = 13;   // the point and NormalParams' default 12 neighbours
 constexpr std::size_t kLayerPoints = 3;       // a second sheet: at least this many row entries across the gap
 constexpr double kLayerSpread = 0.5;          // a layer: heights' standard deviation under this × the spacing
-constexpr double kMinorSpread = 0.5;          // a plane's inliers: spread across it at least this × the spacing
 constexpr double kBandPerNoise = 2.0;         // the empty band between two layers: wider than this × their spread
 
 /// Unit PCA normal of @p p and the points @p idx (fewer than 2 neighbours: @p fallback).
@@ -72,36 +71,22 @@ Eigen::Vector3d robustNormal(const std::vector<Eigen::Vector3d>& points, std::si
   // sheets are close a plane across both (along the gap's direction) can hold as many points in a strip as a
   // noisy sheet's own plane: the points off the plane count too when they form a second layer parallel to it
   // (within the tolerance of their median height, on the side that has more of them), at least the rule's
-  // smallest gap off (@p gap), and only while the other side holds no layer: a plane with points beyond the gap
-  // on both sides runs between two sheets (along a rim joining them), not on one of them. At a free edge the local spacing grows (the nearest lie on one side only), and
+  // smallest gap off (@p gap). At a free edge the local spacing grows (the nearest lie on one side only), and
   // two sheets 2.5 spacings apart are less than 2 of those spacings apart there.
   auto support = [&](const Eigen::Vector3d& n) {
     const double inv2 = 1.0 / (height * height);
     std::array<double, 129> above, below;
     std::size_t na = 0, nb = 0;
     double sum = 0;
-    const Eigen::Vector3d u = n.unitOrthogonal(), v = n.cross(u);
-    Eigen::Matrix2d spread = Eigen::Matrix2d::Zero();  // the inliers' weighted second moment within the plane
     for (std::size_t a = 0; a < m; ++a) {
-      const Eigen::Vector3d d = points[others[a]] - o;
-      const double h = n.dot(d), w = std::max(0.0, 1.0 - h * h * inv2);
-      const Eigen::Vector2d t(u.dot(d), v.dot(d));
-      sum += w;
-      spread.noalias() += w * t * t.transpose();
+      const double h = n.dot(points[others[a]] - o);
+      sum += std::max(0.0, 1.0 - h * h * inv2);
       if (h >= gap) above[na++] = h;
       if (h <= -gap) below[nb++] = h;
     }
-    // Points along one line (a strip across a rim between two sheets) support every plane through it: a plane
-    // counts in full only where its inliers spread over it in both directions.
-    if (sum > 0) {
-      const double minor = 0.5 * (spread.trace() - std::sqrt(std::max(
-                                      0.0, (spread(0, 0) - spread(1, 1)) * (spread(0, 0) - spread(1, 1)) +
-                                               4 * spread(0, 1) * spread(0, 1))));
-      sum *= std::min(1.0, std::sqrt(std::max(0.0, minor) / sum) / (kMinorSpread * height));
-    }
     std::array<double, 129>& layer = na >= nb ? above : below;
     const std::size_t nl = std::max(na, nb);
-    if (nl >= 2 && std::min(na, nb) < kLayerPoints) {
+    if (nl >= 2) {
       std::nth_element(layer.begin(), layer.begin() + static_cast<long>(nl / 2), layer.begin() + static_cast<long>(nl));
       const double median = layer[nl / 2];
       for (std::size_t a = 0; a < nl; ++a) sum += std::max(0.0, 1.0 - (layer[a] - median) * (layer[a] - median) * inv2);
