@@ -237,8 +237,10 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
   if (sheets) {
     t = clock.begin("sheets");
     std::vector<Eigen::Vector3d> normals;
-    result.sheets = separateSheets(cloud.points, *neighbours, normals, sp, cloud.hasNormals() ? &cloud.normals : nullptr,
-                                   &nearSheets);
+    SheetParams first = sp;
+    first.orient = !preprocessing;  // pre-processing fits (and orients) its own normals over the filtered rows
+    result.sheets = separateSheets(cloud.points, *neighbours, normals, first,
+                                   cloud.hasNormals() ? &cloud.normals : nullptr, &nearSheets);
     // Pre-processing fits its own normals over the filtered rows (as the feature detector expects them);
     // without it, these are the cloud's.
     if (!preprocessing) cloud.normals = std::move(normals);

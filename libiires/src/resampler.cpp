@@ -134,19 +134,21 @@ Rings Resampler::computeRings(const Samples& s, double cellRadius, Relaxation* r
     auto& byDistance = sc.byDistance;
     auto& nb = sc.nb;
     const auto candidates = r.candidates.begin() + static_cast<long>(i * stride);
-    if (requery || (stale && (*stale)[i])) {
+    const bool queried = requery || (stale && (*stale)[i]);  // then idx holds accepted samples only
+    if (queried) {
       index->knn(s.pos[i], stride, idx, d2);
       // Samples the rule refuses (another sheet a gap away, narrower than the spacing) take the places of
       // neighbours: then a wider query, of which the first stride accepted ones are kept.
-      std::size_t refused = 0;
-      for (const std::uint32_t j : idx) refused += j != i && !rule_.accept(i, j);
-      if (refused > 0) {
+      std::size_t w = 0;
+      for (std::size_t c = 0; c < idx.size(); ++c)
+        if (idx[c] == i || rule_.accept(i, idx[c])) idx[w] = idx[c], d2[w] = d2[c], ++w;
+      if (w < idx.size()) {
         index->knn(s.pos[i], kWiderQuery * stride, idx, d2);
-        std::size_t w = 0;
+        w = 0;
         for (std::size_t c = 0; c < idx.size() && w < stride; ++c)
           if (idx[c] == i || rule_.accept(i, idx[c])) idx[w] = idx[c], d2[w] = d2[c], ++w;
-        idx.resize(w), d2.resize(w);
       }
+      idx.resize(w), d2.resize(w);
     } else {
       byDistance.clear();
       for (std::size_t c = 0; c < stride; ++c)
@@ -170,7 +172,7 @@ Rings Resampler::computeRings(const Samples& s, double cellRadius, Relaxation* r
     coincident.clear();
     for (std::size_t c = 0; c < idx.size(); ++c) {
       const std::uint32_t j = idx[c];
-      if (j == i || !rule_.accept(i, j)) continue;
+      if (j == i || (!queried && !rule_.accept(i, j))) continue;
       const Eigen::Vector3d d = s.pos[j] - s.pos[i];
       Eigen::Vector2d q(d.dot(u), d.dot(v));
       const double qn = q.norm(), dist = std::sqrt(d2[c]);

@@ -185,11 +185,11 @@ struct SheetState {
   /// sheet's points in it, and keeps whoever lies on that plane — but not a point from whose (asymmetric)
   /// row it comes, across a gap, off its plane: that pair takes the gap test.
   bool final(std::size_t i, std::size_t j) const {
-    return (plain[i] && onPlane(i, points[j])) || (plain[j] && onPlane(j, points[i])) ||
-           (normals[i].dot(normals[j]) >= minDot &&
-            !((layer[i] || layer[j]) &&
-              acrossGap(points[i], normals[i], points[j], normals[j],
-                        params.gapSpacings * std::min(spacing[i], spacing[j]), gapCos)));
+    auto plainKeeps = [&] { return (plain[i] && onPlane(i, points[j])) || (plain[j] && onPlane(j, points[i])); };
+    if (normals[i].dot(normals[j]) < minDot) return plainKeeps();
+    if (!layer[i] && !layer[j]) return true;  // no second layer in either row: no gap to part them
+    return plainKeeps() || !acrossGap(points[i], normals[i], points[j], normals[j],
+                                      params.gapSpacings * std::min(spacing[i], spacing[j]), gapCos);
   }
   /// PCA normal of point i over its first pcaK same-sheet (loose) neighbours, or its normal when too few.
   Eigen::Vector3d sheetFit(std::size_t i) const {
@@ -448,9 +448,9 @@ SheetReport separateSheets(const std::vector<Eigen::Vector3d>& points, Neighbour
   }
   report.crossPairs = table.filter([&](std::size_t i, std::size_t j) { return st.final(i, j); },
                                    params.minNeighbours, threads);
-  if (!given) orientSheets(st, table, threads);
+  if (!given && params.orient) orientSheets(st, table, threads);
   std::vector<std::uint8_t> nearPoints = countZones(st, report, threads);
-  if (!given) plainNormalsAwayFromGaps(st, nearPoints, threads);
+  if (!given && params.orient) plainNormalsAwayFromGaps(st, nearPoints, threads);
   if (near) *near = std::move(nearPoints);
   report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return report;

@@ -69,54 +69,60 @@ std::vector<std::uint32_t> voxelThin(const std::vector<Eigen::Vector3d>& pts, co
     cell *= std::sqrt(std::clamp(ratio, 0.25, 4.0));
   }
   sortCells(cell);  // (already sorted when the loop stopped on it)
+  // Where each cell's run of byCell starts (and, past the last, n).
+  std::vector<std::size_t> runs;
+  for (std::size_t r = 0; r < n; ++r)
+    if (r == 0 || byCell[r].first != byCell[r - 1].first) runs.push_back(r);
+  runs.push_back(n);
   // A cell whose points form two layers (a gap wider than layerGap between their heights along the cell's
   // thinnest direction, with at least two points on each side) holds two sheets closer than the cell is wide.
-  double layerGap = 0;
-  if (keepLayers) {
-    // The input spacing (mean nearest-neighbour distance ≈ half the grid spacing of a random sampling), from
-    // the occupied cells: each holds about cell² of surface.
-    std::size_t cells = 0;
-    for (std::size_t r = 0; r < n; ++r) cells += r == 0 || byCell[r].first != byCell[r - 1].first;
-    layerGap = kLayerGapSpacings * 0.5 * cell / std::sqrt(static_cast<double>(n) / static_cast<double>(cells));
-  }
-  std::vector<double> heights;
-  auto layered = [&](std::size_t begin, std::size_t end) {
-    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-    for (std::size_t x = begin; x < end; ++x) mean += pts[byCell[x].second];
-    mean /= static_cast<double>(end - begin);
-    Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-    for (std::size_t x = begin; x < end; ++x) {
-      const Eigen::Vector3d d = pts[byCell[x].second] - mean;
-      cov.noalias() += d * d.transpose();
-    }
-    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
-    eig.computeDirect(cov);
-    const Eigen::Vector3d axis = eig.eigenvectors().col(0);
-    heights.clear();
-    for (std::size_t x = begin; x < end; ++x) heights.push_back(axis.dot(pts[byCell[x].second] - mean));
-    std::sort(heights.begin(), heights.end());
-    for (std::size_t x = 2; x + 1 < heights.size(); ++x)
-      if (heights[x] - heights[x - 1] > layerGap) return true;
-    return false;
-  };
+  // The input spacing (mean nearest-neighbour distance ≈ half the grid spacing of a random sampling) comes from
+  // the occupied cells: each holds about cell² of surface.
+  const std::size_t cells = runs.size() - 1;
+  const double layerGap = keepLayers ? kLayerGapSpacings * 0.5 * cell /
+                                           std::sqrt(static_cast<double>(n) / static_cast<double>(cells))
+                                     : 0.0;
+  std::vector<char> twoLayers(keepLayers ? cells : 0, 0);
+  if (keepLayers)
+    parallelFor(cells, threads, [&](std::size_t c) {
+      const std::size_t begin = runs[c], end = runs[c + 1];
+      if (end - begin < 4) return;
+      Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+      for (std::size_t x = begin; x < end; ++x) mean += pts[byCell[x].second];
+      mean /= static_cast<double>(end - begin);
+      Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+      for (std::size_t x = begin; x < end; ++x) {
+        const Eigen::Vector3d d = pts[byCell[x].second] - mean;
+        cov.noalias() += d * d.transpose();
+      }
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
+      eig.computeDirect(cov);
+      const Eigen::Vector3d axis = eig.eigenvectors().col(0);
+      thread_local std::vector<double> heights;
+      heights.clear();
+      for (std::size_t x = begin; x < end; ++x) heights.push_back(axis.dot(pts[byCell[x].second] - mean));
+      std::sort(heights.begin(), heights.end());
+      for (std::size_t x = 2; x + 1 < heights.size(); ++x)
+        if (heights[x] - heights[x - 1] > layerGap) twoLayers[c] = 1;
+    });
   // Per cell the point nearest its centre (ties: the lowest index, the first of its run), returned in index
   // order. With a sheet height, per cell one point per sheet: the points off the planes of the cell's points
   // picked so far by more than it are picked too, nearest the centre first.
   std::vector<char> picked(n, 0);
   std::vector<std::uint32_t> run, reps;
-  for (std::size_t r = 0, best = 0, first = 0; r < n; ++r) {
-    const std::uint32_t i = byCell[r].second;
-    if (r == 0 || byCell[r].first != byCell[r - 1].first) first = r;
-    if (r == first || toCentre[i] < toCentre[best]) best = i;
-    if (r + 1 < n && byCell[r + 1].first == byCell[r].first) continue;
+  for (std::size_t c = 0; c < cells; ++c) {
+    const std::size_t first = runs[c], last = runs[c + 1] - 1;
+    std::size_t best = byCell[first].second;
+    for (std::size_t r = first + 1; r <= last; ++r)
+      if (toCentre[byCell[r].second] < toCentre[best]) best = byCell[r].second;
     picked[best] = 1;
-    if (layerGap > 0 && r + 1 - first >= 4 && layered(first, r + 1)) {
-      for (std::size_t x = first; x <= r; ++x) picked[byCell[x].second] = 1;  // two sheets: not thinned
+    if (keepLayers && twoLayers[c]) {
+      for (std::size_t x = first; x <= last; ++x) picked[byCell[x].second] = 1;  // two sheets: not thinned
       continue;
     }
-    if (sheetHeight <= 0 || normals.empty() || r == first) continue;
+    if (sheetHeight <= 0 || normals.empty() || last == first) continue;
     run.clear();
-    for (std::size_t x = first; x <= r; ++x) run.push_back(byCell[x].second);
+    for (std::size_t x = first; x <= last; ++x) run.push_back(byCell[x].second);
     std::sort(run.begin(), run.end(), [&](std::uint32_t a, std::uint32_t b) {
       return toCentre[a] != toCentre[b] ? toCentre[a] < toCentre[b] : a < b;
     });

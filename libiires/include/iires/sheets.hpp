@@ -41,6 +41,9 @@ struct SheetParams {
   double gapAngleDeg = 25.0;
   double maxNormalAngleDeg = 120.0;  ///< oriented normals: pairs whose normals differ by more are apart
   std::size_t minNeighbours = 3;  ///< a row left with fewer same-sheet neighbours keeps its Euclidean row
+  /// Estimated normals (no normals given) are oriented over the same-sheet graph; false leaves them unoriented
+  /// and as the sheet fits gave them, for a caller that only needs the filtered rows (and fits its own normals).
+  bool orient = true;
   int threads = 0;               ///< 0 = all cores; the result does not depend on it
 
   /// @throws std::invalid_argument with a readable message when a field is out of range.
@@ -64,8 +67,9 @@ struct SheetReport {
 /// @brief Unit normals (oriented unless @p givenNormals were given, which are kept) and the sheet rule
 /// applied to @p table, whose rows are filtered in place (NeighbourTable::filter).
 /// @param table neighbour lists of exactly @p points, the point itself included (k ≥ pcaNeighbours + 1)
-/// @param normals out: estimated (PCA over same-sheet neighbours, refined once, then oriented by a minimum
-/// spanning tree over the same-sheet graph) unless @p givenNormals holds one normal per point (then a copy)
+/// @param normals out: estimated (PCA over same-sheet neighbours, refined once, then, with params.orient,
+/// oriented by a minimum spanning tree over the same-sheet graph) unless @p givenNormals holds one normal per
+/// point (then a copy)
 /// @param near (optional) out: per point, 1 where a neighbour was found on another sheet
 /// @note O(n k). Deterministic for any thread count.
 SheetReport separateSheets(const std::vector<Eigen::Vector3d>& points, NeighbourTable& table,
