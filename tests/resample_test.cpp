@@ -10,10 +10,9 @@
 
 namespace {
 
-iires::ResampleParams paramsFor(std::size_t n, int threads = 0) {
+iires::ResampleParams paramsFor(std::size_t n) {
   iires::ResampleParams p;
   p.targetCount = n;
-  p.threads = threads;
   return p;
 }
 
@@ -75,11 +74,11 @@ TEST(Resample, UpsamplesToExactCount) {
 
 TEST(Resample, SameOutputForAnyThreadCountAndSeedMatters) {
   const auto cloud = iires::test::planeCloud(20000, 1.0, 3.0);
-  const auto a = iires::resample(cloud, paramsFor(1500, 1));
-  const auto b = iires::resample(cloud, paramsFor(1500, 2));
+  const auto a = iires::resample(cloud, paramsFor(1500), iires::Execution{1});
+  const auto b = iires::resample(cloud, paramsFor(1500), iires::Execution{2});
   EXPECT_EQ(a.cloud.points, b.cloud.points);
   EXPECT_EQ(a.cloud.normals, b.cloud.normals);
-  auto p = paramsFor(1500, 2);
+  auto p = paramsFor(1500);
   p.seed = 99;
   EXPECT_NE(iires::resample(cloud, p).cloud.points, a.cloud.points);
 }

@@ -27,6 +27,7 @@ int main(int argc, char** argv) {
     std::string input, output, reportPath;
     long long count = 0;
     iires::ResampleParams params;
+    iires::Execution exec;
     bool quiet = false, noIntrinsic = false, noDenoise = false, denoiseOnly = false, showProgress = false;
     std::string outlierMode = "pull";
     std::string geodesicPath;
@@ -43,7 +44,8 @@ int main(int argc, char** argv) {
     app.add_option("--seed", params.seed, "seed of the initial candidates' grid; same seed -> same output");
     app.add_option("--input-per-sample", params.maxInputPerSample,
                    "thin inputs denser than this many points per output point first (default 6; 0 = never)");
-    app.add_option("--threads", params.threads, "threads (0 = all cores); the output does not depend on it");
+    app.add_option("--threads", exec.threads, "threads (0 = all cores); the output does not depend on it")
+        ->check(CLI::NonNegativeNumber);
     app.add_option("--report", reportPath, "write the report as JSON to this file");
     app.add_flag("--no-intrinsic", noIntrinsic,
                  "Euclidean neighbours only (default: intrinsic control, never across thin gaps or objects)");
@@ -75,7 +77,7 @@ int main(int argc, char** argv) {
       throw iires::InputError("cannot write " + output + ": unknown point cloud extension \"" + ext +
                               "\" (supported: .ply .xyz .xyzn)");
     iires::tools::Progress progress("iires-resample", showProgress, quiet);
-    params.progress = progress.callback();
+    exec.progress = progress.callback();
     params.preprocessing.outliers.mode = iires::parseOutlierMode(outlierMode);
     params.preprocessing.runDenoise = !noDenoise;
     if (denoiseOnly) {
@@ -83,8 +85,7 @@ int main(int argc, char** argv) {
       const iires::PointCloud cloud = iires::readPointCloud(input, columns);
       iires::PreprocessResult cleaned;
       try {
-        params.preprocessing.threads = params.threads;
-        cleaned = iires::preprocess(cloud, params.preprocessing);
+        cleaned = iires::preprocess(cloud, params.preprocessing, exec);
       } catch (const iires::InputError& e) {
         throw iires::InputError(input + ": " + e.what());
       }
@@ -119,7 +120,7 @@ int main(int argc, char** argv) {
     iires::PointCloud cloud = iires::readPointCloud(input, columns);
     iires::ResampleResult result;
     try {
-      result = iires::resample(std::move(cloud), params);
+      result = iires::resample(std::move(cloud), params, exec);
     } catch (const iires::InputError& e) {
       throw iires::InputError(input + ": " + e.what());
     } catch (const std::runtime_error& e) {

@@ -12,7 +12,6 @@
 namespace iires {
 
 void PreprocessParams::validate() const {
-  if (threads < 0) throw std::invalid_argument("PreprocessParams: threads must be >= 0 (0 = all cores)");
   if (!(cleanDisplacement >= 0)) throw std::invalid_argument("PreprocessParams: cleanDisplacement must be >= 0");
   outliers.validate();
   if (runDenoise) denoise.validate();
@@ -33,13 +32,11 @@ std::size_t preprocessNeighbours(const PreprocessParams& params) {
   return params.runDenoise ? std::max(k, denoiseNeighbours(params.denoise)) : k;
 }
 
-PreprocessResult preprocess(const PointCloud& input, const PreprocessParams& params,
+PreprocessResult preprocess(const PointCloud& input, const PreprocessParams& params, const Execution& exec,
                             const NeighbourTable* table) {
   params.validate();
   const auto start = std::chrono::steady_clock::now();
-  OutlierParams op = params.outliers;
   DenoiseParams dp = params.denoise;
-  if (params.threads > 0) op.threads = dp.threads = params.threads;
 
   PreprocessResult result;
   result.inputPoints = input.size();
@@ -48,9 +45,9 @@ PreprocessResult preprocess(const PointCloud& input, const PreprocessParams& par
   std::optional<NeighbourTable> own;
   if (!table) {
     index.emplace(input.points);
-    table = &own.emplace(*index, input.points, preprocessNeighbours(params), params.threads);
+    table = &own.emplace(*index, input.points, preprocessNeighbours(params), exec.threads);
   }
-  OutlierResult outliers = processOutliers(input, op, table);  // eq. (4)–(5)
+  OutlierResult outliers = processOutliers(input, params.outliers, exec, table);  // eq. (4)–(5)
   const bool unchanged = outliers.found == 0;
   result.outliersFound = outliers.found;
   result.outliersPulled = outliers.pulled;
@@ -62,7 +59,7 @@ PreprocessResult preprocess(const PointCloud& input, const PreprocessParams& par
     // cleanDisplacement input spacings on average, the cloud is already clean and further sweeps would only
     // erode tight curvature (folds, thin parts, sparse clouds) — denoise() keeps the positions then.
     dp.cleanDisplacement = params.cleanDisplacement;
-    DenoiseResult denoised = denoise(outliers.cloud, dp, unchanged ? table : nullptr);
+    DenoiseResult denoised = denoise(outliers.cloud, dp, exec, unchanged ? table : nullptr);
     result.denoiseSeconds = denoised.seconds;
     result.cleanInput = denoised.cleanInput;
     result.denoiseIterations = denoised.iterations;

@@ -102,7 +102,7 @@ Rings Resampler::computeRings(const Samples& s, double cellRadius, Relaxation* r
     r.open.assign(s.size(), 0);
   }
   if (size_)  // adaptive mode (eq. 10): a sample takes the size factor of its nearest input point
-    parallelFor(s.size(), params_.threads, [&](std::size_t i) {
+    parallelFor(s.size(), exec_.threads, [&](std::size_t i) {
       if (active(i)) r.size[i] = (*size_)[surface_.index().nearest(s.pos[i])];
     });
   std::optional<KnnIndex> index;
@@ -112,7 +112,7 @@ Rings Resampler::computeRings(const Samples& s, double cellRadius, Relaxation* r
   std::array<Eigen::Vector2d, kDiscEdges> unitDisc;
   for (int e = 0; e < kDiscEdges; ++e)
     unitDisc[static_cast<std::size_t>(e)] = {std::cos(2 * M_PI * e / kDiscEdges), std::sin(2 * M_PI * e / kDiscEdges)};
-  parallelFor(s.size(), params_.threads, [&](std::size_t i) {
+  parallelFor(s.size(), exec_.threads, [&](std::size_t i) {
     if (!active(i)) return;
     // Per-thread scratch buffers (one thread-local lookup): this runs for every sample in every iteration.
     struct Scratch {
@@ -238,12 +238,12 @@ std::vector<Edge> Resampler::edges(const Samples& s, const Rings& r) const {
     return std::find(rb, rb + k, static_cast<std::uint32_t>(a)) != rb + k;
   };
   std::vector<std::uint32_t> offset(n + 1, 0);
-  parallelFor(n, params_.threads, [&](std::size_t a) {
+  parallelFor(n, exec_.threads, [&](std::size_t a) {
     for (std::size_t x = 0; x < k; ++x) offset[a + 1] += mutual(a, r.ring[a * k + x]);
   });
   for (std::size_t a = 0; a < n; ++a) offset[a + 1] += offset[a];
   std::vector<Edge> out(offset[n]);
-  parallelFor(n, params_.threads, [&](std::size_t a) {
+  parallelFor(n, exec_.threads, [&](std::size_t a) {
     const auto first = out.begin() + offset[a];
     auto at = first;
     for (std::size_t x = 0; x < k; ++x)
@@ -275,7 +275,7 @@ double Resampler::relax(Samples& s, double l, int iterations, Relaxation& state,
     if (!state.rings) state.active.assign(n, 1);
     pos = s.pos;
     nrm = s.nrm;
-    parallelFor(n, params_.threads, [&](std::size_t i) {
+    parallelFor(n, exec_.threads, [&](std::size_t i) {
       if (s.fixed[i] || !state.active[i]) return;
       Eigen::Vector3d step = params_.overRelaxation * (r.centroid[i] - s.pos[i]);
       // Boundary samples may slide along the boundary or move inwards, never off the surface.
@@ -349,7 +349,7 @@ EditMap Resampler::splitAndCollapse(Samples& s, const std::vector<Edge>& sorted,
       batch.push_back(&*next);
     std::vector<Eigen::Vector3d> pos(batch.size()), nrm(batch.size());
     std::vector<double> off(batch.size()), out(batch.size());
-    parallelFor(batch.size(), params_.threads, [&](std::size_t c) {
+    parallelFor(batch.size(), exec_.threads, [&](std::size_t c) {
       const Edge& e = *batch[c];
       pos[c] = surface_.project(0.5 * (s.pos[e.a] + s.pos[e.b]), &nrm[c], &off[c], &s.nrm[e.a], nullptr, 0, &out[c]);
     });
@@ -462,13 +462,13 @@ void Resampler::eliminate(Samples& s, std::size_t count) {
   // Adaptive mode: the Poisson-disk radius of a pair scales with the mean size factor of its two samples.
   std::vector<double> sz(s.size(), 1.0);
   if (size_)
-    parallelFor(s.size(), params_.threads, [&](std::size_t i) { sz[i] = (*size_)[surface_.index().nearest(s.pos[i])]; });
+    parallelFor(s.size(), exec_.threads, [&](std::size_t i) { sz[i] = (*size_)[surface_.index().nearest(s.pos[i])]; });
   const double maxSize = *std::max_element(sz.begin(), sz.end());
   KnnIndex index(s.pos);
   updateRule(s);  // only neighbours by the rule crowd each other (not across a thin gap)
   // float: 8 bytes a pair, and each row allocated once at its size (memory at 5M)
   std::vector<std::vector<std::pair<std::uint32_t, float>>> nb(s.size());
-  parallelFor(s.size(), params_.threads, [&](std::size_t i) {
+  parallelFor(s.size(), exec_.threads, [&](std::size_t i) {
     thread_local std::vector<std::uint32_t> idx;
     thread_local std::vector<double> d2;
     thread_local std::vector<std::pair<std::uint32_t, float>> row;
@@ -537,7 +537,7 @@ void Resampler::eliminate(Samples& s, std::size_t count) {
     for (const auto& [j, wj] : nb[top.i])
       if (!removed[j]) weight[j] -= wj;
   }
-  s = spatiallySorted(s, removed, params_.threads);
+  s = spatiallySorted(s, removed, exec_.threads);
 }
 
 void Resampler::updateRule(const Samples& s) {
@@ -609,7 +609,7 @@ Samples Resampler::initialise(const std::vector<std::uint32_t>& chosen, Resample
   // Candidates are input points (on the cloud already): only the survivors of the elimination are projected.
   for (std::uint32_t c : chosen) s.add(pts_[c], normals_[c], false);
   eliminate(s, n);
-  parallelFor(s.size(), params_.threads, [&](std::size_t i) {
+  parallelFor(s.size(), exec_.threads, [&](std::size_t i) {
     if (!s.fixed[i]) s.pos[i] = surface_.project(s.pos[i], &s.nrm[i], nullptr, &s.nrm[i], &s.cache[i]);
   });
   updateRule(s);
@@ -630,7 +630,7 @@ void Resampler::run(Samples& s, ResampleResult& result) {
       std::memcpy(&bits, &e[x].length, sizeof bits);
       byLength[x] = {bits, static_cast<std::uint32_t>(x)};
     }
-    radixSort(byLength, params_.threads);
+    radixSort(byLength, exec_.threads);
     std::vector<Edge> out(e.size());
     for (std::size_t x = 0; x < e.size(); ++x) out[x] = e[byLength[x].second];
     return out;
@@ -659,7 +659,7 @@ void Resampler::run(Samples& s, ResampleResult& result) {
   // per pass) come on top, up to kMaxCountPasses of them.
   constexpr int kMaxCountPasses = 8;
   for (int pass = 0, atN = 0; atN < params_.maxPasses && pass < params_.maxPasses + kMaxCountPasses; ++pass) {
-    if (params_.progress) params_.progress("resample", 0.8 * atN / params_.maxPasses);
+    exec_.report("resample", 0.8 * atN / params_.maxPasses);
     // At N, or off by what one balanced round of edits can leave (a collapse may find its samples taken).
     atN += static_cast<double>(s.size() > n ? s.size() - n : n - s.size()) <= params_.maxEditShare * countD + 1;
     const std::vector<Edge> e = sortedEdges(edgeRings(s, l, relaxation));
@@ -707,7 +707,7 @@ void Resampler::run(Samples& s, ResampleResult& result) {
   // Lloyd relaxation in rounds of 4 iterations until the spacing CV has not improved for relaxPatience rounds.
   double best = std::numeric_limits<double>::max();
   for (int it = 0, stale = 0; it < params_.maxRelaxIterations && stale < params_.relaxPatience; it += 4) {
-    if (params_.progress) params_.progress("resample", 0.8 + 0.2 * it / params_.maxRelaxIterations);
+    exec_.report("resample", 0.8 + 0.2 * it / params_.maxRelaxIterations);
     const double cv = relax(s, l, std::min(4, params_.maxRelaxIterations - it), relaxation);
     result.relaxIterations += std::min(4, params_.maxRelaxIterations - it);
     stale = cv < best - 1e-5 ? 0 : stale + 1;

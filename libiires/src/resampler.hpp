@@ -65,9 +65,9 @@ class Resampler {
  public:
   /// @param size per input point target-size factor (curvature mode), or null (isotropic)
   Resampler(const std::vector<Eigen::Vector3d>& pts, const std::vector<Eigen::Vector3d>& normals,
-            const MlsSurface& surface, const ResampleParams& params, NeighbourRule& rule,
+            const MlsSurface& surface, const ResampleParams& params, const Execution& exec, NeighbourRule& rule,
             const std::vector<double>* size)
-      : pts_(pts), normals_(normals), surface_(surface), params_(params), rule_(rule), size_(size) {}
+      : pts_(pts), normals_(normals), surface_(surface), params_(params), exec_(exec), rule_(rule), size_(size) {}
 
   /// @p chosen: the input points to start from (initialCandidates()).
   Samples initialise(const std::vector<std::uint32_t>& chosen, ResampleResult& result);
@@ -92,6 +92,7 @@ class Resampler {
   const std::vector<Eigen::Vector3d>& normals_;
   const MlsSurface& surface_;
   const ResampleParams& params_;
+  const Execution& exec_;
   NeighbourRule& rule_;
   const std::vector<double>* size_;
   std::vector<Eigen::Vector3d> rulePos_;  // the samples' positions at the rule's last update

@@ -8,6 +8,7 @@
 #include <optional>
 #include <vector>
 
+#include "iires/execution.hpp"
 #include "iires/knn.hpp"
 
 namespace iires {
@@ -16,7 +17,6 @@ struct MlsParams {
   int k = 16;           ///< neighbours in each local fit (paper: 8 for the weights' kernel width)
   int degree = 2;       ///< 1 = weighted tangent plane (paper eq. 1–3), 2 = plane + quadric height field
   int iterations = 2;   ///< projection steps per query (each re-centres the fit on the last estimate)
-  int threads = 0;      ///< for the construction (kernel widths); 0 = all cores
 };
 
 /// @brief The input neighbourhood of a previous projection, kept by a caller that projects the same moving
@@ -41,7 +41,7 @@ class MlsSurface {
   /// @param table (optional) neighbour lists of exactly these points (k ≥ kWidthNeighbours), borrowed while
   /// constructing, to save the kernel widths' k-NN search
   MlsSurface(const std::vector<Eigen::Vector3d>& points, const std::vector<Eigen::Vector3d>& normals,
-             const MlsParams& params = {}, const KnnIndex* index = nullptr,
+             const MlsParams& params = {}, const Execution& exec = {}, const KnnIndex* index = nullptr,
              const NeighbourTable* table = nullptr);
   ~MlsSurface();
 

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "iires/denoise.hpp"
+#include "iires/execution.hpp"
 #include "iires/outliers.hpp"
 #include "iires/types.hpp"
 
@@ -20,7 +21,6 @@ struct PreprocessParams {
   /// on average: the input is clean, and smoothing it further would only erode tight curvature. Overrides
   /// denoise.cleanDisplacement (whose default, 0, is off for denoise() on its own).
   double cleanDisplacement = 0.07;
-  int threads = 0;         ///< overrides outliers.threads and denoise.threads when > 0
 
   /// @throws std::invalid_argument with a readable message when a field is out of range.
   void validate() const;
@@ -52,7 +52,7 @@ std::size_t preprocessNeighbours(const PreprocessParams& params);
 /// @param table (optional) neighbour lists of exactly input.points with k ≥ preprocessNeighbours(params),
 /// borrowed; without it preprocess() finds them itself (once for both stages)
 /// @note O(n k log n). Deterministic for any thread count.
-PreprocessResult preprocess(const PointCloud& input, const PreprocessParams& params = {},
+PreprocessResult preprocess(const PointCloud& input, const PreprocessParams& params = {}, const Execution& exec = {},
                             const NeighbourTable* table = nullptr);
 
 }  // namespace iires
