@@ -70,6 +70,9 @@ struct ResampleParams {
   bool ringEdges = false;
   /// Samples that are kept exactly as given (never moved or removed) and count towards N (DESIGN §9).
   std::vector<Eigen::Vector3d> fixedSamples;
+  /// Samples of finished neighbouring regions (a tile's neighbours, DESIGN §9): held like fixedSamples, so the
+  /// free samples keep their spacing to them, but not counted in N and not part of the output.
+  std::vector<Eigen::Vector3d> contextSamples;
   /// Optional progress report: called with a stage name ("validate", "preprocess", "normals", "surface",
   /// "geodesic", "initialise", "resample") and the fraction of that stage done, in [0, 1]; from the calling
   /// thread only. Empty = no reports. Does not affect the output.
