@@ -198,4 +198,22 @@ TEST(Tiled, BadInputAndParameters) {
   EXPECT_THROW(iires::resampleTiled(dir + "/scene.ply", paramsFor(10), tp), std::invalid_argument);
 }
 
+TEST(Tiled, ToolWritesExactlyNOrNothing) {
+  const std::string dir = iires::test::tempDir(), scratch = iires::test::tempDir();
+  iires::writePointCloud(dir + "/in.ply", scene(8000, 9));
+  const std::string tool = iires::test::tool("iires-resample") + " " + dir + "/in.ply " + dir + "/out.ply -n 500 -q ";
+  std::string output;
+  EXPECT_EQ(iires::test::run(tool + "--tiles 1.0 --scratch " + scratch, &output), 0) << output;
+  EXPECT_EQ(iires::readPointCloud(dir + "/out.ply").size(), 500u);
+  EXPECT_TRUE(emptyDirectory(scratch));
+  std::filesystem::remove(dir + "/out.ply");
+  for (const std::string bad : {"--tiles nope", "--tiles -1", "--tiles 1 --scratch " + dir + "/missing",
+                                "--tiles auto --memory 0", "--tiles 1 --sharp-edges"}) {
+    EXPECT_EQ(iires::test::run(tool + bad, &output), 2) << bad << ": " << output;
+    EXPECT_NE(output.find("error"), std::string::npos) << output;
+    EXPECT_FALSE(iires::test::fileExists(dir + "/out.ply")) << bad;
+  }
+}
+
 }  // namespace
+

@@ -41,4 +41,24 @@ class PointStream {
   std::unique_ptr<Impl> impl_;
 };
 
+/// @brief A binary PLY point cloud written chunk by chunk (scenes larger than memory), with a point count
+/// declared up front. Atomic like writePointCloud: the file appears under its name only when finish() succeeds.
+class PointStreamWriter {
+ public:
+  /// @throws InputError when @p path is not .ply or its directory is not writable.
+  PointStreamWriter(const std::string& path, std::size_t count, bool normals);
+  ~PointStreamWriter();  ///< removes the temporary file unless finish() succeeded
+  PointStreamWriter(const PointStreamWriter&) = delete;
+  PointStreamWriter& operator=(const PointStreamWriter&) = delete;
+
+  /// Appends the points (and normals) of @p chunk. @throws InputError past the declared count or on a failed write.
+  void write(const PointCloud& chunk);
+  /// @throws InputError when fewer points than declared were written, or the file cannot be committed.
+  void finish();
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
 }  // namespace iires
