@@ -207,7 +207,7 @@ TEST(Tiled, ToolWritesExactlyNOrNothing) {
   EXPECT_EQ(iires::readPointCloud(dir + "/out.ply").size(), 500u);
   EXPECT_TRUE(emptyDirectory(scratch));
   std::filesystem::remove(dir + "/out.ply");
-  for (const std::string bad : {"--tiles nope", "--tiles -1", "--tiles 1 --scratch " + dir + "/missing",
+  for (const std::string& bad : std::vector<std::string>{"--tiles nope", "--tiles -1", "--tiles 1 --scratch " + dir + "/missing",
                                 "--tiles auto --memory 0", "--tiles 1 --sharp-edges"}) {
     EXPECT_EQ(iires::test::run(tool + bad, &output), 2) << bad << ": " << output;
     EXPECT_NE(output.find("error"), std::string::npos) << output;
