@@ -32,7 +32,12 @@ struct TilingOptions {
     if (!tiles.empty()) return tiles != "off";
     if (const std::string ext = iires::extensionOf(input); ext != ".ply" && ext != ".xyz" && ext != ".xyzn")
       return false;
-    const double points = static_cast<double>(iires::PointStream(input).estimatedCount());
+    double points = 0;
+    try {
+      points = static_cast<double>(iires::PointStream(input).estimatedCount());
+    } catch (const iires::InputError&) {
+      return false;  // not streamable (or unreadable): the in-memory reader says why
+    }
     return points * iires::TileParams::kBytesPerInputPoint > memoryGB * 1e9;
   }
 
@@ -190,7 +195,7 @@ int main(int argc, char** argv) {
       const std::size_t available = iires::tools::availableMemory();
       tiling.memoryGB = available > 0 ? static_cast<double>(available) / 1e9 : 4.0;
     }
-    if (tiling.wanted(input)) {
+    if ((columns.empty() || !tiling.tiles.empty()) && tiling.wanted(input)) {
       if (!geodesicPath.empty() || !columns.empty())
         throw iires::InputError("--export-geodesic and --columns are not available with --tiles");
       return runTiled(input, output, reportPath, params, tiling, progress, quiet);
