@@ -7,6 +7,7 @@
 #include <random>
 
 #include "shapes.hpp"
+#include "iires/knn.hpp"
 
 namespace {
 
@@ -168,4 +169,29 @@ TEST(Resample, ReportIsJsonWithTheFieldsUsersRead) {
     EXPECT_NE(json.find(key), std::string::npos) << key << " missing in " << json;
 }
 
+TEST(Resample, ContextSamplesAreHeldButNeitherCountedNorOutput) {
+  // A plane resampled with the left half's samples given as context: the N free samples fill the right half
+  // and keep their spacing to the context.
+  const auto cloud = iires::test::planeCloud(40000, 1.0, 1.0, 23);
+  const auto full = iires::resample(cloud, paramsFor(2000));
+  iires::ResampleParams p = paramsFor(1000);
+  for (const auto& q : full.cloud.points)
+    if (q.x() < 0.5) p.contextSamples.push_back(q);
+  p.targetCount = 2000 - p.contextSamples.size();
+  const auto r = iires::resample(cloud, p);
+  ASSERT_EQ(r.cloud.size(), p.targetCount);
+  EXPECT_TRUE(r.fixedIndices.empty());
+  const iires::KnnIndex context(p.contextSamples);
+  std::vector<std::uint32_t> idx;
+  std::vector<double> d2;
+  std::size_t left = 0;
+  for (const auto& q : r.cloud.points) {
+    left += q.x() < 0.5 - 0.5 * full.spacing.mean;
+    context.knn(q, 1, idx, d2);
+    EXPECT_GT(std::sqrt(d2[0]), 0.5 * full.spacing.mean) << "a free sample on top of a context sample";
+  }
+  EXPECT_LT(left, p.targetCount / 50) << "the free samples stay out of the covered half";
+}
+
 }  // namespace
+

@@ -92,7 +92,8 @@ void checkWithinInput(const std::vector<Eigen::Vector3d>& samples, const std::ve
 PointCloud workingCloud(PointCloud cloud, const ResampleParams& params, const Execution& exec,
                         const StageClock& clock) {
   constexpr std::size_t kMinWorkingPoints = 60000;
-  const std::size_t workingTarget = std::max(kMinWorkingPoints, params.maxInputPerSample * params.targetCount);
+  const std::size_t workingTarget = std::max(
+      kMinWorkingPoints, params.maxInputPerSample * (params.targetCount + params.contextSamples.size()));
   if (params.maxInputPerSample > 0 && cloud.size() > workingTarget) {
     const auto t = clock.begin("thin");
     const std::size_t target = workingTarget;
@@ -159,6 +160,8 @@ void ResampleParams::validate() const {
   if (mode == ResampleMode::kCurvature) curvature.validate();
   if (sharpEdges && !(edgeRatio >= 0.1 && edgeRatio <= 4.0))
     throw std::invalid_argument("edgeRatio (--edge-ratio) must be in [0.1, 4], got " + std::to_string(edgeRatio));
+  if (ringEdges && !contextSamples.empty())
+    throw std::invalid_argument("ring edges are not available with context samples");
   if (fixedSamples.size() > targetCount)
     throw std::invalid_argument("more fixed samples than the requested point count");
 }
@@ -302,10 +305,12 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params, const Ex
   resampler.run(s, result);
   clock.end("resample", t);
 
-  for (std::size_t i = 0; i < s.size(); ++i)
-    if (s.fixed[i]) result.fixedIndices.push_back(static_cast<std::uint32_t>(i));
-  result.cloud.points = std::move(s.pos);
-  result.cloud.normals = std::move(s.nrm);
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    if (s.fixed[i] == Samples::kContext) continue;  // held for the neighbours' sake, not output
+    if (s.fixed[i]) result.fixedIndices.push_back(static_cast<std::uint32_t>(result.cloud.size()));
+    result.cloud.points.push_back(s.pos[i]);
+    result.cloud.normals.push_back(s.nrm[i]);
+  }
   t = clock.begin("report");
   result.spacing = spacingStats(result.cloud.points, exec.threads);
   checkWithinInput(result.cloud.points, cloud.points, result.spacing.mean, surface->meanSpacing());

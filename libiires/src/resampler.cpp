@@ -232,8 +232,10 @@ Rings Resampler::computeRings(const Samples& s, double cellRadius, Relaxation* r
 /// Edges present in both endpoints' 1-rings, each once (a < b), ordered by (a, b).
 std::vector<Edge> Resampler::edges(const Samples& s, const Rings& r) const {
   const std::size_t n = s.size(), k = static_cast<std::size_t>(r.stride);
-  auto mutual = [&](std::size_t a, std::uint32_t b) {  // the edge a–b, from its lower end
-    if (b == kNone || b <= a) return false;
+  // The edge a–b, from its lower end. Edges between two context samples are left out: they are finished
+  // (never split, collapsed or counted).
+  auto mutual = [&](std::size_t a, std::uint32_t b) {
+    if (b == kNone || b <= a || (s.fixed[a] == Samples::kContext && s.fixed[b] == Samples::kContext)) return false;
     const auto* rb = &r.ring[b * k];
     return std::find(rb, rb + k, static_cast<std::uint32_t>(a)) != rb + k;
   };
@@ -382,7 +384,7 @@ EditMap Resampler::splitAndCollapse(Samples& s, const std::vector<Edge>& sorted,
       map.newIndex[i] = static_cast<std::uint32_t>(kept.size());
       kept.add(s.pos[i], s.nrm[i], s.fixed[i], std::move(s.cache[i]));
     }
-  for (std::size_t c = 0; c < newPos.size(); ++c) kept.add(newPos[c], newNrm[c], false);
+  for (std::size_t c = 0; c < newPos.size(); ++c) kept.add(newPos[c], newNrm[c], 0);
   s = std::move(kept);
   map.added = newPos.size();
   updateRule(s);
@@ -548,7 +550,7 @@ void Resampler::updateRule(const Samples& s) {
 /// Last resort when the edge operations cannot reach N (a handful of points with degenerate 1-rings): drop the
 /// free samples closest to another sample, or add the input points farthest from the samples, one at a time.
 void Resampler::forceCount(Samples& s, Relaxation& relaxation) {
-  const std::size_t n = params_.targetCount;
+  const std::size_t n = total();
   std::vector<char> removed(s.size(), 0);
   std::vector<std::uint32_t> idx;
   std::vector<double> d2;
@@ -575,7 +577,7 @@ void Resampler::forceCount(Samples& s, Relaxation& relaxation) {
     }
     while (kept.size() < n) {
       const auto far = static_cast<std::size_t>(std::max_element(toSamples.begin(), toSamples.end()) - toSamples.begin());
-      kept.add(pts_[far], normals_[far], false);
+      kept.add(pts_[far], normals_[far], 0);
       for (std::size_t q = 0; q < pts_.size(); ++q)
         toSamples[q] = std::min(toSamples[q], (pts_[q] - pts_[far]).squaredNorm());
     }
@@ -588,7 +590,8 @@ void Resampler::forceCount(Samples& s, Relaxation& relaxation) {
 std::vector<std::uint32_t> initialCandidates(const PointCloud& cloud, const MlsSurface& surface,
                                              const ResampleParams& params, int threads) {
   const std::size_t count =
-      static_cast<std::size_t>(params.candidateFactor * static_cast<double>(params.targetCount));
+      static_cast<std::size_t>(params.candidateFactor *
+                               static_cast<double>(params.targetCount + params.contextSamples.size()));
   if (cloud.size() <= count) {
     std::vector<std::uint32_t> all(cloud.size());
     std::iota(all.begin(), all.end(), 0u);
@@ -599,15 +602,19 @@ std::vector<std::uint32_t> initialCandidates(const PointCloud& cloud, const MlsS
 }
 
 Samples Resampler::initialise(const std::vector<std::uint32_t>& chosen, ResampleResult& result) {
-  const std::size_t n = params_.targetCount;
+  const std::size_t n = total();
   Samples s;
-  for (const auto& p : params_.fixedSamples) {
-    Eigen::Vector3d nrm;
-    surface_.project(p, &nrm);
-    s.add(p, nrm, true);
-  }
+  auto hold = [&](const std::vector<Eigen::Vector3d>& given, char kind) {
+    for (const auto& p : given) {
+      Eigen::Vector3d nrm;
+      surface_.project(p, &nrm);
+      s.add(p, nrm, kind);
+    }
+  };
+  hold(params_.fixedSamples, Samples::kHeld);
+  hold(params_.contextSamples, Samples::kContext);
   // Candidates are input points (on the cloud already): only the survivors of the elimination are projected.
-  for (std::uint32_t c : chosen) s.add(pts_[c], normals_[c], false);
+  for (std::uint32_t c : chosen) s.add(pts_[c], normals_[c], 0);
   eliminate(s, n);
   parallelFor(s.size(), exec_.threads, [&](std::size_t i) {
     if (!s.fixed[i]) s.pos[i] = surface_.project(s.pos[i], &s.nrm[i], nullptr, &s.nrm[i], &s.cache[i]);
@@ -618,7 +625,7 @@ Samples Resampler::initialise(const std::vector<std::uint32_t>& chosen, Resample
 }
 
 void Resampler::run(Samples& s, ResampleResult& result) {
-  const std::size_t n = params_.targetCount;
+  const std::size_t n = total();
   const double countD = static_cast<double>(n);
   // By (length, a, b): a stable radix sort on the lengths' bits (non-negative doubles order like them) of
   // edges in (a, b) order.

@@ -70,6 +70,9 @@ struct ResampleParams {
   bool ringEdges = false;
   /// Samples that are kept exactly as given (never moved or removed) and count towards N (DESIGN §9).
   std::vector<Eigen::Vector3d> fixedSamples;
+  /// Samples of finished neighbouring regions (a tile's neighbours, DESIGN §9): held like fixedSamples, so the
+  /// free samples keep their spacing to them, but not counted in N and not part of the output.
+  std::vector<Eigen::Vector3d> contextSamples;
 
   /// @throws std::invalid_argument with a readable message when a field is out of range.
   void validate() const;
