@@ -45,12 +45,22 @@ register_config() {
 # The real pair: CGAL's two hippo scans, default flags and the hinted run (rigid, overlap 0.7) as the reference.
 hippo() {
   local name="$1"; shift
-  local t0; t0=$(date +%s.%N)
-  "$bin/iires-register" datasets/cache/points_3/hippo1.ply datasets/cache/points_3/hippo2.ply -q --threads 2 \
-    --report "$out/hippo.json" "$@"
-  python3 -c 'import json, sys; r = json.load(open(sys.argv[1])); print("config=hippo1-hippo2 method=%s rotation_deg=%.2f scale=%.4f rmse=%.4g overlap_median=%s time_s_mean=%.2f" % (
-    sys.argv[2], r["rotation_angle_deg"], r["scale"], r["rmse"], r["overlap_share"], float(sys.argv[3])))' \
-    "$out/hippo.json" "$name" "$(awk -v a="$t0" -v b="$(date +%s.%N)" 'BEGIN { print b - a }')" >> "$out/register.txt"
+  /usr/bin/time -f "%e" -o "$out/hippo.time" "$bin/iires-register" datasets/cache/points_3/hippo1.ply \
+    datasets/cache/points_3/hippo2.ply -q --threads 2 --report "$out/hippo.json" "$@"
+  python3 -c 'import json, sys; r = json.load(open(sys.argv[1])); print("config=hippo1-hippo2 method=%s rotation_deg=%.2f scale=%.4f rmse=%.4g overlap_median=%s time_s_mean=%s" % (
+    sys.argv[2], r["rotation_angle_deg"], r["scale"], r["rmse"], r["overlap_share"], sys.argv[3]))' \
+    "$out/hippo.json" "$name" "$(tail -1 "$out/hippo.time")" >> "$out/register.txt"
+  rm -f "$out/hippo.json" "$out/hippo.time"
+}
+
+# Benchmarks with a runner of their own: bench/run_NAME.sh MODE prints key=value lines; its comment lines
+# "# title: ", "# about: " and "# columns: " give its section's heading, text and table columns.
+runners() {
+  for runner in bench/run_*.sh; do
+    name=$(basename "$runner" .sh); name=${name#run_}
+    [ "$name" != all ] && [ -e "$runner" ] && echo "$name"
+  done
+  return 0
 }
 
 run_benchmarks() {
@@ -61,9 +71,10 @@ run_benchmarks() {
   bash datasets/fetch.sh $(printf 'meshes/%s.off ' $corpus) points_3/building.ply points_3/before_upsample.xyz >/dev/null
   cmake -S . -B build-bench -DCMAKE_BUILD_TYPE=Release -DIIRES_BUILD_TESTS=OFF -DIIRES_BUILD_BENCH=ON >/dev/null
   cmake --build build-bench -j"$(nproc)" >/dev/null
-  local load_start started
+  local load_start started commit
   load_start=$(cut -d' ' -f1-3 /proc/loadavg)
   started=$(date -u +"%Y-%m-%d %H:%M")
+  commit=$(git rev-parse --short HEAD)
 
   # ---------------------------------------------------------------------------------------------------------------
   # Runs: each benchmark writes key=value lines to $out/NAME.txt.
@@ -100,7 +111,6 @@ run_benchmarks() {
   register_config both-cut-20% --cut 0.2 --target-cut 0.2 --methods iires
   hippo iires-default
   hippo iires-hinted --no-scale --overlap 0.7
-  rm -f "$out/hippo.json"
 
   echo "reconstruction ..."
   : > "$out/reconstruct.txt"
@@ -128,17 +138,15 @@ run_benchmarks() {
   echo "geodesic coordinates ..."
   "$bin/geodesic_bench" "" 1000000 2 > "$out/geodesic.txt"
 
-  # Benchmarks with a runner of their own (bench/run_NAME.sh, key=value lines on stdout).
-  for runner in bench/run_*.sh; do
-    [ -e "$runner" ] || continue
-    name=$(basename "$runner" .sh); name=${name#run_}
+  # Benchmarks with a runner of their own.
+  for name in $(runners); do
     echo "$name ..."
-    bash "$runner" "$mode" > "$out/$name.txt"
+    bash "bench/run_$name.sh" "$mode" > "$out/$name.txt"
   done
   printf 'mode=%s\nstarted=%s\ncores=%s\nload_start=%s\nload_end=%s\ncommit=%s\n' "$mode" "$started" "$(nproc)" \
-    "$load_start" "$(cut -d' ' -f1-3 /proc/loadavg)" "$(git rev-parse --short HEAD)" > "$out/run_info.txt"
+    "$load_start" "$(cut -d' ' -f1-3 /proc/loadavg)" "$commit" > "$out/run_info.txt"
 }
-[ "$tables_only" = 1 ] || run_benchmarks
+if [ "$tables_only" != 1 ]; then run_benchmarks; fi
 info() { sed -n "s/^$1=//p" "$out/run_info.txt"; }
 
 # ---------------------------------------------------------------------------------------------------------------
@@ -163,9 +171,10 @@ ratio() {
     { delete kv; for (i = 1; i <= NF; i++) { p = index($i, "="); if (p) kv[substr($i, 1, p - 1)] = substr($i, p + 1) }
       g = ""; n = split(keys, k, " "); for (i = 1; i <= n; i++) g = g "|" kv[k[i]]
       line[NR] = $0; group[NR] = g; t[NR] = kv["time_s"]; if (kv["method"] ~ /^iires$/) base[g] = kv["time_s"] }
-    END { for (r = 1; r <= NR; r++) { x = (group[r] in base && base[group[r]] > 0 && t[r] != "") ?
-                                          sprintf(" time_vs_iires=%.2f", t[r] / base[group[r]]) : ""
-                                      print line[r] x } }' "$1"
+    END { for (r = 1; r <= NR; r++) {
+            x = ""
+            if (group[r] in base && base[group[r]] > 0 && t[r] != "") x = sprintf(" time_vs_iires=%.2f", t[r] / base[group[r]])
+            print line[r] x } }' "$1"
 }
 # plot DAT PNG XLABEL YLABEL: one log-log line per distinct first column of DAT (columns: series x y).
 plot() {
@@ -190,9 +199,9 @@ plot "$out/grid.dat" "$out/grid.png" "output points N" "time (s), 2 cores"
   cat <<EOF
 # Benchmarks
 
-Generated by \`bash bench/run_all.sh $mode\` at commit $(info commit) ($(info started) UTC, $(info cores) cores, load
-average $(info load_start) at the start and $(info load_end) at the end); do not edit by hand. Every table compares methods **in one run on the same inputs**;
-absolute seconds depend on the machine's load, the ratios (\`time_vs_iires\`) much less. Raw key=value lines:
+Generated by \`bash bench/run_all.sh $mode\` at commit $(info commit) ($(info started) UTC, $(info cores) cores;
+load average at the start: $(info load_start); at the end: $(info load_end)); do not edit by hand.
+Every table compares methods **in one run on the same inputs**; absolute seconds depend on the machine's load, the ratios (\`time_vs_iires\`) much less. Raw key=value lines:
 bench/results/. Errors are distances in % of the bounding-box diagonal unless a column says otherwise; cv =
 std/mean of the nearest-neighbour distance (lower is more uniform).
 
@@ -204,7 +213,7 @@ surface to the nearest output point, in output spacings (holes show here). Open3
 it gives N within 2 %.
 
 EOF
-  ratio "$out/resample.txt" "model input N" > "$out/resample_ratio.txt"
+  grep -v 'skipped=' "$out/resample.txt" | ratio /dev/stdin "model input N" > "$out/resample_ratio.txt"
   table "model input N method time_s time_vs_iires cv err_mean_pct err_max_pct cov99_per_spacing" "$out/resample_ratio.txt"
   cat <<EOF
 
@@ -222,10 +231,18 @@ EOF
 
 \`$bin/denoise_bench\`: dense samplings of the models, offsets along the true normal uniform in [0, noise·l]
 (l = input spacing), optionally outliers; normals estimated from the noisy cloud. mean_err_l = mean distance of
-the output to the true mesh in units of l; edge_err_l the same near sharp edges (dihedral > 45°).
+the output to the true mesh in units of l, per method (input = the noisy cloud itself); after the slash the same near
+sharp edges (dihedral > 45°); then each method's time (s).
 
 EOF
-  table "model noise outliers method mean_err_l edge_err_l time_s" "$out/denoise.txt"
+  # One row per case: each method's mean (and near-edge) error side by side, and its time.
+  awk '/ method=/ { delete kv; for (i = 1; i <= NF; i++) { p = index($i, "="); kv[substr($i, 1, p - 1)] = substr($i, p + 1) }
+                    key = "model=" kv["model"] " noise=" kv["noise"] " outliers=" kv["outliers"]
+                    if (!(key in row)) { order[++n] = key; row[key] = key }
+                    m = kv["method"]; e = kv["mean_err_l"]; if ("edge_err_l" in kv) e = e "/" kv["edge_err_l"]
+                    row[key] = row[key] " " m "=" e; if (m != "input") row[key] = row[key] " " m "_s=" kv["time_s"] }
+       END { for (i = 1; i <= n; i++) print row[order[i]] }' "$out/denoise.txt" > "$out/denoise_rows.txt"
+  table "model noise outliers input iires cgal_jet cgal_bilateral iires_s cgal_jet_s cgal_bilateral_s" "$out/denoise_rows.txt"
   echo
   echo "Speed (200k points): \`$(grep '^speed' "$out/denoise.txt" | head -1)\`"
   cat <<EOF
@@ -275,13 +292,13 @@ EOF
 
 ## Geodesic coordinates
 
-\`$bin/geodesic_bench "" 1000000 2\`: a 1M-point sampling of armadillo, 2 threads.
+\`$bin/geodesic_bench "" 1000000 2\`: a 1M-point sampling of armadillo, 2 threads, without and with input
+normals.
 
 EOF
-  table "bench points threads time_s graph_s" "$out/geodesic.txt"
-  for runner in bench/run_*.sh; do
-    [ -e "$runner" ] || continue
-    name=$(basename "$runner" .sh); name=${name#run_}
+  table "points normals threads time_s graph_s components_s fields_s edges components" "$out/geodesic.txt"
+  for name in $(runners); do
+    runner=bench/run_$name.sh
     echo
     echo "## $(sed -n 's/^# title: //p' "$runner")"
     echo

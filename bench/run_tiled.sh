@@ -1,6 +1,11 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: GPL-3.0-or-later
-# Tiled (out-of-core, DESIGN §9) vs in-memory resampling of a generated large scene; one row per line:
+# title: Out-of-core tiled resampling vs in-memory (issue 23)
+# about: `bench/run_tiled.sh quick|full`: a scene from `build-bench/bin/scene_generator` (ground, walls, scaled corpus
+# about: models) resampled by `iires-resample` once in memory (`--tiles off`) and once tiled (`--tiles auto --memory GB`),
+# about: 2 threads; peak RSS from GNU time. quick: 1M → 200k at 0.3 GB; full: 5M → 1M at 1.5 GB and 50M → 5M at 4 GB.
+# columns: case mode memory_gb tiles output_points wall_s peak_rss_mb cv survey_s spill_s colours_s
+# One row per line, keys:
 #   case=<input>_to_<N>        the run: input points → N output points
 #   mode=memory|tiled          iires-resample --tiles off, or --tiles auto --memory <GB>
 #   memory_gb=<GB>             the --memory budget of a tiled run (0 for in-memory)
@@ -11,21 +16,20 @@
 #   peak_rss_mb=<MB>           peak resident memory (/usr/bin/time -f %M)
 #   cv=<cv> mean_spacing=<l>   nearest-neighbour spacing of the output (coefficient of variation, mean)
 #   survey_s spill_s colours_s stage times of the tiled run: pass 1, pass 2, all colour rounds
-# Usage: bench/run_tiled.sh [BUILD_DIR] [WORK_DIR]   (env: POINTS=5000000 N=1000000 MEMORY=1.5 THREADS=2)
+# Usage: bench/run_tiled.sh [quick|full]   (env: BUILD=build-bench WORK=/tmp/iires_tiled_bench THREADS=2)
 set -euo pipefail
-BUILD=${1:-build-bench}
-WORK=${2:-/tmp/iires_tiled_bench}
-POINTS=${POINTS:-5000000}
-N=${N:-1000000}
-MEMORY=${MEMORY:-1.5}
+cd "$(dirname "$0")/.."
+MODE=${1:-quick}
+BUILD=${BUILD:-build-bench}
+WORK=${WORK:-/tmp/iires_tiled_bench}
 THREADS=${THREADS:-2}
 mkdir -p "$WORK"
-SCENE="$WORK/scene_${POINTS}.ply"
-[ -f "$SCENE" ] || "$BUILD/bin/scene_generator" --points "$POINTS" --out "$SCENE" > /dev/null
 
-run() {  # mode memory_gb extra-args...
-  local mode=$1 gb=$2
-  shift 2
+run() {  # points N mode memory_gb extra-args...
+  local POINTS=$1 N=$2 mode=$3 gb=$4
+  shift 4
+  local SCENE="$WORK/scene_${POINTS}.ply"
+  [ -f "$SCENE" ] || "$BUILD/bin/scene_generator" --points "$POINTS" --out "$SCENE" > /dev/null
   local report="$WORK/report_$mode.json" out="$WORK/out_$mode.ply"
   local start end
   start=$(date +%s.%N)
@@ -51,5 +55,14 @@ PY
   rm -f "$out"
 }
 
-run memory 0 --tiles off
-run tiled "$MEMORY" --tiles auto --memory "$MEMORY" --scratch "$WORK"
+# One case: the in-memory run (skipped where it would not fit this machine) and the tiled run.
+case_pair() {  # points N memory_gb in_memory(0|1)
+  [ "$4" = 1 ] && run "$1" "$2" memory 0 --tiles off
+  run "$1" "$2" tiled "$3" --tiles auto --memory "$3" --scratch "$WORK"
+}
+if [ "$MODE" = full ]; then
+  case_pair 5000000 1000000 1.5 1
+  case_pair 50000000 5000000 4 0
+else
+  case_pair 1000000 200000 0.3 1
+fi
