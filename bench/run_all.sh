@@ -191,6 +191,8 @@ plot for [s in series] "$1" using (\$1 == s ? \$2 : 1/0):3 with linespoints titl
 GP
 }
 
+tmp=$(mktemp -d)  # intermediate tables
+trap 'rm -rf "$tmp"' EXIT
 awk '/method=iires/ { for (i = 1; i <= NF; i++) { split($i, p, "="); kv[p[1]] = p[2] } print kv["input"], kv["N"], kv["time_s"] }' \
   "$out/grid.txt" > "$out/grid.dat"
 plot "$out/grid.dat" "$out/grid.png" "output points N" "time (s), 2 cores"
@@ -213,8 +215,8 @@ surface to the nearest output point, in output spacings (holes show here). Open3
 it gives N within 2 %.
 
 EOF
-  grep -v 'skipped=' "$out/resample.txt" | ratio /dev/stdin "model input N" > "$out/resample_ratio.txt"
-  table "model input N method time_s time_vs_iires cv err_mean_pct err_max_pct cov99_per_spacing" "$out/resample_ratio.txt"
+  grep -v 'skipped=' "$out/resample.txt" | ratio /dev/stdin "model input N" > "$tmp/resample_ratio.txt"
+  table "model input N method time_s time_vs_iires cv err_mean_pct err_max_pct cov99_per_spacing" "$tmp/resample_ratio.txt"
   cat <<EOF
 
 ## Scale grid (armadillo, isotropic, iires only)
@@ -225,7 +227,7 @@ EOF
   table "input N time_s cv err_mean_pct err_max_pct cov99_per_spacing peak_mb" "$out/grid.txt"
   cat <<EOF
 
-![time against output size, one line per input size](results/grid.png)
+![time against output size, one line per input size](bench/results/grid.png)
 
 ## Pre-processing (outliers + MLS denoising) vs CGAL jet and bilateral smoothing
 
@@ -241,8 +243,8 @@ EOF
                     if (!(key in row)) { order[++n] = key; row[key] = key }
                     m = kv["method"]; e = kv["mean_err_l"]; if ("edge_err_l" in kv) e = e "/" kv["edge_err_l"]
                     row[key] = row[key] " " m "=" e; if (m != "input") row[key] = row[key] " " m "_s=" kv["time_s"] }
-       END { for (i = 1; i <= n; i++) print row[order[i]] }' "$out/denoise.txt" > "$out/denoise_rows.txt"
-  table "model noise outliers input iires cgal_jet cgal_bilateral iires_s cgal_jet_s cgal_bilateral_s" "$out/denoise_rows.txt"
+       END { for (i = 1; i <= n; i++) print row[order[i]] }' "$out/denoise.txt" > "$tmp/denoise_rows.txt"
+  table "model noise outliers input iires cgal_jet cgal_bilateral iires_s cgal_jet_s cgal_bilateral_s" "$tmp/denoise_rows.txt"
   echo
   echo "Speed (200k points): \`$(grep '^speed' "$out/denoise.txt" | head -1)\`"
   cat <<EOF
@@ -274,9 +276,9 @@ mesh, uncov = % of the input farther than 2 spacings from the mesh.
 EOF
   awk '{ for (i = 1; i <= NF; i++) { split($i, p, "="); kv[p[1]] = p[2] }
          if ($0 ~ /status=ok/) print $0 " nm=" kv["nonmanifold_edges"] + kv["nonmanifold_vertices"]; else print }' \
-    "$out/reconstruct.txt" > "$out/reconstruct_nm.txt"
+    "$out/reconstruct.txt" > "$tmp/reconstruct_nm.txt"
   table "model:model density_ratio:density n method self_intersections:si nm genus_truth:genus_truth genus:genus boundary_loops:loops q_avg q_min pct_angle_lt30:lt30 mesh_to_truth_pct_diag:H_mesh→truth truth_to_mesh_pct_diag:H_truth→mesh uncovered_pct:uncov time_s" \
-    "$out/reconstruct_nm.txt" "status="
+    "$tmp/reconstruct_nm.txt" "status="
   cat <<EOF
 
 ## Sharp edges: iires isotropic and --sharp-edges vs CGAL WLOP and an EAR-style pipeline
@@ -285,9 +287,9 @@ EOF
 the mesh's sharp edges (dihedral > 45°) to the nearest output point, in output spacings.
 
 EOF
-  ratio "$out/sharp_edges.txt" "model density_ratio N" > "$out/sharp_ratio.txt"
+  ratio "$out/sharp_edges.txt" "model density_ratio N" > "$tmp/sharp_ratio.txt"
   table "model density_ratio N method time_s time_vs_iires cv err_mean_pct err_max_pct edge_max_per_spacing:edge_max edge_mean_per_spacing:edge_mean" \
-    "$out/sharp_ratio.txt"
+    "$tmp/sharp_ratio.txt"
   cat <<EOF
 
 ## Geodesic coordinates
@@ -306,7 +308,6 @@ EOF
     echo
     table "$(sed -n 's/^# columns: //p' "$runner")" "$out/$name.txt"
   done
-} > "$out/BENCHMARKS.md"
-# Links in the generated file are relative to the repository root once copied there.
-sed 's#(results/grid.png)#(bench/results/grid.png)#' "$out/BENCHMARKS.md" > BENCHMARKS.md
+} > "$tmp/BENCHMARKS.md"
+mv "$tmp/BENCHMARKS.md" BENCHMARKS.md
 echo "wrote BENCHMARKS.md ($(wc -l < BENCHMARKS.md) lines)"
