@@ -35,10 +35,9 @@ ReconstructMethod parseReconstructMethod(const std::string& name);
 
 /// @brief The resampler settings reconstruct() starts from: ResampleParams{} with more clean-up passes, a
 /// longer final Lloyd relaxation (maxPasses 8 instead of 5, maxRelaxIterations 48 instead of 8; it still stops
-/// once the spacing CV stops improving) and the MLS surface of up to 16·N input points instead of 6·N (with 6·N,
-/// armadillo 10k kept a 22-edge hole and hand 10k's Hausdorff rose to 0.98 %). Triangle shape
-/// follows the spacing's regularity: on a 100k sampling of fandisk at N = 10k, Q_avg 0.899 → 0.905 (the mean
-/// is set by the bulk, not the creases); see BENCHMARKS.md (issue 7) for the cost.
+/// once the spacing CV stops improving) and the MLS surface of up to 16·N input points instead of 6·N (a finer
+/// surface keeps thin parts and small holes). Triangle shape follows the spacing's regularity, so a mesh pays for
+/// the longer relaxation.
 ResampleParams meshResampling();
 
 /// @brief Parameters of reconstruct().
