@@ -206,15 +206,14 @@ template <typename Report>
 void runIires(const ModelCase& c, const iires::PointCloud& noisy, const std::vector<std::uint8_t>& injected,
               double normalSeconds, const Options& opt, const iires::MeshDistance& md, Report&& report) {
   const std::size_t n = c.clean.size();
-  iires::PreprocessParams pp = opt.pre;
-  pp.threads = opt.threads;
+  const iires::PreprocessParams& pp = opt.pre;
+  const iires::Execution exec{opt.threads, {}};
   const auto t0 = Clock::now();
-  const iires::PreprocessResult r = iires::preprocess(noisy, pp);
+  const iires::PreprocessResult r = iires::preprocess(noisy, pp, exec);
   const double seconds = since(t0);
   iires::OutlierParams op = pp.outliers;
   op.mode = iires::OutlierMode::kKeep;
-  op.threads = opt.threads;
-  const iires::OutlierResult det = iires::processOutliers(noisy, op);
+  const iires::OutlierResult det = iires::processOutliers(noisy, op, exec);
   const auto outliers = static_cast<std::size_t>(std::count(injected.begin(), injected.end(), 1));
   std::size_t truePos = 0;
   for (std::uint32_t i : det.outliers) truePos += injected[i];
@@ -247,9 +246,7 @@ void runModel(const ModelCase& c, const Options& opt) {
       double normalSeconds = 0;
       if (opt.estimatedNormals) {
         const auto t0 = Clock::now();
-        iires::NormalParams np;
-        np.threads = T;
-        noisy.normals = iires::estimateNormals(noisy.points, np);
+        noisy.normals = iires::estimateNormals(noisy.points, {}, iires::Execution{T, {}});
         normalSeconds = since(t0);
       }
       const std::string tag = "model=" + c.name + " noise=" + std::to_string(noise).substr(0, 4) +
@@ -305,8 +302,7 @@ void runSpeed(const Options& opt) {
   sp.outlierMax = 6 * l;
   iires::PointCloud noisy = iires::sampleMesh(mesh, sp);
   noisy.normals.clear();
-  iires::DenoiseParams dp = opt.pre.denoise;
-  dp.threads = T;
+  const iires::Execution exec{T, {}};
   auto run = [&](const char* what, auto&& fn) {
     const auto t0 = Clock::now();
     const std::clock_t c0 = std::clock();
@@ -316,13 +312,11 @@ void runSpeed(const Options& opt) {
   };
   std::printf("speed points=%zu threads=%d", noisy.size(), T);
   iires::DenoiseResult d;
-  run("denoise", [&] { d = iires::denoise(noisy, dp); });
+  run("denoise", [&] { d = iires::denoise(noisy, opt.pre.denoise, exec); });
   std::printf(" neighbours_s=%.3f sweeps_s=%.3f orient_s=%.3f iterations=%d", d.neighbourSeconds, d.sweepSeconds,
               d.orientSeconds, d.iterations);
-  iires::PreprocessParams pp = opt.pre;
-  pp.threads = T;
   iires::PreprocessResult r;
-  run("preprocess", [&] { r = iires::preprocess(noisy, pp); });
+  run("preprocess", [&] { r = iires::preprocess(noisy, opt.pre, exec); });
   std::printf(" outliers_s=%.3f denoise_in_preprocess_s=%.3f\n", r.outlierSeconds, r.denoiseSeconds);
 }
 

@@ -20,10 +20,8 @@ int main(int argc, char** argv) {
     for (bool normals : {false, true}) {
       iires::PointCloud input = cloud;
       if (!normals) input.normals.clear();
-      iires::GeodesicParams gp;
-      gp.threads = threads;
       const auto start = std::chrono::steady_clock::now();
-      const iires::GeodesicCoordinates geo(input, gp);
+      const iires::GeodesicCoordinates geo(input, {}, iires::Execution{threads, {}});
       const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       const auto& r = geo.report();
       std::printf("bench=geodesic model=%s points=%zu normals=%d threads=%d time_s=%.3f graph_s=%.3f "

@@ -63,9 +63,7 @@ const char* kRealPoints = "kitten.xyz,hippo1.ply,hippo2.ply,building.ply,sphere_
 /// The line a method reports. @p truth may be empty (a real point set): distances then go to @p input.
 std::string describe(const iires::TriangleMesh& mesh, const iires::TriangleMesh& truth, const iires::PointCloud& input,
                      double seconds, int threads) {
-  iires::MeshQualityParams qp;
-  qp.threads = threads;
-  const iires::MeshQuality q = iires::evaluateMesh(mesh, &input, qp);
+  const iires::MeshQuality q = iires::evaluateMesh(mesh, &input, {}, iires::Execution{threads, {}});
   double toTruth = q.distance.forwardMax, fromTruth = q.distance.backwardMax, diagonal = q.distance.diagonal,
          mean = q.distance.mean;
   if (!truth.triangles.empty()) {
@@ -125,16 +123,16 @@ std::string runMethod(const ChildJob& job) {
   if (method == "local" || method == "advancing-front" || method == "input-advancing-front") {
     iires::ReconstructParams p;
     p.evaluate = false;
-    p.threads = job.threads;
+    const iires::Execution exec{job.threads, {}};
     p.method = iires::parseReconstructMethod(method == "local" ? method : "advancing-front");
     iires::ReconstructResult r;
     if (method == "local") {  // the whole pipeline, as iires-reconstruct runs it
       p.targetCount = job.n;
-      r = iires::reconstruct(input, p);
+      r = iires::reconstruct(input, p, exec);
       if (r.samples.points != samples.points) return "status=error message=\"resampling differs from the parent's\"";
     } else {  // the resampled points, or (input-advancing-front) the input itself
       p.resample = false;
-      r = iires::reconstruct(method == "advancing-front" ? samples : input, p);
+      r = iires::reconstruct(method == "advancing-front" ? samples : input, p, exec);
     }
     mesh = r.mesh;
     if (!job.dump.empty()) iires::writeMesh(job.dump, mesh);
@@ -213,9 +211,8 @@ void runCase(const Case& c, const std::vector<std::string>& counts, const std::v
   for (const std::string& count : counts) {
     iires::ResampleParams rp = iires::meshResampling();  // the resampling reconstruct() does
     rp.targetCount = std::stoul(count);
-    rp.threads = threads;
     const auto t = Clock::now();
-    const iires::ResampleResult rs = iires::resample(c.input, rp);
+    const iires::ResampleResult rs = iires::resample(c.input, rp, iires::Execution{threads, {}});
     const std::string head = "model=" + c.name + " density_ratio=" + (c.truthFile.empty() ? "real" : std::to_string(ratio).substr(0, 3)) +
                              " input_points=" + std::to_string(c.input.size()) + " n=" + count + " genus_truth=" + genusTruth;
     std::cout << head << " method=resample spacing_cv=" << rs.spacing.cv << " time_s=" << since(t) << std::endl;

@@ -69,9 +69,8 @@ int main(int argc, char** argv) {
     const std::string prefix = "model=" + name + " input=" + std::to_string(inputCount) + " N=" + std::to_string(n);
     iires::ResampleParams p;
     p.targetCount = n;
-    p.threads = threads;
     double t = now();
-    const auto r = iires::resample(cloud, p);
+    const auto r = iires::resample(cloud, p, iires::Execution{threads, {}});
     const double seconds = now() - t;
     std::string stages;  // time per stage, from the result
     for (const auto& s : r.timings)

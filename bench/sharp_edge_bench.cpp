@@ -238,10 +238,9 @@ int main(int argc, char** argv) {
       if (!run(sharp ? "iires_sharp" : "iires")) continue;
       iires::ResampleParams p;
       p.targetCount = n;
-      p.threads = threads;
       p.sharpEdges = sharp;
       const double t = now();
-      const auto r = iires::resample(cloud, p);
+      const auto r = iires::resample(cloud, p, iires::Execution{threads, {}});
       report(prefix, sharp ? "iires_sharp" : "iires", r.cloud.points, now() - t, ref,
              sharp ? " feature_samples=" + std::to_string(r.featureSamples) : "");
       if (dump > 0) dumpWorst(r.cloud.points, r.fixedIndices, ref, dump);

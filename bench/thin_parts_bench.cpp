@@ -76,10 +76,9 @@ int main(int argc, char** argv) {
                              " gap_spacings=" + std::to_string(gapSpacings).substr(0, 4) +
                              " noise_spacings=" + std::to_string(noise).substr(0, 4);
   if (std::getenv("THIN_PARTS_NO_DENOISE_ONLY") == nullptr) {  // --denoise-only
-    iires::PreprocessParams pp;
-    pp.threads = threads;
+    const iires::Execution exec{threads, {}};
     const double t0 = now();
-    const iires::PreprocessResult r = iires::preprocess(t.cloud, pp);
+    const iires::PreprocessResult r = iires::preprocess(t.cloud, {}, exec);
     double sum = 0, before = 0;
     for (const auto& p : r.cloud.points) sum += t.distance(p);
     for (const auto& p : t.cloud.points) before += t.distance(p);
@@ -92,11 +91,10 @@ int main(int argc, char** argv) {
   for (std::size_t n : ns) {
     iires::ResampleParams p;
     p.targetCount = n;
-    p.threads = threads;
     p.intrinsic = intrinsic;
     if (inputPerSample >= 0) p.maxInputPerSample = static_cast<std::size_t>(inputPerSample);
     const double t0 = now();
-    const iires::ResampleResult r = iires::resample(t.cloud, p);
+    const iires::ResampleResult r = iires::resample(t.cloud, p, iires::Execution{threads, {}});
     const double seconds = now() - t0;
     std::size_t off = 0, near = 0, sides[2] = {0, 0};
     double worst = 0, mean = 0;

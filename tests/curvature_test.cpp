@@ -287,11 +287,8 @@ TEST(Curvature, SmoothingIsEq8) {
 
 TEST(Curvature, DeterministicAcrossThreadCounts) {
   const auto c = planeWithBump(20000, 2000);
-  iires::CurvatureParams one, two;
-  one.threads = 1;
-  two.threads = 2;
-  const auto a = iires::computeCurvature(c.points, c.normals, one);
-  const auto b = iires::computeCurvature(c.points, c.normals, two);
+  const auto a = iires::computeCurvature(c.points, c.normals, {}, iires::Execution{1});
+  const auto b = iires::computeCurvature(c.points, c.normals, {}, iires::Execution{2});
   EXPECT_EQ(a.eta, b.eta);
   EXPECT_EQ(a.smoothedEta, b.smoothedEta);
   EXPECT_EQ(a.level, b.level);

@@ -135,10 +135,8 @@ TEST(Denoise, SameOutputForOneAndTwoThreads) {
   std::normal_distribution<double> g(0.0, 0.005);
   for (auto& p : cloud.points) p *= 1.0 + g(rng);
   DenoiseParams p1, p2;
-  p1.threads = 1;
-  p2.threads = 2;
   p1.sharpnessAngle = p2.sharpnessAngle = 30;
-  const auto a = iires::denoise(cloud, p1), b = iires::denoise(cloud, p2);
+  const auto a = iires::denoise(cloud, p1, iires::Execution{1}), b = iires::denoise(cloud, p2, iires::Execution{2});
   ASSERT_EQ(a.cloud.size(), b.cloud.size());
   for (std::size_t i = 0; i < a.cloud.size(); ++i) {
     EXPECT_EQ(a.cloud.points[i], b.cloud.points[i]);
@@ -280,7 +278,7 @@ TEST(Denoise, BorrowedNeighbourTableGivesTheSameOutput) {
   cloud.normals.clear();
   const iires::KnnIndex index(cloud.points);
   const iires::NeighbourTable table(index, cloud.points, iires::denoiseNeighbours({}));
-  const auto own = iires::denoise(cloud), borrowed = iires::denoise(cloud, {}, &table);
+  const auto own = iires::denoise(cloud), borrowed = iires::denoise(cloud, {}, {}, &table);
   ASSERT_EQ(own.cloud.size(), borrowed.cloud.size());
   double worst = 0;
   for (std::size_t i = 0; i < own.cloud.size(); ++i)

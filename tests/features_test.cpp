@@ -177,7 +177,7 @@ TEST(Features, SnapToCreasesOnACube) {
     chain.push_back(1);
   }
   std::vector<std::uint32_t> owner;
-  const auto out = iires::snapToCreases(cloud, samples, chain, h, p, &owner);
+  const auto out = iires::snapToCreases(cloud, samples, chain, h, p, {}, &owner);
   ASSERT_EQ(out.size(), owner.size());
   std::size_t onChain0 = 0, corners = 0;
   for (std::size_t i = 0; i < out.size(); ++i) {
@@ -194,10 +194,8 @@ TEST(Features, SnapToCreasesOnACube) {
     for (std::size_t j = i + 1; j < out.size(); ++j)
       EXPECT_GT((out[i] - out[j]).norm(), 0.025) << out[i].transpose() << " / " << out[j].transpose() << " chains " << owner[i] << " " << owner[j];
   // Deterministic for any thread count.
-  p.threads = 1;
-  const auto one = iires::snapToCreases(cloud, samples, chain, h, p);
-  p.threads = 2;
-  EXPECT_EQ(one, iires::snapToCreases(cloud, samples, chain, h, p));
+  const auto one = iires::snapToCreases(cloud, samples, chain, h, p, iires::Execution{1});
+  EXPECT_EQ(one, iires::snapToCreases(cloud, samples, chain, h, p, iires::Execution{2}));
   EXPECT_THROW(iires::snapToCreases(cloud, samples, {0u}, h, p), std::invalid_argument);
 }
 
@@ -325,7 +323,7 @@ TEST(Features, StrayLoneSampleBesideAChainIsDropped) {
   const Eigen::Vector3d alone(0.0, 0.5, 1.0);
   samples.push_back(alone), chain.push_back(2);
   std::vector<std::uint32_t> owner;
-  const auto out = iires::snapToCreases(cloud, samples, chain, h, p, &owner);
+  const auto out = iires::snapToCreases(cloud, samples, chain, h, p, {}, &owner);
   ASSERT_EQ(out.size(), owner.size());
   double nearAlone = 1e300;
   for (std::size_t i = 0; i < out.size(); ++i) {
@@ -582,9 +580,8 @@ TEST(Features, DeterministicAcrossThreadCounts) {
     FeatureParams one, two;
     one.detector = two.detector = d;
     one.sampleSpacing = two.sampleSpacing = 0.05;
-    one.threads = 1;
-    two.threads = 2;
-    const auto a = iires::detectFeatures(cloud, one), b = iires::detectFeatures(cloud, two);
+    const auto a = iires::detectFeatures(cloud, one, iires::Execution{1});
+    const auto b = iires::detectFeatures(cloud, two, iires::Execution{2});
     EXPECT_EQ(a.featureIndices, b.featureIndices);
     EXPECT_EQ(a.samples, b.samples);
   }

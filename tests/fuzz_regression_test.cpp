@@ -42,7 +42,6 @@ ResampleParams fuzzParams() {
   params.targetCount = 10;
   params.intrinsic = false;
   params.preprocess = false;
-  params.threads = 1;
   params.maxPasses = 4;
   params.maxRelaxIterations = 8;
   return params;
@@ -152,7 +151,6 @@ TEST(FuzzRegression, ZeroLengthInputNormalsGiveUnitOutputNormals) {
   params.relaxPerPass = 1;
   params.neighbours = 6;
   params.seed = 31;
-  params.threads = 1;
   for (int i = 0; i < 6; ++i) params.fixedSamples.push_back(cloud.points[i]);
   const ResampleResult result = resample(cloud, params);
   ASSERT_EQ(result.cloud.size(), 20u);
@@ -189,7 +187,6 @@ TEST(FuzzRegression, DegenerateRingsStillGiveExactlyN) {
   params.intrinsic = false;
   params.maxPasses = 2;
   params.maxRelaxIterations = 8;
-  params.threads = 1;
   const ResampleResult r = resample(cloud, params);
   ASSERT_EQ(r.cloud.size(), 3u);
   ASSERT_EQ(r.cloud.normals.size(), 3u);

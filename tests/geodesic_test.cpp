@@ -161,11 +161,11 @@ TEST(Geodesic, BorrowedNeighbourTableGivesTheSameCoordinates) {
   const PointCloud c = uStrip(15000, 0.05, 9);
   const iires::KnnIndex index(c.points);
   const iires::NeighbourTable table(index, c.points, 17);
-  const GeodesicCoordinates own(c), borrowed(c, {}, &table);
+  const GeodesicCoordinates own(c), borrowed(c, {}, {}, &table);
   EXPECT_EQ(own.edges(), borrowed.edges());
   EXPECT_EQ(own.coordinates(), borrowed.coordinates());
   const iires::NeighbourTable tooShort(index, c.points, 8);  // fewer than k + 1: not used
-  EXPECT_EQ(GeodesicCoordinates(c, {}, &tooShort).coordinates(), own.coordinates());
+  EXPECT_EQ(GeodesicCoordinates(c, {}, {}, &tooShort).coordinates(), own.coordinates());
 }
 
 // Work handed to the constructor runs once (beside the sweeps when a thread is idle), leaves the coordinates
@@ -175,15 +175,14 @@ TEST(Geodesic, RunsIndependentWorkAlongsideTheSweeps) {
   GeodesicParams p;
   const GeodesicCoordinates plain(c, p);
   for (int threads : {1, 2}) {
-    p.threads = threads;
     int calls = 0, given = 0;
-    const GeodesicCoordinates g(c, p, nullptr, [&](int t, const KnnIndex*) { ++calls, given = t; });
+    const GeodesicCoordinates g(c, p, Execution{threads}, nullptr, [&](int t, const KnnIndex*) { ++calls, given = t; });
     EXPECT_EQ(calls, 1);
     EXPECT_EQ(given, 1)
         << "one component: one thread sweeps, the other is free (or, on one thread, after it)";
     EXPECT_EQ(g.coordinates(), plain.coordinates());
     EXPECT_THROW(
-        GeodesicCoordinates(c, p, nullptr,
+        GeodesicCoordinates(c, p, {}, nullptr,
                             [](int, const KnnIndex*) { throw std::runtime_error("alongside failed"); }),
         std::runtime_error);
   }
@@ -199,7 +198,7 @@ TEST(Geodesic, AlongsideGetsThePointIndexOfAZOrderedCloud) {
     const PointCloud& cloud = ordered ? z : c;
     const KnnIndex* seen = nullptr;
     std::int64_t nearest = -1;
-    const GeodesicCoordinates g(cloud, {}, nullptr, [&](int, const KnnIndex* index) {
+    const GeodesicCoordinates g(cloud, {}, {}, nullptr, [&](int, const KnnIndex* index) {
       seen = index;
       if (index) nearest = index->nearest(cloud.points[1234]);
     });
@@ -214,10 +213,8 @@ TEST(Geodesic, AlongsideGetsThePointIndexOfAZOrderedCloud) {
 TEST(Geodesic, DeterministicForAnyThreadCount) {
   PointCloud c = uStrip(15000, 0.05, 9);
   GeodesicParams p;
-  p.threads = 1;
-  const GeodesicCoordinates g1(c, p);
-  p.threads = 2;
-  const GeodesicCoordinates g2(c, p);
+  const GeodesicCoordinates g1(c, p, Execution{1});
+  const GeodesicCoordinates g2(c, p, Execution{2});
   EXPECT_EQ(g1.coordinates(), g2.coordinates());
   EXPECT_EQ(g1.componentIds(), g2.componentIds());
   EXPECT_EQ(g1.satellites(0), g2.satellites(0));
@@ -258,9 +255,7 @@ TEST(Geodesic, ValidatesInput) {
   p = {};
   p.maxEdgeSlopeDeg = 0;
   EXPECT_THROW(p.validate(), std::invalid_argument);
-  p = {};
-  p.threads = -1;
-  EXPECT_THROW(p.validate(), std::invalid_argument);
+  EXPECT_THROW(Execution{-1}.validate(), std::invalid_argument);
   EXPECT_NO_THROW(GeodesicParams{}.validate());
   // A single point: one component, coordinates 0.
   PointCloud one;

@@ -56,9 +56,7 @@ TEST(Icp, ConvergesFromANearbyPoseWithScale) {
   Eigen::Matrix4d init = Eigen::Matrix4d::Identity();
   init.topLeftCorner<3, 3>() *= 1.0 / 0.28;
   for (int threads : {1, 2}) {
-    iires::reg::IcpParams p;
-    p.threads = threads;
-    const auto r = iires::reg::similarityIcp(source, target, tree, init, p);
+    const auto r = iires::reg::similarityIcp(source, target, tree, init, {}, iires::Execution{threads});
     const Eigen::Matrix4d truth = move.inverse();
     EXPECT_NEAR(r.scale, 1.0 / 0.3, 0.01 / 0.3);
     EXPECT_LT(std::acos(std::clamp(((r.T_target_source.topLeftCorner<3, 3>() / r.scale).transpose() *

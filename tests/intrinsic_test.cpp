@@ -54,8 +54,9 @@ bool crossesGap(const Eigen::Vector3d& p, const Eigen::Vector3d& q) {
   return part(p) != 2 && part(q) != 2 && part(p) != part(q) && std::max(p.x(), q.x()) < 0.95;
 }
 
-std::shared_ptr<const GeodesicCoordinates> geodesicOf(const PointCloud& c, const GeodesicParams& p = {}) {
-  return std::make_shared<const GeodesicCoordinates>(c, p);
+std::shared_ptr<const GeodesicCoordinates> geodesicOf(const PointCloud& c, const GeodesicParams& p = {},
+                                                      const Execution& exec = {}) {
+  return std::make_shared<const GeodesicCoordinates>(c, p, exec);
 }
 
 TEST(IntrinsicRule, ValidatesParams) {
@@ -360,8 +361,7 @@ TEST(IntrinsicRule, DeterministicForAnyThreadCount) {
   IntrinsicParams ip;
   std::vector<std::vector<bool>> decisions;
   for (int threads : {1, 2}) {
-    gp.threads = ip.threads = threads;
-    IntrinsicRule rule(geodesicOf(dense, gp), ip);
+    IntrinsicRule rule(geodesicOf(dense, gp, Execution{threads}), ip, Execution{threads});
     std::vector<Eigen::Vector3d> s;
     for (std::size_t i = 0; i < dense.size(); i += 20) s.push_back(dense.points[i]);
     rule.update(s, {});

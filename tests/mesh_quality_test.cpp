@@ -345,10 +345,8 @@ TEST(MeshQuality, SurfaceDistanceBetweenShiftedCubes) {
 TEST(MeshQuality, SameReportForAnyThreadCount) {
   PointCloud cloud;
   for (int i = 0; i < 500; ++i) cloud.points.emplace_back(std::sin(i) * 0.5 + 0.5, std::cos(3 * i) * 0.5 + 0.5, 0.01 * (i % 7));
-  MeshQualityParams p1, p2;
-  p1.threads = 1;
-  p2.threads = 2;
-  EXPECT_EQ(evaluateMesh(cube(), &cloud, p1).toJson(), evaluateMesh(cube(), &cloud, p2).toJson());
+  EXPECT_EQ(evaluateMesh(cube(), &cloud, {}, Execution{1}).toJson(),
+            evaluateMesh(cube(), &cloud, {}, Execution{2}).toJson());
 }
 
 TEST(MeshQuality, BadInputs) {

@@ -50,7 +50,7 @@ TEST(MlsSurface, BorrowedIndexAndSingleStepProjection) {
   const iires::KnnIndex index(cloud.points);
   const iires::MlsSurface own(cloud.points, cloud.normals);
   const iires::NeighbourTable table(index, cloud.points, iires::MlsSurface::kWidthNeighbours);
-  const iires::MlsSurface borrowed(cloud.points, cloud.normals, {}, &index, &table);
+  const iires::MlsSurface borrowed(cloud.points, cloud.normals, {}, {}, &index, &table);
   EXPECT_EQ(&borrowed.index(), &index);
   EXPECT_DOUBLE_EQ(own.area(), borrowed.area());  // the kernel widths from the table are the tree's
   EXPECT_DOUBLE_EQ(own.meanSpacing(), borrowed.meanSpacing());

@@ -12,9 +12,7 @@ namespace {
 TEST(Normals, SphereNormalsAreRadialAndOutward) {
   const auto cloud = iires::test::sphereCloud(5000, 2.0, 3);
   for (int threads : {1, 2}) {
-    iires::NormalParams p;
-    p.threads = threads;
-    const auto n = iires::estimateNormals(cloud.points, p);
+    const auto n = iires::estimateNormals(cloud.points, {}, iires::Execution{threads});
     ASSERT_EQ(n.size(), cloud.size());
     for (std::size_t i = 0; i < n.size(); ++i) {
       EXPECT_NEAR(n[i].norm(), 1.0, 1e-9);
@@ -55,10 +53,8 @@ TEST(Normals, OrientationOverAGivenGraphMakesASphereOutward) {
 
 TEST(Normals, DeterministicAcrossThreadCounts) {
   const auto cloud = iires::test::planeCloud(4000, 1.0, 5.0);
-  iires::NormalParams one, two;
-  one.threads = 1;
-  two.threads = 2;
-  EXPECT_EQ(iires::estimateNormals(cloud.points, one), iires::estimateNormals(cloud.points, two));
+  EXPECT_EQ(iires::estimateNormals(cloud.points, {}, iires::Execution{1}),
+            iires::estimateNormals(cloud.points, {}, iires::Execution{2}));
 }
 
 }  // namespace

@@ -202,7 +202,7 @@ TEST(Outliers, BorrowedNeighbourTableGivesTheSameOutput) {
   const iires::KnnIndex index(data.cloud.points);
   const iires::NeighbourTable table(index, data.cloud.points, iires::outlierNeighbours({}));
   const auto own = iires::processOutliers(data.cloud),
-             borrowed = iires::processOutliers(data.cloud, {}, &table);
+             borrowed = iires::processOutliers(data.cloud, {}, {}, &table);
   EXPECT_GT(own.found, 0u);
   EXPECT_EQ(own.outliers, borrowed.outliers);
   EXPECT_EQ(own.cloud.points, borrowed.cloud.points);
@@ -210,10 +210,8 @@ TEST(Outliers, BorrowedNeighbourTableGivesTheSameOutput) {
 
 TEST(Outliers, SameOutputForOneAndTwoThreads) {
   const Noisy data = noisyPlane(10000, 3.0, 0.5, 0.03, 15);
-  OutlierParams p1, p2;
-  p1.threads = 1;
-  p2.threads = 2;
-  const auto a = iires::processOutliers(data.cloud, p1), b = iires::processOutliers(data.cloud, p2);
+  const auto a = iires::processOutliers(data.cloud, {}, iires::Execution{1});
+  const auto b = iires::processOutliers(data.cloud, {}, iires::Execution{2});
   EXPECT_EQ(a.outliers, b.outliers);
   EXPECT_EQ(a.cloud.points, b.cloud.points);
 }

@@ -73,10 +73,7 @@ TEST(Triangulate, SameMeshForAnyThreadCount) {
   PointCloud c;
   c.points = test::fibonacciSphere(2000);
   c.normals = c.points;
-  TriangulateParams p1, p2;
-  p1.threads = 1;
-  p2.threads = 2;
-  const auto a = triangulateLocal(c, p1).mesh, b = triangulateLocal(c, p2).mesh;
+  const auto a = triangulateLocal(c, {}, Execution{1}).mesh, b = triangulateLocal(c, {}, Execution{2}).mesh;
   ASSERT_EQ(a.triangles.size(), b.triangles.size());
   for (std::size_t f = 0; f < a.triangles.size(); ++f) EXPECT_EQ(a.triangles[f], b.triangles[f]);
 }
@@ -461,8 +458,7 @@ TEST(Reconstruct, NoisySphereHasNoSelfIntersections) {
   }
   ReconstructParams p;
   p.targetCount = 3000;
-  p.threads = 2;
-  const ReconstructResult r = reconstruct(noisy, p);
+  const ReconstructResult r = reconstruct(noisy, p, Execution{2});
   EXPECT_GT(r.validity.intersectingPairs, 0u) << "the case no longer needs the repair";
   EXPECT_EQ(r.quality.selfIntersections, 0u);
   expectClosedGenus(r.quality, 2);
@@ -543,11 +539,9 @@ TEST(Reconstruct, DegenerateInputIsAnInputError) {
 TEST(Reconstruct, SameMeshForAnyThreadCount) {
   ReconstructParams p1, p2;
   p1.targetCount = p2.targetCount = 1000;
-  p1.threads = 1;
-  p2.threads = 2;
   p1.evaluate = p2.evaluate = false;
   const PointCloud c = test::sphereCloud(8000);
-  const auto a = reconstruct(c, p1).mesh, b = reconstruct(c, p2).mesh;
+  const auto a = reconstruct(c, p1, Execution{1}).mesh, b = reconstruct(c, p2, Execution{2}).mesh;
   ASSERT_EQ(a.triangles.size(), b.triangles.size());
   EXPECT_EQ(a.vertices, b.vertices);
   for (std::size_t f = 0; f < a.triangles.size(); ++f) EXPECT_EQ(a.triangles[f], b.triangles[f]);

@@ -282,9 +282,9 @@ TEST(Registration, ProgressNamesEveryStageAndDoesNotChangeTheResult) {
   const PointCloud target = scan("fandisk", 6000, 55);
   const PointCloud source = moved(scan("fandisk", 3000, 56), similarity(3, 80, {1, 0, 1}, {2, 0, 1}));
   std::vector<std::pair<std::string, double>> calls;
-  auto p = fast();
-  p.progress = [&](const std::string& stage, double fraction) { calls.emplace_back(stage, fraction); };
-  const auto withProgress = registerClouds(source, target, p);
+  iires::Execution exec;
+  exec.progress = [&](const std::string& stage, double fraction) { calls.emplace_back(stage, fraction); };
+  const auto withProgress = registerClouds(source, target, fast(), exec);
   const auto without = registerClouds(source, target, fast());
   EXPECT_EQ(withProgress.T_target_source, without.T_target_source);
   std::vector<std::string> stages;
@@ -307,10 +307,8 @@ TEST(Registration, SameResultForAnyThreadCount) {
   const PointCloud target = scan("bunny00", 6000, 51);
   const PointCloud source = moved(scan("bunny00", 3000, 52), similarity(0.5, 95, {0, 1, 0}, {1, 2, 3}));
   auto p = fast();
-  p.threads = 1;
-  const auto a = registerClouds(source, target, p);
-  p.threads = 2;
-  const auto b = registerClouds(source, target, p);
+  const auto a = registerClouds(source, target, p, iires::Execution{1});
+  const auto b = registerClouds(source, target, p, iires::Execution{2});
   EXPECT_EQ(a.T_target_source, b.T_target_source);
   EXPECT_EQ(a.bestCandidate, b.bestCandidate);
   EXPECT_EQ(a.icpIterations, b.icpIterations);

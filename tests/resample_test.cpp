@@ -7,13 +7,13 @@
 #include <random>
 
 #include "shapes.hpp"
+#include "iires/knn.hpp"
 
 namespace {
 
-iires::ResampleParams paramsFor(std::size_t n, int threads = 0) {
+iires::ResampleParams paramsFor(std::size_t n) {
   iires::ResampleParams p;
   p.targetCount = n;
-  p.threads = threads;
   return p;
 }
 
@@ -75,11 +75,11 @@ TEST(Resample, UpsamplesToExactCount) {
 
 TEST(Resample, SameOutputForAnyThreadCountAndSeedMatters) {
   const auto cloud = iires::test::planeCloud(20000, 1.0, 3.0);
-  const auto a = iires::resample(cloud, paramsFor(1500, 1));
-  const auto b = iires::resample(cloud, paramsFor(1500, 2));
+  const auto a = iires::resample(cloud, paramsFor(1500), iires::Execution{1});
+  const auto b = iires::resample(cloud, paramsFor(1500), iires::Execution{2});
   EXPECT_EQ(a.cloud.points, b.cloud.points);
   EXPECT_EQ(a.cloud.normals, b.cloud.normals);
-  auto p = paramsFor(1500, 2);
+  auto p = paramsFor(1500);
   p.seed = 99;
   EXPECT_NE(iires::resample(cloud, p).cloud.points, a.cloud.points);
 }
@@ -169,4 +169,29 @@ TEST(Resample, ReportIsJsonWithTheFieldsUsersRead) {
     EXPECT_NE(json.find(key), std::string::npos) << key << " missing in " << json;
 }
 
+TEST(Resample, ContextSamplesAreHeldButNeitherCountedNorOutput) {
+  // A plane resampled with the left half's samples given as context: the N free samples fill the right half
+  // and keep their spacing to the context.
+  const auto cloud = iires::test::planeCloud(40000, 1.0, 1.0, 23);
+  const auto full = iires::resample(cloud, paramsFor(2000));
+  iires::ResampleParams p = paramsFor(1000);
+  for (const auto& q : full.cloud.points)
+    if (q.x() < 0.5) p.contextSamples.push_back(q);
+  p.targetCount = 2000 - p.contextSamples.size();
+  const auto r = iires::resample(cloud, p);
+  ASSERT_EQ(r.cloud.size(), p.targetCount);
+  EXPECT_TRUE(r.fixedIndices.empty());
+  const iires::KnnIndex context(p.contextSamples);
+  std::vector<std::uint32_t> idx;
+  std::vector<double> d2;
+  std::size_t left = 0;
+  for (const auto& q : r.cloud.points) {
+    left += q.x() < 0.5 - 0.5 * full.spacing.mean;
+    context.knn(q, 1, idx, d2);
+    EXPECT_GT(std::sqrt(d2[0]), 0.5 * full.spacing.mean) << "a free sample on top of a context sample";
+  }
+  EXPECT_LT(left, p.targetCount / 50) << "the free samples stay out of the covered half";
+}
+
 }  // namespace
+

@@ -136,8 +136,7 @@ TEST(RotationSearch, TranslationSearchRecentresCutClouds) {
     p.overlaps = {1.0, 0.8, 0.6};
     p.keep = 12;
     p.translationRadius = radius;
-    p.threads = 2;
-    const auto found = RotationSearch(s, t, p).search(grid);
+    const auto found = RotationSearch(s, t, p, iires::Execution{2}).search(grid);
     ASSERT_FALSE(found.candidates.empty());
     if (radius > 0) {
       // The best candidate is the true rotation (within the grid's spacing), recentred.
@@ -157,10 +156,8 @@ TEST(RotationSearch, SameCandidatesForAnyThreadCount) {
   const auto grid = iires::reg::rotationGrid(iires::reg::RotationGridType::kSo3, 24, 6144);
   RotationSearchParams p;
   p.overlaps = {1.0, 0.8, 0.6};
-  p.threads = 1;
-  const auto one = RotationSearch(s, t, p).search(grid);
-  p.threads = 2;
-  const auto two = RotationSearch(s, t, p).search(grid);
+  const auto one = RotationSearch(s, t, p, iires::Execution{1}).search(grid);
+  const auto two = RotationSearch(s, t, p, iires::Execution{2}).search(grid);
   ASSERT_EQ(one.candidates.size(), two.candidates.size());
   for (std::size_t i = 0; i < one.candidates.size(); ++i) {
     EXPECT_EQ(one.candidates[i].gridIndex, two.candidates[i].gridIndex);

@@ -28,6 +28,7 @@ int main(int argc, char** argv) {
     long long count = 10000;
     bool noResample = false, noHoles = false, noValidity = false, quiet = false, showProgress = false;
     iires::ReconstructParams params;
+    iires::Execution exec;
     std::vector<std::string> columns;
     app.add_option("INPUT", input, "input cloud (.ply .pcd .xyz .xyzn .pts, or mesh vertices .obj .off .stl)")
         ->required();
@@ -53,7 +54,8 @@ int main(int argc, char** argv) {
     app.add_option("--uncovered", uncoveredPath,
                    "write the input points farther than 2 mesh spacings from the mesh (the parts it does not "
                    "cover) to this point cloud file");
-    app.add_option("--threads", params.threads, "threads (0 = all cores); the output does not depend on it");
+    app.add_option("--threads", exec.threads, "threads (0 = all cores); the output does not depend on it")
+        ->check(CLI::NonNegativeNumber);
     app.add_option("--seed", params.seed, "seed; same seed -> same mesh");
     app.add_flag("-q,--quiet", quiet, "print nothing on success (no report, no progress)");
     app.add_flag("--progress", showProgress, "progress on stderr even when it is not a terminal");
@@ -67,7 +69,7 @@ int main(int argc, char** argv) {
       throw iires::InputError("cannot write " + uncoveredPath + ": use .ply (with normals when the input has them) "
                               "or .xyz for --uncovered");
     iires::tools::Progress progress("iires-reconstruct", showProgress, quiet);
-    params.progress = progress.callback();  // resampling and meshing stages
+    exec.progress = progress.callback();  // resampling and meshing stages
 
     if (!qualityOnly.empty()) {
       if (!output.empty()) throw iires::InputError("--quality-only takes no OUTPUT_MESH (got " + output + ")");
@@ -86,9 +88,8 @@ int main(int argc, char** argv) {
       iires::validateCloud(reference, 1, input);
       progress.update("quality", 0.0);
       iires::MeshQualityParams qp;
-      qp.threads = params.threads;
       qp.seed = params.seed + 1;
-      const iires::MeshQuality q = iires::evaluateMesh(mesh, &reference, qp);
+      const iires::MeshQuality q = iires::evaluateMesh(mesh, &reference, qp, exec);
       progress.finish();
       iires::OutputBatch outputs;
       if (!reportPath.empty()) outputs.text(reportPath, q.toJson());
@@ -116,7 +117,7 @@ int main(int argc, char** argv) {
                                              kBytesPerVertex);
     iires::ReconstructResult result;
     try {
-      result = iires::reconstruct(cloud, params);
+      result = iires::reconstruct(cloud, params, exec);
     } catch (const iires::InputError& e) {
       throw iires::InputError(input + ": " + e.what());
     }

@@ -19,6 +19,7 @@ int main(int argc, char** argv) {
                  "distance, refine with ICP (with scale). Prints the similarity T_target_source."};
     std::string sourcePath, targetPath, alignedPath, transformPath, reportPath, grid = "so3";
     iires::reg::RegistrationParams params;
+    iires::Execution exec;
     auto samples = static_cast<long long>(params.samples);
     bool noScale = false, quiet = false, showProgress = false, fullResample = false;
     app.add_option("SOURCE", sourcePath, "cloud to move (.ply .pcd .xyz .xyzn .pts, or mesh vertices)")->required();
@@ -39,7 +40,8 @@ int main(int argc, char** argv) {
                    "outliers of both clouds (and of the -o output): pull back onto the surface, remove, or keep")
         ->check(CLI::IsMember({"pull", "remove", "keep"}));
     app.add_option("--seed", params.seed, "seed; same seed -> same result");
-    app.add_option("--threads", params.threads, "threads (0 = all cores); the result does not depend on it");
+    app.add_option("--threads", exec.threads, "threads (0 = all cores); the result does not depend on it")
+        ->check(CLI::NonNegativeNumber);
     app.add_flag("--full-resample", fullResample,
                  "resample with the full pipeline (denoising, outliers, relaxation): slower, for noisy scans");
     app.add_flag("-q,--quiet", quiet, "print nothing on success (no result, no progress)");
@@ -63,13 +65,13 @@ int main(int argc, char** argv) {
 
     if (fullResample) params.resample = iires::ResampleParams{};
     iires::tools::Progress progress("iires-register", showProgress, quiet);
-    params.progress = progress.callback();
+    exec.progress = progress.callback();
     progress.update("read", 0.0);
     const iires::PointCloud source = iires::readPointCloud(sourcePath);
     const iires::PointCloud target = iires::readPointCloud(targetPath);
     iires::reg::RegistrationResult result;
     try {
-      result = iires::reg::registerClouds(source, target, params);
+      result = iires::reg::registerClouds(source, target, params, exec);
     } catch (const iires::InputError& e) {
       // The library names the clouds "source"/"target"; name the files instead.
       std::string msg = e.what();
@@ -80,9 +82,8 @@ int main(int argc, char** argv) {
     progress.update("write", 0.0);
     iires::OutputBatch outputs;  // all given files or none
     if (!alignedPath.empty()) {  // the source without its outliers (pulled or removed as the run's were)
-      iires::OutlierParams op = params.outliers;
-      op.threads = params.threads;
-      outputs.pointCloud(alignedPath, iires::reg::transformCloud(iires::cleanOutliers(source, op), result.T_target_source));
+      outputs.pointCloud(alignedPath, iires::reg::transformCloud(iires::cleanOutliers(source, params.outliers, exec),
+                                                                 result.T_target_source));
     }
     if (!transformPath.empty()) outputs.text(transformPath, iires::reg::formatTransform(result.T_target_source));
     if (!reportPath.empty()) outputs.text(reportPath, result.toJson());

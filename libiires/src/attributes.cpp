@@ -82,7 +82,8 @@ void AttributeParams::validate() const {
 
 std::vector<PointAttribute> interpolateAttributes(const PointCloud& source, const std::vector<Eigen::Vector3d>& targets,
                                                   const std::vector<Eigen::Vector3d>& targetNormals,
-                                                  const SameSheet& sameSheet, const AttributeParams& params) {
+                                                  const SameSheet& sameSheet, const AttributeParams& params,
+                                                  const Execution& exec) {
   params.validate();
   if (!targetNormals.empty() && targetNormals.size() != targets.size())
     throw std::invalid_argument("attributes: expected one normal per target");
@@ -102,7 +103,7 @@ std::vector<PointAttribute> interpolateAttributes(const PointCloud& source, cons
   const auto k = static_cast<std::size_t>(params.neighbours);
   const bool slopeTest = !targetNormals.empty() && params.maxSlopeDeg < 90;
   const double maxSine = std::sin(params.maxSlopeDeg * M_PI / 180.0);
-  parallelFor(targets.size(), params.threads, [&](std::size_t i) {
+  parallelFor(targets.size(), exec.threads, [&](std::size_t i) {
     thread_local Stencil stencil;
     computeStencil(tree, source.points, targets[i], slopeTest ? &targetNormals[i] : nullptr, maxSine, sameSheet, k,
                    stencil);

@@ -168,9 +168,9 @@ bool curvedCreasePoint(const PointCloud& cloud, const KnnIndex& index, double hl
 /// the two sheets' curved crease (curvedCreasePoint), where that lies within maxLineDistance local spacings.
 /// Each sample on its own: deterministic, in parallel.
 void refineOnCurvedSheets(const PointCloud& cloud, const KnnIndex& index, double h, const FeatureParams& params,
-                          std::vector<Eigen::Vector3d>& out) {
+                          std::vector<Eigen::Vector3d>& out, int threads) {
   const FeatureParams loose = looseParams(params);
-  parallelFor(out.size(), params.threads, [&](std::size_t i) {
+  parallelFor(out.size(), threads, [&](std::size_t i) {
     std::vector<std::uint32_t> idx;
     std::vector<double> d2;
     const double hl = localSpacing(index, out[i], h);
@@ -490,7 +490,8 @@ void addCorners(const KnnIndex& index, double h, const FeatureParams& params, st
 //     are left out (more: a third sheet, as at a corner) and the move is at most maxLineDistance local spacings.
 std::vector<Eigen::Vector3d> snapToCreases(const PointCloud& cloud, const std::vector<Eigen::Vector3d>& samples,
                                            const std::vector<std::uint32_t>& chainOfSample, double spacing,
-                                           const FeatureParams& params, std::vector<std::uint32_t>* chainOut) {
+                                           const FeatureParams& params, const Execution& exec,
+                                           std::vector<std::uint32_t>* chainOut) {
   params.validate();
   if (!(spacing > 0)) throw std::invalid_argument("snapToCreases: spacing must be > 0");
   if (!cloud.hasNormals()) throw std::invalid_argument("snapToCreases: the cloud needs one normal per point");
@@ -503,7 +504,7 @@ std::vector<Eigen::Vector3d> snapToCreases(const PointCloud& cloud, const std::v
   std::vector<Eigen::Vector3d> moved(samples);
   std::vector<char> good(n, 0);
   std::vector<Eigen::Vector3d> creaseDir(n, Eigen::Vector3d::Zero());  // of the fit that placed each good sample
-  parallelFor(n, params.threads, [&](std::size_t i) {
+  parallelFor(n, exec.threads, [&](std::size_t i) {
     std::vector<std::uint32_t> idx;
     std::vector<double> d2;
     // A chain may run beside its crease (its points come from the detector's unweighted fits): when the crease
@@ -578,7 +579,7 @@ std::vector<Eigen::Vector3d> snapToCreases(const PointCloud& cloud, const std::v
   placeCreaseTips(cloud, index, h, params, out, owner);
   addCorners(index, h, params, out, owner);  // 3.
   fillCreaseGaps(cloud, index, h, params, out, owner);
-  refineOnCurvedSheets(cloud, index, h, params, out);
+  refineOnCurvedSheets(cloud, index, h, params, out, exec.threads);
   if (chainOut) *chainOut = std::move(owner);
   return out;
 }

@@ -150,7 +150,8 @@ std::vector<int> quantileLevels(const std::vector<double>& values, int levels, s
 }
 
 CurvatureResult computeCurvature(const std::vector<Eigen::Vector3d>& points,
-                                 const std::vector<Eigen::Vector3d>& normals, const CurvatureParams& params) {
+                                 const std::vector<Eigen::Vector3d>& normals, const CurvatureParams& params,
+                                 const Execution& exec) {
   params.validate();
   checkInput(points, normals);
   const auto start = std::chrono::steady_clock::now();
@@ -158,9 +159,9 @@ CurvatureResult computeCurvature(const std::vector<Eigen::Vector3d>& points,
   const std::size_t n = points.size();
 
   CurvatureResult r;
-  const KnnTable table = buildKnn(points, params.k, params.threads);
-  r.eta = fieldFromTable(normals, table, params.threads);                                          // eq. (9)
-  r.smoothedEta = smoothFromTable(r.eta, table, params.beta, params.smoothIterations, params.threads);  // (8)
+  const KnnTable table = buildKnn(points, params.k, exec.threads);
+  r.eta = fieldFromTable(normals, table, exec.threads);                                          // eq. (9)
+  r.smoothedEta = smoothFromTable(r.eta, table, params.beta, params.smoothIterations, exec.threads);  // (8)
 
   // Quantisation (eq. 10's groups): equal-count quantiles, unless the field is uniform.
   std::vector<double> sorted(r.smoothedEta);
@@ -194,7 +195,7 @@ CurvatureResult computeCurvature(const std::vector<Eigen::Vector3d>& points,
     // Level borders: smooth log s by eq. 8 so the target length changes by a steady factor across a few
     // samples instead of jumping by r_q/r_{q+1} at once (the paper's smooth gradation).
     for (double& s : r.sizeFactor) s = std::log(s);
-    r.sizeFactor = smoothFromTable(r.sizeFactor, table, params.beta, params.sizeSmoothIterations, params.threads);
+    r.sizeFactor = smoothFromTable(r.sizeFactor, table, params.beta, params.sizeSmoothIterations, exec.threads);
     for (double& s : r.sizeFactor) s = std::exp(s);
   }
   if (params.normalize && n > 0) {

@@ -132,7 +132,6 @@ void DenoiseParams::validate() const {
   if (!(cleanDisplacement >= 0) || !std::isfinite(cleanDisplacement))
     fail("cleanDisplacement must be a finite value >= 0");
   if (orientNeighbours < 1 || orientNeighbours > 128) fail("orientNeighbours must lie in [1, 128]");
-  if (threads < 0) fail("threads must be >= 0 (0 = all cores)");
 }
 
 MlsPlane fitMlsPlane(const Eigen::Vector3d& p, const std::vector<Eigen::Vector3d>& points,
@@ -155,7 +154,8 @@ std::size_t denoiseNeighbours(const DenoiseParams& params) {
   return static_cast<std::size_t>(std::max(params.neighbours, params.kernelNeighbour + 1));
 }
 
-DenoiseResult denoise(const PointCloud& input, const DenoiseParams& params, const NeighbourTable* table) {
+DenoiseResult denoise(const PointCloud& input, const DenoiseParams& params, const Execution& exec,
+                      const NeighbourTable* table) {
   params.validate();
   const auto start = Clock::now();
   const std::size_t k = static_cast<std::size_t>(params.neighbours);
@@ -167,7 +167,7 @@ DenoiseResult denoise(const PointCloud& input, const DenoiseParams& params, cons
 
   // Work in Morton order: neighbours in space are neighbours in memory (k-NN queries and sweeps stay in
   // cache). in[a] is the caller's point order[a]; the output is put back in the caller's order.
-  const std::vector<std::uint32_t> order = mortonOrder(input.points, params.threads);
+  const std::vector<std::uint32_t> order = mortonOrder(input.points, exec.threads);
   std::vector<Eigen::Vector3d> in(n), normals(n, Eigen::Vector3d::Zero());
   for (std::size_t a = 0; a < n; ++a) {
     in[a] = input.points[order[a]];
@@ -188,7 +188,7 @@ DenoiseResult denoise(const PointCloud& input, const DenoiseParams& params, cons
       rankOf.resize(n);
       for (std::size_t a = 0; a < n; ++a) rankOf[order[a]] = static_cast<std::uint32_t>(a);
     }
-    parallelFor(n, params.threads, [&](std::size_t i) {
+    parallelFor(n, exec.threads, [&](std::size_t i) {
       std::vector<std::uint32_t> idx;
       std::vector<double> d2;
       const std::size_t f = table ? table->get(order[i], K, idx, d2) : own->knn(in[i], K, idx, d2);
@@ -218,7 +218,7 @@ DenoiseResult denoise(const PointCloud& input, const DenoiseParams& params, cons
   const int sweeps = std::max(1, params.iterations);  // at least one fit, for the normals
   for (int it = 0; it < sweeps; ++it) {
     const bool useBilateral = sharp > 0 && (given || it > 0);
-    parallelFor(n, params.threads, [&](std::size_t i) {
+    parallelFor(n, exec.threads, [&](std::size_t i) {
       const std::uint32_t* nb = nbr.data() + i * K;
       const std::size_t count = found[i];
       // eq. (2): θ_j = exp(−|p_j − p|²/h²); the covariance uses the wider exp(−|p_j − p|²/(2h)²) = θ_j^¼ (one
@@ -267,7 +267,7 @@ DenoiseResult denoise(const PointCloud& input, const DenoiseParams& params, cons
   result.sweepSeconds = std::chrono::duration<double>(orientStart - sweepStart).count();
   if (!given && params.orientNormals)
     orientNormals(cur, normals, nbr, K, std::min<std::size_t>(K, static_cast<std::size_t>(params.orientNeighbours) + 1),
-                  params.threads, true);
+                  exec.threads, true);
   result.orientSeconds = std::chrono::duration<double>(Clock::now() - orientStart).count();
 
   result.cloud.points.resize(n);

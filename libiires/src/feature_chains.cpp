@@ -364,7 +364,8 @@ struct CellHash {
 }  // namespace
 
 std::vector<FeatureChain> detail::buildChains(const std::vector<Eigen::Vector3d>& x0,
-                                      const std::vector<Eigen::Vector3d>& d0, double h, const FeatureParams& prm) {
+                                      const std::vector<Eigen::Vector3d>& d0, double h, const FeatureParams& prm,
+                                      int threads) {
   std::vector<FeatureChain> chains;
   std::vector<Eigen::Vector3d> x, d;
   const double link = prm.chainRadius * h, cosTurn = std::cos(prm.maxChainTurn * kDeg);
@@ -392,7 +393,7 @@ std::vector<FeatureChain> detail::buildChains(const std::vector<Eigen::Vector3d>
   // Candidate links: within `link`, directions and the link itself along the crease.
   KnnIndex index(x);
   std::vector<std::vector<std::pair<std::uint32_t, double>>> cand(n);
-  parallelFor(n, prm.threads, [&](std::size_t i) {
+  parallelFor(n, threads, [&](std::size_t i) {
     std::vector<std::uint32_t> idx;
     std::vector<double> d2;
     index.radius(x[i], link, idx, d2);

@@ -154,7 +154,7 @@ double estimateSpacing(const std::vector<Eigen::Vector3d>& points, int threads) 
   return *mid;
 }
 
-FeatureResult detectFeatures(const PointCloud& cloud, const FeatureParams& params) {
+FeatureResult detectFeatures(const PointCloud& cloud, const FeatureParams& params, const Execution& exec) {
   params.validate();
   if (cloud.size() < 8) throw InputError("feature detection needs at least 8 points, got " +
                                          std::to_string(cloud.size()));
@@ -164,7 +164,7 @@ FeatureResult detectFeatures(const PointCloud& cloud, const FeatureParams& param
   const std::size_t n = pts.size();
   FeatureResult r;
   auto t0 = Clock::now();
-  r.spacing = params.spacing > 0 ? params.spacing : estimateSpacing(pts, params.threads);
+  r.spacing = params.spacing > 0 ? params.spacing : estimateSpacing(pts, exec.threads);
   const double h = r.spacing;
   if (!(h > 0)) throw InputError("feature detection: the points have zero spacing (all duplicates?)");
 
@@ -177,15 +177,15 @@ FeatureResult detectFeatures(const PointCloud& cloud, const FeatureParams& param
     if (idx.size() > kMaxFitPoints) idx.resize(kMaxFitPoints);  // nearest first; bounds the cost in dense clusters
   };
   if (params.detector == FeatureDetector::NormalVariation) {
-    parallelFor(n, params.threads, [&](std::size_t i) {
+    parallelFor(n, exec.threads, [&](std::size_t i) {
       std::vector<std::uint32_t> idx;
       const double hi = localSpacing(index, pts[i], h);
       neighbourhood(i, idx, hi);
       flag[i] = twoPlaneTest(pts, nrm, pts[i], idx, hi, params, creases[i]) ? 1 : 0;
     });
   } else {
-    const auto cov = computeVcm(pts, params.vcmOffset * h, params.vcmConvolution * h, params.threads);
-    parallelFor(n, params.threads, [&](std::size_t i) {
+    const auto cov = computeVcm(pts, params.vcmOffset * h, params.vcmConvolution * h, exec.threads);
+    parallelFor(n, exec.threads, [&](std::size_t i) {
       Covariance c = cov[i];
       flag[i] = CGAL::vcm_is_on_feature_edge(c, params.vcmThreshold) ? 1 : 0;
       if (!flag[i]) return;
@@ -212,7 +212,7 @@ FeatureResult detectFeatures(const PointCloud& cloud, const FeatureParams& param
   r.detectSeconds = since(t0);
 
   t0 = Clock::now();
-  r.chains = buildChains(x, d, h, params);
+  r.chains = buildChains(x, d, h, params, exec.threads);
   // The final feature points: input points within maxLineDistance of a chain (densified at h/4).
   {
     std::vector<Eigen::Vector3d> dense;
@@ -229,7 +229,7 @@ FeatureResult detectFeatures(const PointCloud& cloud, const FeatureParams& param
       KnnIndex chainIndex(dense);
       const double reach = params.maxLineDistance * h;
       std::vector<char> near(n, 0);
-      parallelFor(n, params.threads, [&](std::size_t i) {
+      parallelFor(n, exec.threads, [&](std::size_t i) {
         double d2 = 0;
         chainIndex.nearest(pts[i], &d2);
         near[i] = d2 <= (reach + 0.125 * h) * (reach + 0.125 * h) ? 1 : 0;
@@ -243,7 +243,7 @@ FeatureResult detectFeatures(const PointCloud& cloud, const FeatureParams& param
     t0 = Clock::now();
     std::vector<std::uint32_t> owner;
     const auto samples = sampleFeatureChains(r.chains, params.sampleSpacing, &owner);
-    r.samples = snapToCreases(cloud, samples, owner, h, params, &r.sampleChain);
+    r.samples = snapToCreases(cloud, samples, owner, h, params, exec, &r.sampleChain);
     r.sampleSeconds = since(t0);
   }
   return r;

@@ -79,7 +79,8 @@ std::vector<std::pair<std::size_t, std::size_t>> ownerRuns(const std::vector<std
 /// Chains (paths of crease points, finished: fitted, trimmed, joined, extended to their corners) from the
 /// feature points @p x0 with crease directions @p d0.
 std::vector<FeatureChain> buildChains(const std::vector<Eigen::Vector3d>& x0,
-                                      const std::vector<Eigen::Vector3d>& d0, double h, const FeatureParams& prm);
+                                      const std::vector<Eigen::Vector3d>& d0, double h, const FeatureParams& prm,
+                                      int threads);
 
 /// Continue every open run of chain samples (@p out, consecutive samples of one chain in @p owner) along its
 /// crease: from the end sample, step forward by the run's end spacing, fit the two sheets' local planes there

@@ -185,7 +185,6 @@ void GeodesicParams::validate() const {
   if (!(maxEdgeSlopeDeg > 0 && maxEdgeSlopeDeg <= 90)) fail("maxEdgeSlopeDeg must be in (0, 90]");
   if (!(maxNormalAngleDeg > 0 && maxNormalAngleDeg <= 180)) fail("maxNormalAngleDeg must be in (0, 180]");
   if (satellites < 1 || satellites > 16) fail("satellites must be in [1, 16] (got " + std::to_string(satellites) + ")");
-  if (threads < 0) fail("threads must be >= 0 (0 = all cores)");
 }
 
 std::string GeodesicReport::toJson() const {
@@ -199,6 +198,7 @@ std::string GeodesicReport::toJson() const {
 
 struct GeodesicCoordinates::Impl {
   GeodesicParams params;
+  int threads = 0;  // of the build
   // Public side, in the caller's point order.
   std::vector<Eigen::Vector3d> points;
   std::vector<Eigen::Vector3d> normals;
@@ -277,7 +277,7 @@ void GeodesicCoordinates::Impl::build(const NeighbourTable* table,
 /// their float copy.
 void GeodesicCoordinates::Impl::sortPoints() {
   const std::size_t n = points.size();
-  order = mortonOrder(points, params.threads);
+  order = mortonOrder(points, threads);
   rank.assign(n, 0);
   bool identity = true;
   for (std::size_t i = 0; i < n && identity; ++i) identity = order[i] == i;
@@ -313,7 +313,7 @@ GeodesicCoordinates::Impl::NeighbourLists GeodesicCoordinates::Impl::neighbourLi
   std::vector<float> nearestDist(n, 0.0f);
   const bool given = lists.givenNormals = normals.size() == n;
   lists.normal.assign(n, Eigen::Vector3f::Zero());
-  parallelFor(n, params.threads, [&](std::size_t i) {
+  parallelFor(n, threads, [&](std::size_t i) {
     std::vector<std::uint32_t> idx;
     std::vector<double> d2;
     if (table) {  // the caller's order: map the neighbours to ours
@@ -372,7 +372,7 @@ std::vector<std::uint8_t> GeodesicCoordinates::Impl::filterEdges(const Neighbour
     return std::find(l, l + k, x) != l + k;
   };
   std::vector<std::uint8_t> keep(n * k, 0);
-  parallelFor(n, params.threads, [&](std::size_t i) {
+  parallelFor(n, threads, [&](std::size_t i) {
     for (std::size_t r = 0; r < k; ++r) {
       const std::uint32_t j = knn[i * k + r];
       if (j == kNone) break;
@@ -579,7 +579,7 @@ void GeodesicCoordinates::Impl::satellitesAndFields(const Components& components
   for (std::size_t o = n; o-- > 0;) members.seed[comp[rank[o]]] = rank[o];
   std::vector<std::vector<std::uint32_t>> sat(count);
   std::vector<float> field(n * static_cast<std::size_t>(params.satellites), kInf);  // internal order
-  const int team = resolveThreads(params.threads);
+  const int team = resolveThreads(threads);
   const int nThreads = std::max(1, std::min<int>(team, static_cast<int>(std::min<std::size_t>(count, 1024))));
   const bool spareThread = team > nThreads;  // fields 2 and 3 are swept on two threads
   double seedSeconds = 0, sweepSeconds = 0;
@@ -596,9 +596,9 @@ void GeodesicCoordinates::Impl::satellitesAndFields(const Components& components
     }
     sweepSeconds = secondsSince(t);
   };
-  auto besides = [&](int threads) {
+  auto besides = [&](int spare) {
     if (!index) index = std::make_unique<KnnIndex>(*sorted);
-    if (alongside) alongside(threads, sortedCopy.empty() ? index.get() : nullptr);
+    if (alongside) alongside(spare, sortedCopy.empty() ? index.get() : nullptr);
   };
   if (team > nThreads) {  // the sweeps on a thread of their own, the other work on the idle ones
     std::exception_ptr failure;
@@ -642,7 +642,7 @@ void GeodesicCoordinates::Impl::toCallerOrder(const Components& components, cons
     for (std::uint32_t x : sat[c]) satellites[c].push_back(order[x]);
 }
 
-GeodesicCoordinates::GeodesicCoordinates(const PointCloud& cloud, const GeodesicParams& params,
+GeodesicCoordinates::GeodesicCoordinates(const PointCloud& cloud, const GeodesicParams& params, const Execution& exec,
                                          const NeighbourTable* table, const Alongside& alongside)
     : impl_(std::make_unique<Impl>()) {
   params.validate();
@@ -652,6 +652,7 @@ GeodesicCoordinates::GeodesicCoordinates(const PointCloud& cloud, const Geodesic
     if (!cloud.points[i].allFinite())
       throw InputError("geodesic coordinates: point " + std::to_string(i) + " has a non-finite coordinate");
   impl_->params = params;
+  impl_->threads = exec.threads;
   impl_->points = cloud.points;
   if (cloud.hasNormals()) impl_->normals = cloud.normals;
   impl_->build(table, alongside);

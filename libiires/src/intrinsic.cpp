@@ -18,11 +18,11 @@ void IntrinsicParams::validate() const {
     fail("toleranceSpacings must be finite and >= 0");
   if (!(maxDistanceSpacings >= 0) || !std::isfinite(maxDistanceSpacings))
     fail("maxDistanceSpacings must be finite and >= 0 (0 = no bound)");
-  if (threads < 0) fail("threads must be >= 0 (0 = all cores)");
 }
 
-IntrinsicRule::IntrinsicRule(std::shared_ptr<const GeodesicCoordinates> geo, const IntrinsicParams& params)
-    : geo_(std::move(geo)), params_(params) {
+IntrinsicRule::IntrinsicRule(std::shared_ptr<const GeodesicCoordinates> geo, const IntrinsicParams& params,
+                             const Execution& exec)
+    : geo_(std::move(geo)), params_(params), threads_(exec.threads) {
   if (!geo_) throw std::invalid_argument("IntrinsicRule: geodesic coordinates are null");
   params_.validate();
   tolerance_ = params_.toleranceSpacings * geo_->spacing();
@@ -36,7 +36,7 @@ void IntrinsicRule::update(const std::vector<Eigen::Vector3d>& samples, const st
   dense_.assign(n, 0);
   comp_.assign(n, 0);
   coords_.assign(n * dims, 0.0f);
-  parallelFor(n, params_.threads, [&](std::size_t i) {
+  parallelFor(n, threads_, [&](std::size_t i) {
     const std::int64_t d = geo_->nearest(samples[i]);
     dense_[i] = static_cast<std::uint32_t>(d < 0 ? 0 : d);
     comp_[i] = geo_->component(dense_[i]);

@@ -184,6 +184,37 @@ void stage(OutputBatch& batch, const std::string& path, const std::function<void
 // The formats
 
 Geometry parsePly(const std::string& path, std::string_view data);
+
+struct PlyProperty {
+  std::string name;
+  ScalarType type = ScalarType::kFloat32;
+  bool list = false;
+  ScalarType countType = ScalarType::kUint8;
+};
+
+struct PlyElement {
+  std::string name;
+  std::size_t count = 0;
+  std::vector<PlyProperty> properties;
+
+  /// "1000 vertices", "3 faces", "2 edge elements".
+  std::string counted() const {
+    const std::string noun = name == "vertex" ? "vertices" : name == "face" ? "faces" : name + " elements";
+    return std::to_string(count) + " " + noun;
+  }
+};
+
+/// A PLY header: the format ("ascii", "binary_little_endian", "binary_big_endian"), the elements, and where
+/// the body starts (byte offset, line number).
+struct PlyHeader {
+  std::string format;
+  std::vector<PlyElement> elements;
+  std::size_t bodyOffset = 0, bodyLine = 0;
+};
+/// Parses the header at the start of @p data (which must hold at least the whole header).
+PlyHeader parsePlyHeader(const std::string& path, std::string_view data);
+/// Index of the property called one of @p names in @p element (a list property when @p list), or -1.
+int findProperty(const PlyElement& element, std::initializer_list<std::string_view> names, bool list);
 Geometry parsePcd(const std::string& path, std::string_view data);
 Geometry parseXyz(const std::string& path, std::string_view text);
 Geometry parseXyzn(const std::string& path, std::string_view text);

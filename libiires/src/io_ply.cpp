@@ -26,25 +26,6 @@ struct AttributeSlots {
   }
 };
 
-struct PlyProperty {
-  std::string name;
-  ScalarType type = ScalarType::kFloat32;
-  bool list = false;
-  ScalarType countType = ScalarType::kUint8;
-};
-
-struct PlyElement {
-  std::string name;
-  std::size_t count = 0;
-  std::vector<PlyProperty> properties;
-
-  /// "1000 vertices", "3 faces", "2 edge elements".
-  std::string counted() const {
-    const std::string noun = name == "vertex" ? "vertices" : name == "face" ? "faces" : name + " elements";
-    return std::to_string(count) + " " + noun;
-  }
-};
-
 /// Scalars of a binary PLY body, one after another.
 class PlyBinarySource {
  public:
@@ -112,7 +93,8 @@ class PlyAsciiSource {
   std::size_t token_ = 0;
 };
 
-/// Index of the property called one of @p names in @p element, or -1.
+}  // namespace
+
 int findProperty(const PlyElement& element, std::initializer_list<std::string_view> names, bool list) {
   for (std::size_t p = 0; p < element.properties.size(); ++p)
     if (element.properties[p].list == list &&
@@ -120,6 +102,8 @@ int findProperty(const PlyElement& element, std::initializer_list<std::string_vi
       return static_cast<int>(p);
   return -1;
 }
+
+namespace {
 
 /// The attributes of a PLY vertex element: its scalar properties except x y z nx ny nz.
 AttributeSlots plyVertexAttributes(const PlyElement& vertex) {
@@ -197,12 +181,13 @@ Geometry readPlyBody(const std::string& path, const std::vector<PlyElement>& ele
 
 }  // namespace
 
-Geometry parsePly(const std::string& path, std::string_view data) {
+PlyHeader parsePlyHeader(const std::string& path, std::string_view data) {
   LineReader lines(data, false);
   if (!lines.next() || lines.size() != 1 || lines[0] != "ply")
     fail(path, "corrupted header: the file does not start with \"ply\"");
+  PlyHeader header;
   std::optional<std::string_view> format;
-  std::vector<PlyElement> elements;
+  std::vector<PlyElement>& elements = header.elements;
   bool ended = false;
   while (!ended && lines.next()) {
     const std::string_view keyword = lines[0];
@@ -243,13 +228,21 @@ Geometry parsePly(const std::string& path, std::string_view data) {
   }
   if (!ended) fail(path, "corrupted header: no end_header line");
   if (!format) fail(path, "corrupted header: no format line");
-  const std::string_view body = data.substr(lines.offset());
-  if (*format == "ascii") {
-    PlyAsciiSource source(path, body, lines.line() + 1);
-    return readPlyBody(path, elements, source);
+  header.format = std::string(*format);
+  header.bodyOffset = lines.offset();
+  header.bodyLine = lines.line() + 1;
+  return header;
+}
+
+Geometry parsePly(const std::string& path, std::string_view data) {
+  const PlyHeader header = parsePlyHeader(path, data);
+  const std::string_view body = data.substr(header.bodyOffset);
+  if (header.format == "ascii") {
+    PlyAsciiSource source(path, body, header.bodyLine);
+    return readPlyBody(path, header.elements, source);
   }
-  PlyBinarySource source(path, body, *format == "binary_big_endian");
-  return readPlyBody(path, elements, source);
+  PlyBinarySource source(path, body, header.format == "binary_big_endian");
+  return readPlyBody(path, header.elements, source);
 }
 
 namespace {

@@ -82,7 +82,7 @@ double beyondHull(const std::vector<Eigen::Vector3d>& points, const std::vector<
 }  // namespace
 
 MlsSurface::MlsSurface(const std::vector<Eigen::Vector3d>& points,
-                       const std::vector<Eigen::Vector3d>& normals, const MlsParams& params,
+                       const std::vector<Eigen::Vector3d>& normals, const MlsParams& params, const Execution& exec,
                        const KnnIndex* index, const NeighbourTable* table, std::vector<std::uint8_t> nearSheets)
     : points_(points),
       normals_(normals),
@@ -95,7 +95,7 @@ MlsSurface::MlsSurface(const std::vector<Eigen::Vector3d>& points,
   h_.assign(n, 0.0);
   std::vector<double> nearest(n, 0.0);
   if (table && (table->k() < MlsSurface::kWidthNeighbours || table->size() != n)) table = nullptr;
-  parallelFor(n, params.threads, [&](std::size_t i) {
+  parallelFor(n, exec.threads, [&](std::size_t i) {
     std::vector<std::uint32_t> idx;
     std::vector<double> d2;
     const std::size_t found = table ? table->get(i, MlsSurface::kWidthNeighbours, idx, d2)

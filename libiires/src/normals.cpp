@@ -132,11 +132,11 @@ void orientOverGraph(const std::vector<Eigen::Vector3d>& points, std::vector<Eig
 }  // namespace
 
 std::vector<Eigen::Vector3d> estimateNormals(const std::vector<Eigen::Vector3d>& points,
-                                             const NormalParams& params) {
+                                             const NormalParams& params, const Execution& exec) {
   const std::size_t n = points.size(), stride = static_cast<std::size_t>(params.k) + 1;
-  const auto lists = knnLists(points, static_cast<std::size_t>(params.k), params.threads);
+  const auto lists = knnLists(points, static_cast<std::size_t>(params.k), exec.threads);
   std::vector<Eigen::Vector3d> normals(n, Eigen::Vector3d::UnitZ());
-  parallelFor(n, params.threads, [&](std::size_t i) {
+  parallelFor(n, exec.threads, [&](std::size_t i) {
     const std::uint32_t* nb = lists.data() + i * stride;
     std::size_t count = 1;
     Eigen::Vector3d mean = points[i];
@@ -150,7 +150,7 @@ std::vector<Eigen::Vector3d> estimateNormals(const std::vector<Eigen::Vector3d>&
     Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
     normals[i] = eig.eigenvectors().col(0).normalized();
   });
-  if (params.orient) orientOverGraph(points, normals, lists, stride, stride, params.threads);
+  if (params.orient) orientOverGraph(points, normals, lists, stride, stride, exec.threads);
   return normals;
 }
 

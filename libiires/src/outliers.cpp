@@ -88,7 +88,7 @@ void removeOutliers(const PointCloud& input, const std::vector<std::uint8_t>& dr
 /// outlier whose projection lands more than twice the fit's support radius h from a(q), where the plane no
 /// longer stands for the surface.
 void pullOutliers(const PointCloud& input, const OutlierParams& params, const std::vector<std::uint8_t>& trusted,
-                  const std::vector<std::uint8_t>& isolated, OutlierResult& result) {
+                  const std::vector<std::uint8_t>& isolated, OutlierResult& result, int threads) {
   const std::size_t n = input.size();
   const auto& P = input.points;
   const std::size_t fitK = static_cast<std::size_t>(std::max(params.planeNeighbours, params.k)) + 1;
@@ -109,7 +109,7 @@ void pullOutliers(const PointCloud& input, const OutlierParams& params, const st
   std::vector<std::uint8_t> unsupported = isolated;
   const std::optional<KnnIndex> cleanTree =
       cleanPoints.size() >= 3 ? std::optional<KnnIndex>(std::in_place, cleanPoints) : std::nullopt;
-  parallelFor(cleanTree ? result.found : 0, params.threads, [&](std::size_t a) {
+  parallelFor(cleanTree ? result.found : 0, threads, [&](std::size_t a) {
     const std::uint32_t o = result.outliers[a];
     if (isolated[o]) return;
     const auto q = static_cast<std::size_t>(cleanTree->nearest(P[o]));
@@ -166,7 +166,6 @@ void OutlierParams::validate() const {
   if (!(planeThreshold > 0) || !std::isfinite(planeThreshold))
     fail("planeThreshold must be a finite value > 0");
   if (!(nearPlaneThreshold > 0)) fail("nearPlaneThreshold must be > 0 (infinity: off)");
-  if (threads < 0) fail("threads must be >= 0 (0 = all cores)");
 }
 
 std::size_t outlierNeighbours(const OutlierParams& params) {
@@ -174,7 +173,8 @@ std::size_t outlierNeighbours(const OutlierParams& params) {
   return std::max({k, planeK, kSpacingNeighbours}) + 1;
 }
 
-OutlierResult processOutliers(const PointCloud& input, const OutlierParams& params, const NeighbourTable* table) {
+OutlierResult processOutliers(const PointCloud& input, const OutlierParams& params, const Execution& exec,
+                              const NeighbourTable* table) {
   params.validate();
   const auto start = Clock::now();
   const std::size_t k = static_cast<std::size_t>(params.k);
@@ -187,8 +187,8 @@ OutlierResult processOutliers(const PointCloud& input, const OutlierParams& para
 
   // Every per-point loop visits the points in Morton order (neighbours in space are visited together, which
   // keeps the k-d tree and the neighbour rows in cache); each iteration writes only its own point's slot.
-  const std::vector<std::uint32_t> order = mortonOrder(P, params.threads);
-  auto forEachPoint = [&](auto&& fn) { parallelFor(n, params.threads, [&](std::size_t a) { fn(order[a]); }); };
+  const std::vector<std::uint32_t> order = mortonOrder(P, exec.threads);
+  auto forEachPoint = [&](auto&& fn) { parallelFor(n, exec.threads, [&](std::size_t a) { fn(order[a]); }); };
   std::vector<std::uint32_t> nbr(n * K);
   std::vector<std::uint32_t> count(n);
   std::vector<double> spacing(n);
@@ -303,16 +303,17 @@ OutlierResult processOutliers(const PointCloud& input, const OutlierParams& para
     if (outlier[i]) result.outliers.push_back(static_cast<std::uint32_t>(i));
   result.found = result.outliers.size();
 
-  if (params.mode == OutlierMode::kPull) pullOutliers(input, params, trusted, isolated, result);
+  if (params.mode == OutlierMode::kPull) pullOutliers(input, params, trusted, isolated, result, exec.threads);
   if (params.mode == OutlierMode::kRemove) removeOutliers(input, outlier, result);
   if (params.mode == OutlierMode::kKeep) result.cloud = input;
   result.seconds = std::chrono::duration<double>(Clock::now() - start).count();
   return result;
 }
 
-PointCloud cleanOutliers(const PointCloud& cloud, const OutlierParams& params, std::size_t* found) {
+PointCloud cleanOutliers(const PointCloud& cloud, const OutlierParams& params, const Execution& exec,
+                        std::size_t* found) {
   if (params.mode == OutlierMode::kKeep || cloud.size() <= outlierNeighbours(params)) return cloud;
-  OutlierResult cleaned = processOutliers(cloud, params);
+  OutlierResult cleaned = processOutliers(cloud, params, exec);
   if (found) *found += cleaned.found;
   return std::move(cleaned.cloud);
 }

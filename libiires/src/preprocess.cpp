@@ -12,7 +12,6 @@
 namespace iires {
 
 void PreprocessParams::validate() const {
-  if (threads < 0) throw std::invalid_argument("PreprocessParams: threads must be >= 0 (0 = all cores)");
   if (!(cleanDisplacement >= 0)) throw std::invalid_argument("PreprocessParams: cleanDisplacement must be >= 0");
   if (sheets) sheet.validate();
   outliers.validate();
@@ -35,15 +34,12 @@ std::size_t preprocessNeighbours(const PreprocessParams& params) {
   return params.runDenoise ? std::max(k, denoiseNeighbours(params.denoise)) : k;
 }
 
-PreprocessResult preprocess(const PointCloud& input, const PreprocessParams& params,
+PreprocessResult preprocess(const PointCloud& input, const PreprocessParams& params, const Execution& exec,
                             const NeighbourTable* table) {
   params.validate();
   const auto start = std::chrono::steady_clock::now();
-  OutlierParams op = params.outliers;
   DenoiseParams dp = params.denoise;
-  if (params.threads > 0) op.threads = dp.threads = params.threads;
-  SheetParams sp = params.sheet;
-  sp.threads = params.threads;
+  const SheetParams& sp = params.sheet;
 
   PreprocessResult result;
   result.inputPoints = input.size();
@@ -57,16 +53,16 @@ PreprocessResult preprocess(const PointCloud& input, const PreprocessParams& par
   if (!table) {
     if (input.empty()) throw InputError("preprocess: the cloud is empty");
     index.emplace(input.points);
-    table = &own.emplace(*index, input.points, preprocessNeighbours(params), params.threads);
+    table = &own.emplace(*index, input.points, preprocessNeighbours(params), exec.threads);
     if (params.sheets && input.size() > static_cast<std::size_t>(sp.pcaNeighbours)) {
       withNormals.emplace();
       withNormals->points = input.points;
-      result.sheets = separateSheets(input.points, *own, withNormals->normals, sp,
+      result.sheets = separateSheets(input.points, *own, withNormals->normals, sp, exec,
                                      input.hasNormals() ? &input.normals : nullptr);
       cloud = &*withNormals;
     }
   }
-  OutlierResult outliers = processOutliers(*cloud, op, table);  // eq. (4)–(5)
+  OutlierResult outliers = processOutliers(*cloud, params.outliers, exec, table);  // eq. (4)–(5)
   // Pulled or kept outliers leave the indices as they were: the table still serves the denoising (only the
   // pulled points' own rows are out of date). Removed ones renumber the points: a new table, filtered again.
   const bool sameIndices = outliers.cloud.size() == cloud->size();
@@ -87,11 +83,11 @@ PreprocessResult preprocess(const PointCloud& input, const PreprocessParams& par
         outliers.cloud.size() > static_cast<std::size_t>(sp.pcaNeighbours)) {
       renumbered.emplace(outliers.cloud.points);
       denoiseTable = &renumberedTable.emplace(*renumbered, outliers.cloud.points, preprocessNeighbours(params),
-                                              params.threads);
+                                              exec.threads);
       std::vector<Eigen::Vector3d> normals;
-      separateSheets(outliers.cloud.points, *renumberedTable, normals, sp, &outliers.cloud.normals);
+      separateSheets(outliers.cloud.points, *renumberedTable, normals, sp, exec, &outliers.cloud.normals);
     }
-    DenoiseResult denoised = denoise(outliers.cloud, dp, denoiseTable);
+    DenoiseResult denoised = denoise(outliers.cloud, dp, exec, denoiseTable);
     result.denoiseSeconds = denoised.seconds;
     result.cleanInput = denoised.cleanInput;
     result.denoiseIterations = denoised.iterations;

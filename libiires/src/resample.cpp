@@ -47,13 +47,11 @@ PointCloud select(const PointCloud& cloud, const std::vector<std::uint32_t>& ind
 /// tangent plane, and accepted by the intrinsic rule when the run used it).
 std::vector<PointAttribute> carryAttributes(const PointCloud& input, const std::vector<Eigen::Vector3d>& output,
                                             const std::vector<Eigen::Vector3d>& normals, const NeighbourRule* rule,
-                                            int threads) {
+                                            const Execution& exec) {
   SameSheet sameSheet;
   if (const auto* intrinsic = dynamic_cast<const IntrinsicRule*>(rule))
     sameSheet = [intrinsic](const Eigen::Vector3d& a, const Eigen::Vector3d& b) { return intrinsic->acceptPoints(a, b); };
-  AttributeParams ap;
-  ap.threads = threads;
-  return interpolateAttributes(input, output, normals, sameSheet, ap);
+  return interpolateAttributes(input, output, normals, sameSheet, {}, exec);
 }
 
 /// Exit 0 promises points on the input's surface. Each axis of the working cloud's bounding box is enlarged by
@@ -91,9 +89,11 @@ void checkWithinInput(const std::vector<Eigen::Vector3d>& samples, const std::ve
 /// stage works on ≈ maxInputPerSample·N points, never fewer than kMinWorkingPoints: small N keep a fine
 /// surface), then in Morton order (every stage loops over the points querying their neighbours: in that order
 /// those stay in cache).
-PointCloud workingCloud(PointCloud cloud, const ResampleParams& params, const StageClock& clock) {
+PointCloud workingCloud(PointCloud cloud, const ResampleParams& params, const Execution& exec,
+                        const StageClock& clock) {
   constexpr std::size_t kMinWorkingPoints = 60000;
-  const std::size_t workingTarget = std::max(kMinWorkingPoints, params.maxInputPerSample * params.targetCount);
+  const std::size_t workingTarget = std::max(
+      kMinWorkingPoints, params.maxInputPerSample * (params.targetCount + params.contextSamples.size()));
   if (params.maxInputPerSample > 0 && cloud.size() > workingTarget) {
     const auto t = clock.begin("thin");
     const std::size_t target = workingTarget;
@@ -101,20 +101,19 @@ PointCloud workingCloud(PointCloud cloud, const ResampleParams& params, const St
     // their points, so that no later stage sees the sheets merged.
     cloud = select(cloud, voxelThin(cloud.points, cloud.normals, target,
                                     bboxDiagonal(cloud.points) / std::sqrt(static_cast<double>(target)), 0,
-                                    params.threads, 0.0, params.intrinsic));
+                                    exec.threads, 0.0, params.intrinsic));
     clock.end("thin", t);
   }
-  return select(cloud, mortonOrder(cloud.points, params.threads));
+  return select(cloud, mortonOrder(cloud.points, exec.threads));
 }
 
 /// The samples `--sharp-edges` holds: the feature chains sampled at edgeRatio × the output spacing (coarser when
 /// they would take over half of N) and put exactly on the creases; sets featurePoints and featureSamples (how
 /// many of them fit beside the caller's fixed samples).
 std::vector<Eigen::Vector3d> creaseSamples(const PointCloud& cloud, double area, const ResampleParams& params,
-                                           ResampleResult& result) {
-  FeatureParams fp = params.features;
-  fp.threads = params.threads;
-  const FeatureResult features = detectFeatures(cloud, fp);
+                                           const Execution& exec, ResampleResult& result) {
+  const FeatureParams& fp = params.features;
+  const FeatureResult features = detectFeatures(cloud, fp, exec);
   const double l0 = std::sqrt(2.0 * area / (std::sqrt(3.0) * static_cast<double>(params.targetCount)));
   std::vector<std::uint32_t> chainOf;
   std::vector<Eigen::Vector3d> onEdges = sampleFeatureChains(features.chains, params.edgeRatio * l0, &chainOf);
@@ -122,7 +121,7 @@ std::vector<Eigen::Vector3d> creaseSamples(const PointCloud& cloud, double area,
     onEdges = sampleFeatureChains(features.chains, params.edgeRatio * l0 * 2.0 *
                                                        static_cast<double>(onEdges.size()) /
                                                        static_cast<double>(params.targetCount), &chainOf);
-  onEdges = snapToCreases(cloud, onEdges, chainOf, features.spacing, fp);  // exactly on the creases
+  onEdges = snapToCreases(cloud, onEdges, chainOf, features.spacing, fp, exec);  // exactly on the creases
   result.featurePoints = features.featureIndices.size();
   result.featureSamples = std::min(onEdges.size(), params.targetCount - params.fixedSamples.size());
   return onEdges;
@@ -160,10 +159,11 @@ void ResampleParams::validate() const {
   if (maxInputPerSample > 0 && maxInputPerSample < 4) throw std::invalid_argument("maxInputPerSample must be 0 or >= 4");
   if (!(candidateFactor >= 1.0)) throw std::invalid_argument("candidateFactor must be >= 1");
   if (mls.k < 3) throw std::invalid_argument("mls.k must be >= 3");
-  if (threads < 0) throw std::invalid_argument("threads must be >= 0 (0 = all cores)");
   if (mode == ResampleMode::kCurvature) curvature.validate();
   if (sharpEdges && !(edgeRatio >= 0.1 && edgeRatio <= 4.0))
     throw std::invalid_argument("edgeRatio (--edge-ratio) must be in [0.1, 4], got " + std::to_string(edgeRatio));
+  if (ringEdges && !contextSamples.empty())
+    throw std::invalid_argument("ring edges are not available with context samples");
   if (fixedSamples.size() > targetCount)
     throw std::invalid_argument("more fixed samples than the requested point count");
 }
@@ -187,13 +187,14 @@ std::string ResampleResult::toJson() const {
   return j.str() + "\n";
 }
 
-ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
+ResampleResult resample(PointCloud cloud, const ResampleParams& params, const Execution& exec) {
   params.validate();
+  exec.validate();
   const auto start = Clock::now();
   ResampleResult result;
   result.requestedPoints = params.targetCount;
   result.inputPoints = cloud.size();
-  const StageClock clock(result.timings, params.progress);
+  const StageClock clock(result.timings, exec.progress);
   // The input's attributes are interpolated onto the output at the end, from the input as given (the stages
   // below merge, thin, move and drop points).
   PointCloud attributeSource;
@@ -204,19 +205,17 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
   }
 
   auto t = clock.begin("validate");
-  const ValidationReport report = validateCloud(cloud, 4, "input", params.threads);
+  const ValidationReport report = validateCloud(cloud, 4, "input", exec.threads);
   result.duplicatesMerged = report.duplicatesMerged;
   clock.end("validate", t);
 
-  cloud = workingCloud(std::move(cloud), params, clock);
+  cloud = workingCloud(std::move(cloud), params, exec, clock);
   result.thinnedPoints = cloud.size();
 
   constexpr std::size_t kPreprocessMinPoints = 25;
   const bool preprocessing = params.preprocess && cloud.size() >= kPreprocessMinPoints;
   PreprocessParams pp = params.preprocessing;
-  pp.threads = params.threads;
-  GeodesicParams gp = params.geodesic;
-  gp.threads = params.threads;
+  const GeodesicParams& gp = params.geodesic;
   // One k-NN search for every stage that reads the working cloud's neighbours (pre-processing, the geodesic
   // graph, the MLS kernel widths) while pre-processing keeps the positions; one k-d tree for it and the MLS.
   t = clock.begin("neighbours");
@@ -225,12 +224,11 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
   const std::size_t laterK =
       std::max(params.intrinsic ? static_cast<std::size_t>(gp.k) + 1 : 0, MlsSurface::kWidthNeighbours);
   const std::size_t tableK = std::max(preprocessing ? preprocessNeighbours(pp) : std::size_t{0}, laterK);
-  std::optional<NeighbourTable> neighbours(std::in_place, *index, cloud.points, tableK, params.threads);
+  std::optional<NeighbourTable> neighbours(std::in_place, *index, cloud.points, tableK, exec.threads);
   clock.end("neighbours", t);
   // The sheet rule (intrinsic control from the first graph on): every stage below reads neighbours on each
   // point's own sheet only, and a cloud without normals gets them from that graph (estimated and oriented).
-  SheetParams sp = params.preprocessing.sheet;
-  sp.threads = params.threads;
+  const SheetParams& sp = params.preprocessing.sheet;
   pp.sheets = params.intrinsic;
   const bool sheets = params.intrinsic && cloud.size() > static_cast<std::size_t>(sp.pcaNeighbours);
   std::vector<std::uint8_t> nearSheets;  // per point of the final working cloud (the MLS surface's gate)
@@ -239,7 +237,7 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
     std::vector<Eigen::Vector3d> normals;
     SheetParams first = sp;
     first.orient = !preprocessing;  // pre-processing fits (and orients) its own normals over the filtered rows
-    result.sheets = separateSheets(cloud.points, *neighbours, normals, first,
+    result.sheets = separateSheets(cloud.points, *neighbours, normals, first, exec,
                                    cloud.hasNormals() ? &cloud.normals : nullptr, &nearSheets);
     // Pre-processing fits its own normals over the filtered rows (as the feature detector expects them);
     // without it, these are the cloud's.
@@ -248,7 +246,7 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
   }
   if (preprocessing) {
     t = clock.begin("preprocess");
-    result.preprocessing = iires::preprocess(cloud, pp, &*neighbours);
+    result.preprocessing = iires::preprocess(cloud, pp, exec, &*neighbours);
     if (result.preprocessing.positionsKept()) {
       cloud.normals = std::move(result.preprocessing.cloud.normals);
       neighbours->truncate(laterK);  // memory (5M points: 26 → 17 columns)
@@ -259,9 +257,9 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
       if (sheets) {  // the later stages' table, on the final positions and through the sheet rule again (on
                      // rows as long as the first time: shorter ones would not reach a sheet as far off)
         index.emplace(cloud.points);
-        neighbours.emplace(*index, cloud.points, tableK, params.threads);
+        neighbours.emplace(*index, cloud.points, tableK, exec.threads);
         std::vector<Eigen::Vector3d> normals;
-        separateSheets(cloud.points, *neighbours, normals, sp, &cloud.normals, &nearSheets);
+        separateSheets(cloud.points, *neighbours, normals, sp, exec, &cloud.normals, &nearSheets);
         neighbours->truncate(laterK);
       }
     }
@@ -275,9 +273,7 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
 
   t = clock.begin("normals");
   if (!cloud.hasNormals()) {
-    NormalParams np = params.normals;
-    np.threads = params.threads;
-    cloud.normals = estimateNormals(cloud.points, np);
+    cloud.normals = estimateNormals(cloud.points, params.normals, exec);
   } else {
     for (auto& nrm : cloud.normals) nrm.normalize();
   }
@@ -291,9 +287,8 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
   auto independent = [&](int threads, const KnnIndex* pointIndex) {
     auto t = clock.begin("surface");
     MlsParams mp = params.mls;
-    mp.threads = threads;
     if (!params.intrinsic) mp.sheetGap = 0;  // straight-line neighbourhoods
-    surface.emplace(cloud.points, cloud.normals, mp, index ? &*index : pointIndex,
+    surface.emplace(cloud.points, cloud.normals, mp, Execution{threads, {}}, index ? &*index : pointIndex,
                     neighbours ? &*neighbours : nullptr, std::move(nearSheets));
     neighbours.reset();  // read by nothing after the surface and the geodesic graph (memory at 5M)
     clock.end("surface", t);
@@ -305,37 +300,33 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
   std::shared_ptr<NeighbourRule> rule = params.neighbourRule;
   if (geodesicRule) {
     t = clock.begin("geodesic");  // includes the independent stages where they ran during its sweeps
-    IntrinsicParams ip = params.intrinsicRule;
-    ip.threads = params.threads;
-    result.geodesic = std::make_shared<const GeodesicCoordinates>(cloud, gp, neighbours ? &*neighbours : nullptr,
-                                                                  independent);
-    rule = std::make_shared<IntrinsicRule>(result.geodesic, ip);
+    result.geodesic = std::make_shared<const GeodesicCoordinates>(cloud, gp, exec,
+                                                                  neighbours ? &*neighbours : nullptr, independent);
+    rule = std::make_shared<IntrinsicRule>(result.geodesic, params.intrinsicRule, exec);
     result.components = result.geodesic->components();
     result.satellites = result.components * static_cast<std::size_t>(gp.satellites);
     clock.end("geodesic", t);
   } else {
-    independent(params.threads, nullptr);
+    independent(exec.threads, nullptr);
   }
   if (!rule) rule = std::make_shared<EuclideanRule>();
 
   std::optional<CurvatureResult> curvature;
   if (params.mode == ResampleMode::kCurvature) {
     t = clock.begin("curvature");
-    CurvatureParams cp = params.curvature;
-    cp.threads = params.threads;
-    curvature = computeCurvature(cloud.points, cloud.normals, cp);  // eq. (8)–(10)
+    curvature = computeCurvature(cloud.points, cloud.normals, params.curvature, exec);  // eq. (8)–(10)
     clock.end("curvature", t);
   }
   ResampleParams local = params;  // sharp edges add fixed samples
   if (params.sharpEdges) {
     t = clock.begin("features");
-    const std::vector<Eigen::Vector3d> onEdges = creaseSamples(cloud, surface->area(), params, result);
+    const std::vector<Eigen::Vector3d> onEdges = creaseSamples(cloud, surface->area(), params, exec, result);
     local.fixedSamples.insert(local.fixedSamples.end(), onEdges.begin(),
                               onEdges.begin() + static_cast<long>(result.featureSamples));
     clock.end("features", t);
   }
 
-  Resampler resampler(cloud.points, cloud.normals, *surface, local, *rule,
+  Resampler resampler(cloud.points, cloud.normals, *surface, local, exec, *rule,
                       curvature ? &curvature->sizeFactor : nullptr);
   t = clock.begin("initialise");
   Samples s = resampler.initialise(candidates, result);
@@ -345,19 +336,21 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params) {
   resampler.run(s, result);
   clock.end("resample", t);
 
-  for (std::size_t i = 0; i < s.size(); ++i)
-    if (s.fixed[i]) result.fixedIndices.push_back(static_cast<std::uint32_t>(i));
-  result.cloud.points = std::move(s.pos);
-  result.cloud.normals = std::move(s.nrm);
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    if (s.fixed[i] == Samples::kContext) continue;  // held for the neighbours' sake, not output
+    if (s.fixed[i]) result.fixedIndices.push_back(static_cast<std::uint32_t>(result.cloud.size()));
+    result.cloud.points.push_back(s.pos[i]);
+    result.cloud.normals.push_back(s.nrm[i]);
+  }
   t = clock.begin("report");
-  result.spacing = spacingStats(result.cloud.points, params.threads);
+  result.spacing = spacingStats(result.cloud.points, exec.threads);
   checkWithinInput(result.cloud.points, cloud.points, result.spacing.mean, surface->meanSpacing());
   if (curvature) reportLevels(*curvature, surface->index(), result);
   clock.end("report", t);
   if (!attributeSource.attributes.empty()) {
     t = clock.begin("attributes");
     result.cloud.attributes =
-        carryAttributes(attributeSource, result.cloud.points, result.cloud.normals, rule.get(), params.threads);
+        carryAttributes(attributeSource, result.cloud.points, result.cloud.normals, rule.get(), exec);
     clock.end("attributes", t);
   }
   clock.end("total", start);

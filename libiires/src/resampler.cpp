@@ -104,7 +104,7 @@ Rings Resampler::computeRings(const Samples& s, double cellRadius, Relaxation* r
     r.open.assign(s.size(), 0);
   }
   if (size_)  // adaptive mode (eq. 10): a sample takes the size factor of its nearest input point
-    parallelFor(s.size(), params_.threads, [&](std::size_t i) {
+    parallelFor(s.size(), exec_.threads, [&](std::size_t i) {
       if (active(i)) r.size[i] = (*size_)[surface_.index().nearest(s.pos[i])];
     });
   std::optional<KnnIndex> index;
@@ -114,7 +114,7 @@ Rings Resampler::computeRings(const Samples& s, double cellRadius, Relaxation* r
   std::array<Eigen::Vector2d, kDiscEdges> unitDisc;
   for (int e = 0; e < kDiscEdges; ++e)
     unitDisc[static_cast<std::size_t>(e)] = {std::cos(2 * M_PI * e / kDiscEdges), std::sin(2 * M_PI * e / kDiscEdges)};
-  parallelFor(s.size(), params_.threads, [&](std::size_t i) {
+  parallelFor(s.size(), exec_.threads, [&](std::size_t i) {
     if (!active(i)) return;
     // Per-thread scratch buffers (one thread-local lookup): this runs for every sample in every iteration.
     struct Scratch {
@@ -247,18 +247,20 @@ Rings Resampler::computeRings(const Samples& s, double cellRadius, Relaxation* r
 /// Edges present in both endpoints' 1-rings, each once (a < b), ordered by (a, b).
 std::vector<Edge> Resampler::edges(const Samples& s, const Rings& r) const {
   const std::size_t n = s.size(), k = static_cast<std::size_t>(r.stride);
-  auto mutual = [&](std::size_t a, std::uint32_t b) {  // the edge a–b, from its lower end
-    if (b == kNone || b <= a) return false;
+  // The edge a–b, from its lower end. Edges between two context samples are left out: they are finished
+  // (never split, collapsed or counted).
+  auto mutual = [&](std::size_t a, std::uint32_t b) {
+    if (b == kNone || b <= a || (s.fixed[a] == Samples::kContext && s.fixed[b] == Samples::kContext)) return false;
     const auto* rb = &r.ring[b * k];
     return std::find(rb, rb + k, static_cast<std::uint32_t>(a)) != rb + k;
   };
   std::vector<std::uint32_t> offset(n + 1, 0);
-  parallelFor(n, params_.threads, [&](std::size_t a) {
+  parallelFor(n, exec_.threads, [&](std::size_t a) {
     for (std::size_t x = 0; x < k; ++x) offset[a + 1] += mutual(a, r.ring[a * k + x]);
   });
   for (std::size_t a = 0; a < n; ++a) offset[a + 1] += offset[a];
   std::vector<Edge> out(offset[n]);
-  parallelFor(n, params_.threads, [&](std::size_t a) {
+  parallelFor(n, exec_.threads, [&](std::size_t a) {
     const auto first = out.begin() + offset[a];
     auto at = first;
     for (std::size_t x = 0; x < k; ++x)
@@ -290,7 +292,7 @@ double Resampler::relax(Samples& s, double l, int iterations, Relaxation& state,
     if (!state.rings) state.active.assign(n, 1);
     pos = s.pos;
     nrm = s.nrm;
-    parallelFor(n, params_.threads, [&](std::size_t i) {
+    parallelFor(n, exec_.threads, [&](std::size_t i) {
       if (s.fixed[i] || !state.active[i]) return;
       Eigen::Vector3d step = params_.overRelaxation * (r.centroid[i] - s.pos[i]);
       // Boundary samples may slide along the boundary or move inwards, never off the surface.
@@ -364,7 +366,7 @@ EditMap Resampler::splitAndCollapse(Samples& s, const std::vector<Edge>& sorted,
       batch.push_back(&*next);
     std::vector<Eigen::Vector3d> pos(batch.size()), nrm(batch.size());
     std::vector<double> off(batch.size()), out(batch.size());
-    parallelFor(batch.size(), params_.threads, [&](std::size_t c) {
+    parallelFor(batch.size(), exec_.threads, [&](std::size_t c) {
       const Edge& e = *batch[c];
       pos[c] = surface_.project(0.5 * (s.pos[e.a] + s.pos[e.b]), &nrm[c], &off[c], &s.nrm[e.a], nullptr, 0, &out[c]);
     });
@@ -397,7 +399,7 @@ EditMap Resampler::splitAndCollapse(Samples& s, const std::vector<Edge>& sorted,
       map.newIndex[i] = static_cast<std::uint32_t>(kept.size());
       kept.add(s.pos[i], s.nrm[i], s.fixed[i], std::move(s.cache[i]));
     }
-  for (std::size_t c = 0; c < newPos.size(); ++c) kept.add(newPos[c], newNrm[c], false);
+  for (std::size_t c = 0; c < newPos.size(); ++c) kept.add(newPos[c], newNrm[c], 0);
   s = std::move(kept);
   map.added = newPos.size();
   updateRule(s);
@@ -477,13 +479,13 @@ void Resampler::eliminate(Samples& s, std::size_t count) {
   // Adaptive mode: the Poisson-disk radius of a pair scales with the mean size factor of its two samples.
   std::vector<double> sz(s.size(), 1.0);
   if (size_)
-    parallelFor(s.size(), params_.threads, [&](std::size_t i) { sz[i] = (*size_)[surface_.index().nearest(s.pos[i])]; });
+    parallelFor(s.size(), exec_.threads, [&](std::size_t i) { sz[i] = (*size_)[surface_.index().nearest(s.pos[i])]; });
   const double maxSize = *std::max_element(sz.begin(), sz.end());
   KnnIndex index(s.pos);
   updateRule(s);  // only neighbours by the rule crowd each other (not across a thin gap)
   // float: 8 bytes a pair, and each row allocated once at its size (memory at 5M)
   std::vector<std::vector<std::pair<std::uint32_t, float>>> nb(s.size());
-  parallelFor(s.size(), params_.threads, [&](std::size_t i) {
+  parallelFor(s.size(), exec_.threads, [&](std::size_t i) {
     thread_local std::vector<std::uint32_t> idx;
     thread_local std::vector<double> d2;
     thread_local std::vector<std::pair<std::uint32_t, float>> row;
@@ -552,7 +554,7 @@ void Resampler::eliminate(Samples& s, std::size_t count) {
     for (const auto& [j, wj] : nb[top.i])
       if (!removed[j]) weight[j] -= wj;
   }
-  s = spatiallySorted(s, removed, params_.threads);
+  s = spatiallySorted(s, removed, exec_.threads);
 }
 
 void Resampler::updateRule(const Samples& s) {
@@ -563,7 +565,7 @@ void Resampler::updateRule(const Samples& s) {
 /// Last resort when the edge operations cannot reach N (a handful of points with degenerate 1-rings): drop the
 /// free samples closest to another sample, or add the input points farthest from the samples, one at a time.
 void Resampler::forceCount(Samples& s, Relaxation& relaxation) {
-  const std::size_t n = params_.targetCount;
+  const std::size_t n = total();
   std::vector<char> removed(s.size(), 0);
   std::vector<std::uint32_t> idx;
   std::vector<double> d2;
@@ -590,7 +592,7 @@ void Resampler::forceCount(Samples& s, Relaxation& relaxation) {
     }
     while (kept.size() < n) {
       const auto far = static_cast<std::size_t>(std::max_element(toSamples.begin(), toSamples.end()) - toSamples.begin());
-      kept.add(pts_[far], normals_[far], false);
+      kept.add(pts_[far], normals_[far], 0);
       for (std::size_t q = 0; q < pts_.size(); ++q)
         toSamples[q] = std::min(toSamples[q], (pts_[q] - pts_[far]).squaredNorm());
     }
@@ -603,7 +605,8 @@ void Resampler::forceCount(Samples& s, Relaxation& relaxation) {
 std::vector<std::uint32_t> initialCandidates(const PointCloud& cloud, const MlsSurface& surface,
                                              const ResampleParams& params, int threads) {
   const std::size_t count =
-      static_cast<std::size_t>(params.candidateFactor * static_cast<double>(params.targetCount));
+      static_cast<std::size_t>(params.candidateFactor *
+                               static_cast<double>(params.targetCount + params.contextSamples.size()));
   if (cloud.size() <= count) {
     std::vector<std::uint32_t> all(cloud.size());
     std::iota(all.begin(), all.end(), 0u);
@@ -619,17 +622,21 @@ std::vector<std::uint32_t> initialCandidates(const PointCloud& cloud, const MlsS
 }
 
 Samples Resampler::initialise(const std::vector<std::uint32_t>& chosen, ResampleResult& result) {
-  const std::size_t n = params_.targetCount;
+  const std::size_t n = total();
   Samples s;
-  for (const auto& p : params_.fixedSamples) {
-    Eigen::Vector3d nrm;
-    surface_.project(p, &nrm);
-    s.add(p, nrm, true);
-  }
+  auto hold = [&](const std::vector<Eigen::Vector3d>& given, char kind) {
+    for (const auto& p : given) {
+      Eigen::Vector3d nrm;
+      surface_.project(p, &nrm);
+      s.add(p, nrm, kind);
+    }
+  };
+  hold(params_.fixedSamples, Samples::kHeld);
+  hold(params_.contextSamples, Samples::kContext);
   // Candidates are input points (on the cloud already): only the survivors of the elimination are projected.
-  for (std::uint32_t c : chosen) s.add(pts_[c], normals_[c], false);
+  for (std::uint32_t c : chosen) s.add(pts_[c], normals_[c], 0);
   eliminate(s, n);
-  parallelFor(s.size(), params_.threads, [&](std::size_t i) {
+  parallelFor(s.size(), exec_.threads, [&](std::size_t i) {
     if (!s.fixed[i]) s.pos[i] = surface_.project(s.pos[i], &s.nrm[i], nullptr, &s.nrm[i], &s.cache[i]);
   });
   updateRule(s);
@@ -638,7 +645,7 @@ Samples Resampler::initialise(const std::vector<std::uint32_t>& chosen, Resample
 }
 
 void Resampler::run(Samples& s, ResampleResult& result) {
-  const std::size_t n = params_.targetCount;
+  const std::size_t n = total();
   const double countD = static_cast<double>(n);
   // By (length, a, b): a stable radix sort on the lengths' bits (non-negative doubles order like them) of
   // edges in (a, b) order.
@@ -650,7 +657,7 @@ void Resampler::run(Samples& s, ResampleResult& result) {
       std::memcpy(&bits, &e[x].length, sizeof bits);
       byLength[x] = {bits, static_cast<std::uint32_t>(x)};
     }
-    radixSort(byLength, params_.threads);
+    radixSort(byLength, exec_.threads);
     std::vector<Edge> out(e.size());
     for (std::size_t x = 0; x < e.size(); ++x) out[x] = e[byLength[x].second];
     return out;
@@ -679,7 +686,7 @@ void Resampler::run(Samples& s, ResampleResult& result) {
   // per pass) come on top, up to kMaxCountPasses of them.
   constexpr int kMaxCountPasses = 8;
   for (int pass = 0, atN = 0; atN < params_.maxPasses && pass < params_.maxPasses + kMaxCountPasses; ++pass) {
-    if (params_.progress) params_.progress("resample", 0.8 * atN / params_.maxPasses);
+    exec_.report("resample", 0.8 * atN / params_.maxPasses);
     // At N, or off by what one balanced round of edits can leave (a collapse may find its samples taken).
     atN += static_cast<double>(s.size() > n ? s.size() - n : n - s.size()) <= params_.maxEditShare * countD + 1;
     const std::vector<Edge> e = sortedEdges(edgeRings(s, l, relaxation));
@@ -727,7 +734,7 @@ void Resampler::run(Samples& s, ResampleResult& result) {
   // Lloyd relaxation in rounds of 4 iterations until the spacing CV has not improved for relaxPatience rounds.
   double best = std::numeric_limits<double>::max();
   for (int it = 0, stale = 0; it < params_.maxRelaxIterations && stale < params_.relaxPatience; it += 4) {
-    if (params_.progress) params_.progress("resample", 0.8 + 0.2 * it / params_.maxRelaxIterations);
+    exec_.report("resample", 0.8 + 0.2 * it / params_.maxRelaxIterations);
     const double cv = relax(s, l, std::min(4, params_.maxRelaxIterations - it), relaxation);
     result.relaxIterations += std::min(4, params_.maxRelaxIterations - it);
     stale = cv < best - 1e-5 ? 0 : stale + 1;

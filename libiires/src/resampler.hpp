@@ -18,13 +18,14 @@ namespace iires::detail {
 /// The working sample set S.
 struct Samples {
   std::vector<Eigen::Vector3d> pos, nrm;
-  std::vector<char> fixed;
+  std::vector<char> fixed;  // 0 free, kHeld (fixed samples, features) or kContext (ResampleParams::contextSamples)
   std::vector<MlsCache> cache;  // each sample's last MLS neighbourhood (saves most k-NN searches in relaxation)
   std::size_t size() const { return pos.size(); }
-  void add(const Eigen::Vector3d& p, const Eigen::Vector3d& n, bool isFixed, MlsCache c = {}) {
+  static constexpr char kHeld = 1, kContext = 2;
+  void add(const Eigen::Vector3d& p, const Eigen::Vector3d& n, char fixedKind, MlsCache c = {}) {
     pos.push_back(p);
     nrm.push_back(n);
-    fixed.push_back(isFixed ? 1 : 0);
+    fixed.push_back(fixedKind);
     cache.push_back(std::move(c));
   }
 };
@@ -65,9 +66,9 @@ class Resampler {
  public:
   /// @param size per input point target-size factor (curvature mode), or null (isotropic)
   Resampler(const std::vector<Eigen::Vector3d>& pts, const std::vector<Eigen::Vector3d>& normals,
-            const MlsSurface& surface, const ResampleParams& params, NeighbourRule& rule,
+            const MlsSurface& surface, const ResampleParams& params, const Execution& exec, NeighbourRule& rule,
             const std::vector<double>* size)
-      : pts_(pts), normals_(normals), surface_(surface), params_(params), rule_(rule), size_(size) {}
+      : pts_(pts), normals_(normals), surface_(surface), params_(params), exec_(exec), rule_(rule), size_(size) {}
 
   /// @p chosen: the input points to start from (initialCandidates()).
   Samples initialise(const std::vector<std::uint32_t>& chosen, ResampleResult& result);
@@ -87,11 +88,14 @@ class Resampler {
   void forceCount(Samples& s, Relaxation& relaxation);
   /// The neighbour rule's update after a change of the sample set (or a drift, see relax()).
   void updateRule(const Samples& s);
+  /// The size of the sample set to reach: N plus the context samples (held, not counted in N).
+  std::size_t total() const { return params_.targetCount + params_.contextSamples.size(); }
 
   const std::vector<Eigen::Vector3d>& pts_;
   const std::vector<Eigen::Vector3d>& normals_;
   const MlsSurface& surface_;
   const ResampleParams& params_;
+  const Execution& exec_;
   NeighbourRule& rule_;
   const std::vector<double>* size_;
   std::vector<Eigen::Vector3d> rulePos_;  // the samples' positions at the rule's last update

@@ -139,7 +139,6 @@ void SheetParams::validate() const {
   if (!(heightSpacings > 0) || !std::isfinite(heightSpacings)) fail("heightSpacings must be finite and > 0");
   if (!(heightSlope >= 0) || !std::isfinite(heightSlope)) fail("heightSlope must be finite and >= 0");
   if (!(maxNormalAngleDeg > 0 && maxNormalAngleDeg <= 180)) fail("maxNormalAngleDeg must be in (0, 180]");
-  if (threads < 0) fail("threads must be >= 0 (0 = all cores)");
 }
 
 std::string SheetReport::toJson() const {
@@ -412,12 +411,13 @@ void orientSheets(SheetState& st, const NeighbourTable& table, int threads) {
 }  // namespace
 
 SheetReport separateSheets(const std::vector<Eigen::Vector3d>& points, NeighbourTable& table,
-                           std::vector<Eigen::Vector3d>& normals, const SheetParams& params,
+                           std::vector<Eigen::Vector3d>& normals, const SheetParams& params, const Execution& exec,
                            const std::vector<Eigen::Vector3d>* givenNormals, std::vector<std::uint8_t>* near) {
   params.validate();
   const auto start = std::chrono::steady_clock::now();
   if (table.size() != points.size()) throw std::invalid_argument("separateSheets: the table is not of these points");
-  const int threads = params.threads;
+  exec.validate();
+  const int threads = exec.threads;
   SheetState st(points, params, normals);
   st.n = points.size();
   st.K = table.k();

@@ -358,13 +358,14 @@ void MeshQualityParams::validate() const {
   if (referenceSamples == 0) throw std::invalid_argument("referenceSamples must be at least 1");
 }
 
-MeshQuality evaluateMesh(const TriangleMesh& mesh, const PointCloud* reference, const MeshQualityParams& params) {
+MeshQuality evaluateMesh(const TriangleMesh& mesh, const PointCloud* reference, const MeshQualityParams& params,
+                         const Execution& exec) {
   params.validate();
   checkIndices(mesh);
   MeshQuality q;
-  shapeStats(mesh, q, params.threads);
+  shapeStats(mesh, q, exec.threads);
   topologyStats(mesh, q);
-  q.selfIntersections = selfIntersections(mesh, params.threads).size();
+  q.selfIntersections = selfIntersections(mesh, exec.threads).size();
   if (reference && !reference->empty() && !mesh.triangles.empty()) {
     SurfaceDistance& d = q.distance;
     d.computed = true;
@@ -372,7 +373,7 @@ MeshQuality evaluateMesh(const TriangleMesh& mesh, const PointCloud* reference, 
     const MeshDistance toMesh(mesh);
     const std::size_t nr = reference->size();
     std::vector<double> back(nr);
-    parallelFor(nr, params.threads, [&](std::size_t i) { back[i] = toMesh.distance(reference->points[i]); });
+    parallelFor(nr, exec.threads, [&](std::size_t i) { back[i] = toMesh.distance(reference->points[i]); });
     q.uncoveredDistance = 2.0 * q.meanEdgeLength;
     double backSum = 0;
     for (std::size_t i = 0; i < nr; ++i) {  // fixed order: independent of the thread count
@@ -386,7 +387,7 @@ MeshQuality evaluateMesh(const TriangleMesh& mesh, const PointCloud* reference, 
     const std::vector<Eigen::Vector3d> samples = meshSamplePoints(mesh, params.meshSamples, params.seed);
     const KnnIndex index(reference->points);
     std::vector<double> dist(samples.size());
-    parallelFor(samples.size(), params.threads, [&](std::size_t i) {
+    parallelFor(samples.size(), exec.threads, [&](std::size_t i) {
       double sq = 0;
       index.nearest(samples[i], &sq);
       dist[i] = std::sqrt(sq);
@@ -411,7 +412,7 @@ PointCloud uncoveredInput(const PointCloud& reference, const MeshQuality& qualit
 }
 
 SurfaceDistance surfaceDistance(const TriangleMesh& mesh, const TriangleMesh& referenceMesh,
-                                const MeshQualityParams& params) {
+                                const MeshQualityParams& params, const Execution& exec) {
   params.validate();
   checkIndices(mesh);
   checkIndices(referenceMesh);
@@ -420,9 +421,9 @@ SurfaceDistance surfaceDistance(const TriangleMesh& mesh, const TriangleMesh& re
   d.computed = true;
   const MeshDistance toRef(referenceMesh), toMesh(mesh);
   d.diagonal = toRef.diagonal();
-  const DistanceStats fwd = toRef.distances(meshSamplePoints(mesh, params.meshSamples, params.seed), params.threads);
+  const DistanceStats fwd = toRef.distances(meshSamplePoints(mesh, params.meshSamples, params.seed), exec.threads);
   const DistanceStats bwd =
-      toMesh.distances(meshSamplePoints(referenceMesh, params.referenceSamples, params.seed + 1), params.threads);
+      toMesh.distances(meshSamplePoints(referenceMesh, params.referenceSamples, params.seed + 1), exec.threads);
   d.forwardMax = fwd.max;
   d.forwardMean = fwd.mean;
   d.backwardMax = bwd.max;

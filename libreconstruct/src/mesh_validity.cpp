@@ -112,11 +112,12 @@ void ValidityParams::validate() const {
   holes.validate();
 }
 
-ValidityReport repairValidity(TriangleMesh& mesh, std::vector<Eigen::Vector3d>& normals, const ValidityParams& params) {
+ValidityReport repairValidity(TriangleMesh& mesh, std::vector<Eigen::Vector3d>& normals, const ValidityParams& params,
+                              const Execution& exec) {
   params.validate();
   ValidityReport report;
   report.facesRemoved += removeNonManifold(mesh, params.minComponentFaces, &report.nonManifoldEdges);
-  std::vector<std::pair<std::size_t, std::size_t>> pairs = selfIntersections(mesh, params.threads);
+  std::vector<std::pair<std::size_t, std::size_t>> pairs = selfIntersections(mesh, exec.threads);
   report.intersectingPairs = pairs.size();
   for (int round = 1; round <= params.rounds && !pairs.empty() && params.refill; ++round) {
     ++report.rounds;
@@ -124,7 +125,7 @@ ValidityReport repairValidity(TriangleMesh& mesh, std::vector<Eigen::Vector3d>& 
     report.facesRemoved += removeNonManifold(mesh, params.minComponentFaces);
     if (params.minComponentFaces > 1) report.facesRemoved += removeSmallComponents(mesh, params.minComponentFaces);
     refill(mesh, normals, params, report);
-    pairs = selfIntersections(mesh, params.threads);
+    pairs = selfIntersections(mesh, exec.threads);
   }
   // What still intersects goes without a fill: removing faces creates no intersection, and removeNonManifold
   // only removes faces too.
@@ -132,7 +133,7 @@ ValidityReport repairValidity(TriangleMesh& mesh, std::vector<Eigen::Vector3d>& 
     const std::size_t removed = removeFaces(mesh, grownRegion(mesh, pairs, 0)) + removeNonManifold(mesh, 0);
     report.removedWithoutFill += removed;
     report.facesRemoved += removed;
-    pairs = selfIntersections(mesh, params.threads);
+    pairs = selfIntersections(mesh, exec.threads);
   }
   return report;
 }

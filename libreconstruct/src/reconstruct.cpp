@@ -43,7 +43,6 @@ ResampleParams meshResampling() {
 void ReconstructParams::validate() const {
   if (resample && targetCount < 4)
     throw std::invalid_argument("target count N must be at least 4 (got " + std::to_string(targetCount) + ")");
-  if (threads < 0) throw std::invalid_argument("threads must be non-negative");
   if (!(repairQuality >= 0 && repairQuality < 1)) throw std::invalid_argument("repairQuality must be in [0, 1)");
   if (!(repairDeviation >= 0)) throw std::invalid_argument("repairDeviation must be non-negative");
   ResampleParams r = resampling;
@@ -117,15 +116,14 @@ std::vector<Eigen::Vector3d> vertexNormals(const TriangleMesh& mesh) {
 
 /// The samples: the input resampled to params.targetCount (result.resampling), else the input points as they
 /// are, with PCA normals when it has none.
-void takeSamples(const PointCloud& cloud, const ReconstructParams& params, ReconstructResult& result) {
+void takeSamples(const PointCloud& cloud, const ReconstructParams& params, const Execution& exec,
+                 ReconstructResult& result) {
   if (params.resample) {
     ResampleParams rp = params.resampling;
     rp.targetCount = params.targetCount;
     rp.seed = params.seed;
-    rp.threads = params.threads;
     if (params.neighbourRule) rp.neighbourRule = params.neighbourRule;
-    if (!rp.progress) rp.progress = params.progress;
-    result.resampling = resample(cloud, rp);
+    result.resampling = resample(cloud, rp, exec);
     result.samples = std::move(result.resampling.cloud);
     result.resampling.cloud = PointCloud{};
     result.resampled = true;
@@ -133,28 +131,24 @@ void takeSamples(const PointCloud& cloud, const ReconstructParams& params, Recon
   }
   result.samples = cloud;
   if (!result.samples.hasNormals()) {
-    NormalParams np = params.resampling.normals;
-    np.threads = params.threads;
-    result.samples.normals = estimateNormals(result.samples.points, np);
+    result.samples.normals = estimateNormals(result.samples.points, params.resampling.normals, exec);
   }
   for (auto& n : result.samples.normals) n.normalize();
 }
 
 /// The mesh of the samples: local Delaunay 1-rings (with the resampler's intrinsic rule unless a neighbour
 /// rule is given) or CGAL's advancing front.
-void triangulateSamples(const ReconstructParams& params, ReconstructResult& result) {
+void triangulateSamples(const ReconstructParams& params, const Execution& exec, ReconstructResult& result) {
   if (params.method == ReconstructMethod::kLocal) {
     TriangulateParams tp = params.local;
-    tp.threads = params.threads;
     if (params.neighbourRule) {
       tp.neighbourRule = params.neighbourRule;
     } else if (!tp.neighbourRule && result.resampling.geodesic) {
       // The resampler's intrinsic rule (DESIGN §5.2): 1-rings never link across a thin gap or between objects.
-      IntrinsicParams ip = params.resampling.intrinsicRule;
-      ip.threads = params.threads;
-      tp.neighbourRule = std::make_shared<IntrinsicRule>(result.resampling.geodesic, ip);
+      tp.neighbourRule =
+          std::make_shared<IntrinsicRule>(result.resampling.geodesic, params.resampling.intrinsicRule, exec);
     }
-    result.triangulation = triangulateLocal(result.samples, tp);
+    result.triangulation = triangulateLocal(result.samples, tp, exec);
     result.mesh = std::move(result.triangulation.mesh);
     result.triangulation.mesh = TriangleMesh{};
   } else {
@@ -202,15 +196,14 @@ std::size_t closeHoles(const ReconstructParams& params, ReconstructResult& resul
 
 /// Self-intersecting faces and non-manifold parts removed (and refilled); the fills' poor triangles repaired,
 /// then checked again. Returns the faces flipped by the orientation passes remeshing needs first.
-std::size_t repairMeshValidity(const ReconstructParams& params, ReconstructResult& result,
+std::size_t repairMeshValidity(const ReconstructParams& params, const Execution& exec, ReconstructResult& result,
                                std::vector<Eigen::Vector3d>& normals) {
   std::size_t flipped = 0;
   ValidityParams vp = params.validity;
   vp.holes = params.holes;
   vp.refill = params.fillHoles && vp.refill;
   vp.minComponentFaces = params.minComponentFaces;
-  vp.threads = params.threads;
-  result.validity = repairValidity(result.mesh, normals, vp);
+  result.validity = repairValidity(result.mesh, normals, vp, exec);
   if (result.validity.facesAdded > 0 && params.repairQuality > 0) {
     // The fills can hold poor triangles: the same quality repairs as above, then the check again (a repair that
     // made something intersect is undone by removal there).
@@ -222,7 +215,7 @@ std::size_t repairMeshValidity(const ReconstructParams& params, ReconstructResul
       result.remeshedVertices += remeshBadRegions(result.mesh, normals, params.repairQuality);
     }
     vp.rounds = 1;
-    const ValidityReport check = repairValidity(result.mesh, normals, vp);
+    const ValidityReport check = repairValidity(result.mesh, normals, vp, exec);
     result.validity.rounds += check.rounds;
     result.validity.facesRemoved += check.facesRemoved;
     result.validity.facesAdded += check.facesAdded;
@@ -233,42 +226,42 @@ std::size_t repairMeshValidity(const ReconstructParams& params, ReconstructResul
 }
 
 /// The input's attributes interpolated at the mesh vertices, from input points on the same sheet.
-void carryAttributes(const PointCloud& input, const ReconstructParams& params, ReconstructResult& result) {
+void carryAttributes(const PointCloud& input, const ReconstructParams& params, const Execution& exec,
+                     ReconstructResult& result) {
   SameSheet sameSheet;  // the resampler's intrinsic rule: vertices take values from input points on their sheet
   std::shared_ptr<const IntrinsicRule> rule;
   if (result.resampling.geodesic) {
-    rule = std::make_shared<IntrinsicRule>(result.resampling.geodesic, params.resampling.intrinsicRule);
+    rule = std::make_shared<IntrinsicRule>(result.resampling.geodesic, params.resampling.intrinsicRule, exec);
     sameSheet = [&rule](const Eigen::Vector3d& a, const Eigen::Vector3d& b) { return rule->acceptPoints(a, b); };
   }
-  AttributeParams ap;
-  ap.threads = params.threads;
   result.mesh.vertexAttributes =
-      interpolateAttributes(input, result.mesh.vertices, vertexNormals(result.mesh), sameSheet, ap);
+      interpolateAttributes(input, result.mesh.vertices, vertexNormals(result.mesh), sameSheet, {}, exec);
 }
 
 }  // namespace
 
-ReconstructResult reconstruct(const PointCloud& input, const ReconstructParams& params) {
+ReconstructResult reconstruct(const PointCloud& input, const ReconstructParams& params, const Execution& exec) {
   params.validate();
+  exec.validate();
   const auto start = Clock::now();
   ReconstructResult result;
   result.method = toString(params.method);
   result.inputPoints = input.size();
-  const StageClock clock(result.timings, params.progress);  // the resampler reports its own stages
+  const StageClock clock(result.timings, exec.progress);  // the resampler reports its own stages
 
   auto t = clock.begin("validate");
   PointCloud cloud;  // positions and normals; the attributes are carried to the vertices at the end
   cloud.points = input.points;
   cloud.normals = input.normals;
-  validateCloud(cloud, 4, "input");
+  validateCloud(cloud, 4, "input", exec.threads);
   clock.end("validate", t);
 
   t = params.resample ? Clock::now() : clock.begin("normals");
-  takeSamples(cloud, params, result);
+  takeSamples(cloud, params, exec, result);
   clock.end(params.resample ? "resample" : "normals", t);
 
   t = clock.begin("triangulate");
-  triangulateSamples(params, result);
+  triangulateSamples(params, exec, result);
   clock.end("triangulate", t);
 
   t = clock.begin("holes");
@@ -278,7 +271,7 @@ ReconstructResult reconstruct(const PointCloud& input, const ReconstructParams& 
 
   if (params.repairValidity) {
     t = clock.begin("validity");
-    flippedEarlier += repairMeshValidity(params, result, normals);
+    flippedEarlier += repairMeshValidity(params, exec, result, normals);
     clock.end("validity", t);
   }
 
@@ -292,16 +285,15 @@ ReconstructResult reconstruct(const PointCloud& input, const ReconstructParams& 
 
   if (!input.attributes.empty()) {
     t = clock.begin("attributes");
-    carryAttributes(input, params, result);
+    carryAttributes(input, params, exec, result);
     clock.end("attributes", t);
   }
 
   if (params.evaluate) {
     t = clock.begin("quality");
     MeshQualityParams qp = params.quality;
-    qp.threads = params.threads;
     qp.seed = params.seed + 1;
-    result.quality = evaluateMesh(result.mesh, &cloud, qp);
+    result.quality = evaluateMesh(result.mesh, &cloud, qp, exec);
     result.uncoveredInput = uncoveredInput(cloud, result.quality);
     clock.end("quality", t);
   }

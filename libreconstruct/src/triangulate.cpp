@@ -65,7 +65,8 @@ void TriangulateParams::validate() const {
   if (maxFlipSweeps < 0) throw std::invalid_argument("maxFlipSweeps must be non-negative");
 }
 
-TriangulateResult triangulateLocal(const PointCloud& cloud, const TriangulateParams& params) {
+TriangulateResult triangulateLocal(const PointCloud& cloud, const TriangulateParams& params,
+                                   const Execution& exec) {
   params.validate();
   const std::size_t n = cloud.size();
   if (n < 3) throw InputError("triangulation needs at least 3 points (got " + std::to_string(n) + ")");
@@ -85,7 +86,7 @@ TriangulateResult triangulateLocal(const PointCloud& cloud, const TriangulatePar
   const std::size_t k = std::min<std::size_t>(static_cast<std::size_t>(params.neighbours) + 1, n);
   // Per point: the triangles its 1-ring proposes (at most k + kDiscSides).
   std::vector<std::vector<Proposal>> proposals(n);
-  parallelFor(n, params.threads, [&](std::size_t i) {
+  parallelFor(n, exec.threads, [&](std::size_t i) {
     std::vector<std::uint32_t> idx;
     std::vector<double> d2;
     index.knn(cloud.points[i], k, idx, d2);

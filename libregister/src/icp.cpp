@@ -93,7 +93,8 @@ Eigen::Matrix4d umeyamaTransform(const std::vector<Eigen::Vector3d>& a, const st
 }
 
 IcpResult similarityIcp(const std::vector<Eigen::Vector3d>& source, const std::vector<Eigen::Vector3d>& target,
-                        const KnnIndex& targetIndex, const Eigen::Matrix4d& init, const IcpParams& params) {
+                        const KnnIndex& targetIndex, const Eigen::Matrix4d& init, const IcpParams& params,
+                        const Execution& exec) {
   params.validate();
   if (source.size() < 3 || target.size() < 3) throw std::invalid_argument("ICP needs at least 3 points per cloud");
   const std::size_t n = source.size();
@@ -114,7 +115,7 @@ IcpResult similarityIcp(const std::vector<Eigen::Vector3d>& source, const std::v
   auto matchAll = [&](const Eigen::Matrix4d& t) {
     const Eigen::Matrix3d m = t.topLeftCorner<3, 3>();
     const Eigen::Vector3d tr = t.topRightCorner<3, 1>();
-    parallelFor(n, params.threads, [&](std::size_t i) { match[i] = targetIndex.nearest(m * source[i] + tr, &d2[i]); });
+    parallelFor(n, exec.threads, [&](std::size_t i) { match[i] = targetIndex.nearest(m * source[i] + tr, &d2[i]); });
     keep = selectNearest(d2, order, params, params.overlap, kRoundingFloor * radius * scaleOf(t));
   };
   // Reverse matches (target → source), for bidirectional mode: the target moved by T⁻¹ against a tree on
@@ -130,7 +131,7 @@ IcpResult similarityIcp(const std::vector<Eigen::Vector3d>& source, const std::v
     const Eigen::Matrix4d inv = t.inverse();
     const Eigen::Matrix3d mi = inv.topLeftCorner<3, 3>();
     const Eigen::Vector3d ti = inv.topRightCorner<3, 1>();
-    parallelFor(m, params.threads, [&](std::size_t i) { rmatch[i] = sourceTree->nearest(mi * target[i] + ti, &rd2[i]); });
+    parallelFor(m, exec.threads, [&](std::size_t i) { rmatch[i] = sourceTree->nearest(mi * target[i] + ti, &rd2[i]); });
     const double reverseOverlap = params.reverseOverlap > 0.0 ? params.reverseOverlap : params.overlap;
     keepReverse = selectNearest(rd2, rorder, params, reverseOverlap, kRoundingFloor * radius);  // source units
   };

@@ -117,21 +117,22 @@ std::size_t dropStraySamples(std::vector<Eigen::Vector3d>& samples, const std::v
   return before - samples.size();
 }
 
-ResampleResult resampleFor(const PointCloud& cloud, const RegistrationParams& params, const char* what) {
+ResampleResult resampleFor(const PointCloud& cloud, const RegistrationParams& params, const Execution& exec,
+                           const char* what) {
   ResampleParams rp = params.resample;
   rp.targetCount = params.samples;
   rp.seed = params.seed;
-  rp.threads = params.threads;
   const std::string stage = std::string("resample ") + what;
-  if (params.progress) {
-    params.progress(stage, 0.0);
+  Execution inner{exec.threads, {}};
+  if (exec.progress) {
+    exec.report(stage, 0.0);
     // The resampler's own stages are short except its main loop ("resample"), which is reported through.
-    rp.progress = [&](const std::string& inner, double fraction) {
-      if (inner == "resample") params.progress(stage, fraction);
+    inner.progress = [&](const std::string& name, double fraction) {
+      if (name == "resample") exec.report(stage, fraction);
     };
   }
   try {
-    return resample(cloud, rp);
+    return resample(cloud, rp, inner);
   } catch (const InputError& e) {
     throw InputError(std::string(what) + ": " + e.what());
   }
@@ -148,20 +149,21 @@ struct PoseScore {
 /// fractional RMSD (its own overlap estimate). Symmetric, so a shrunken source that covers only part of the
 /// target does not win.
 PoseScore scorePose(const std::vector<Eigen::Vector3d>& ns, const std::vector<Eigen::Vector3d>& nt,
-                    const KnnIndex& targetTree, const Eigen::Matrix4d& T, const RegistrationParams& params) {
+                    const KnnIndex& targetTree, const Eigen::Matrix4d& T, const RegistrationParams& params,
+                    int threads) {
   const std::vector<Eigen::Vector3d> moved = applied(ns, T);
   const KnnIndex movedTree(moved);
   PoseScore out;
   if (params.overlap > 0.0) {
-    const double a = trimmedRms(moved, targetTree, params.overlap, params.threads);
-    const double b = trimmedRms(nt, movedTree, params.overlap, params.threads);
+    const double a = trimmedRms(moved, targetTree, params.overlap, threads);
+    const double b = trimmedRms(nt, movedTree, params.overlap, threads);
     out.score = std::sqrt(0.5 * (a * a + b * b));
     out.sourceOverlap = out.targetOverlap = params.overlap;
     return out;
   }
   auto direction = [&](const std::vector<Eigen::Vector3d>& from, const KnnIndex& to, double* overlap) {
     std::vector<double> d2(from.size());
-    parallelFor(from.size(), params.threads, [&](std::size_t i) { to.nearest(from[i], &d2[i]); });
+    parallelFor(from.size(), threads, [&](std::size_t i) { to.nearest(from[i], &d2[i]); });
     std::sort(d2.begin(), d2.end());
     const double minOverlap = *std::min_element(params.searchOverlaps.begin(), params.searchOverlaps.end());
     const FractionalFit fit = fractionalRmsd(d2, minOverlap, params.fitOverlapExponent, kRoundingFloor);
@@ -185,7 +187,7 @@ struct Refined {
 /// scorePose(); the best continues to convergence. A known overlap < 1 trims the pairs in both directions; an
 /// unknown one is estimated in every iteration (fractional RMSD, both directions).
 Refined refineCandidates(const std::vector<Eigen::Vector3d>& ns, const std::vector<Eigen::Vector3d>& nt,
-                         const RotationSearchResult& found, const RegistrationParams& params) {
+                         const RotationSearchResult& found, const RegistrationParams& params, const Execution& exec) {
   IcpParams ip = params.icp;
   const bool estimate = params.overlap == 0.0;
   ip.overlap = estimate ? 1.0 : params.overlap;
@@ -193,7 +195,6 @@ Refined refineCandidates(const std::vector<Eigen::Vector3d>& ns, const std::vect
   ip.minOverlap = estimate ? *std::min_element(params.searchOverlaps.begin(), params.searchOverlaps.end()) : 1.0;
   ip.overlapExponent = params.fitOverlapExponent;
   ip.estimateScale = params.estimateScale;
-  ip.threads = params.threads;
   ip.bidirectional = ip.bidirectional || params.overlap < 1.0;  // partial scans: both directions
   const KnnIndex targetTree(nt);
   const std::size_t nc = std::min(params.icpCandidates, found.candidates.size());
@@ -203,19 +204,19 @@ Refined refineCandidates(const std::vector<Eigen::Vector3d>& ns, const std::vect
   IcpParams screen = ip;
   screen.maxIterations = params.screenIterations;
   for (std::size_t c = 0; c < nc; ++c) {
-    if (params.progress) params.progress("icp", static_cast<double>(c) / static_cast<double>(nc + 1));
+    exec.report("icp", static_cast<double>(c) / static_cast<double>(nc + 1));
     Eigen::Matrix4d init = Eigen::Matrix4d::Identity();
     init.topLeftCorner<3, 3>() = found.candidates[c].scale * found.candidates[c].rotation;
     init.topRightCorner<3, 1>() = found.candidates[c].translation;
-    out.icp[c] = similarityIcp(ns, nt, targetTree, init, screen);
-    out.score[c] = scorePose(ns, nt, targetTree, out.icp[c].T_target_source, params);
+    out.icp[c] = similarityIcp(ns, nt, targetTree, init, screen, exec);
+    out.score[c] = scorePose(ns, nt, targetTree, out.icp[c].T_target_source, params, exec.threads);
   }
   for (std::size_t c = 1; c < nc; ++c)
     if (out.score[c].score < out.score[out.best].score) out.best = c;
   IcpResult& best = out.icp[out.best];
   if (!best.converged) {  // the winner continues to convergence
     const int screened = best.iterations;
-    best = similarityIcp(ns, nt, targetTree, best.T_target_source, ip);
+    best = similarityIcp(ns, nt, targetTree, best.T_target_source, ip, exec);
     best.iterations += screened;
   }
   if (estimate) {
@@ -228,13 +229,13 @@ Refined refineCandidates(const std::vector<Eigen::Vector3d>& ns, const std::vect
     polish.reverseOverlap = kPolishShare * best.reverseOverlap;
     const int before = best.iterations;
     const double forward = best.overlap, reverse = best.reverseOverlap;
-    best = similarityIcp(ns, nt, targetTree, best.T_target_source, polish);
+    best = similarityIcp(ns, nt, targetTree, best.T_target_source, polish, exec);
     best.iterations += before;
     best.overlap = forward;
     best.reverseOverlap = reverse;
   }
-  out.score[out.best] = scorePose(ns, nt, targetTree, best.T_target_source, params);
-  if (params.progress) params.progress("icp", 1.0);
+  out.score[out.best] = scorePose(ns, nt, targetTree, best.T_target_source, params, exec.threads);
+  exec.report("icp", 1.0);
   return out;
 }
 
@@ -366,8 +367,9 @@ std::string formatTransform(const Eigen::Matrix4d& T) {
 }
 
 RegistrationResult registerClouds(const PointCloud& sourceIn, const PointCloud& targetIn,
-                                  const RegistrationParams& requested) {
+                                  const RegistrationParams& requested, const Execution& exec) {
   requested.validate();
+  exec.validate();
   // M above both input sizes adds no information (and a huge M costs hours): cap it at the larger input,
   // never below the default.
   RegistrationParams params = requested;
@@ -379,8 +381,8 @@ RegistrationResult registerClouds(const PointCloud& sourceIn, const PointCloud& 
   // 1. Validate: empty, NaN/Inf, too few distinct points, collinear → InputError naming the cloud.
   auto t = Clock::now();
   PointCloud source = sourceIn, target = targetIn;
-  validateCloud(source, kMinPoints, "source");
-  validateCloud(target, kMinPoints, "target");
+  validateCloud(source, kMinPoints, "source", exec.threads);
+  validateCloud(target, kMinPoints, "target", exec.threads);
   r.sourcePoints = sourceIn.size();
   r.targetPoints = targetIn.size();
   r.samples = params.samples;
@@ -395,19 +397,17 @@ RegistrationResult registerClouds(const PointCloud& sourceIn, const PointCloud& 
   // identical working clouds (and the identity).
   source = randomSubset(source, workingCap, params.seed);
   target = randomSubset(target, workingCap, params.seed);
-  OutlierParams op = params.outliers;
-  op.threads = params.threads;
-  source = cleanOutliers(source, op, &r.outliersFound);
-  target = cleanOutliers(target, op, &r.outliersFound);
+  source = cleanOutliers(source, params.outliers, exec, &r.outliersFound);
+  target = cleanOutliers(target, params.outliers, exec, &r.outliersFound);
   r.sourceWorkingPoints = source.size();
   r.targetWorkingPoints = target.size();
   stage("thin", t);
   t = Clock::now();
-  ResampleResult rs = resampleFor(source, params, "source");
+  ResampleResult rs = resampleFor(source, params, exec, "source");
   r.strayDropped = dropStraySamples(rs.cloud.points, source.points);
   stage("resample_source", t);
   t = Clock::now();
-  ResampleResult rt = resampleFor(target, params, "target");
+  ResampleResult rt = resampleFor(target, params, exec, "target");
   r.strayDropped += dropStraySamples(rt.cloud.points, target.points);
   stage("resample_target", t);
   if (rs.cloud.size() < kMinPoints || rt.cloud.size() < kMinPoints)
@@ -435,10 +435,8 @@ RegistrationResult registerClouds(const PointCloud& sourceIn, const PointCloud& 
   sp.overlaps = estimate ? params.searchOverlaps : std::vector<double>{params.overlap};
   sp.overlapExponent = params.searchOverlapExponent;
   sp.seed = params.seed;
-  sp.threads = params.threads;
   sp.keep = std::max(sp.keep, params.icpCandidates);
-  if (params.progress) sp.progress = [&](double fraction) { params.progress("search", fraction); };
-  const RotationSearch search(ns, nt, sp);
+  const RotationSearch search(ns, nt, sp, exec);
   const std::vector<Eigen::Matrix3d> grid = rotationGrid(params.grid, params.eulerSteps, params.so3Count);
   const RotationSearchResult found = search.search(grid);
   r.grid = toString(params.grid);
@@ -450,7 +448,7 @@ RegistrationResult registerClouds(const PointCloud& sourceIn, const PointCloud& 
 
   // 5. ICP from each of the best few candidates, ranked by the symmetric score.
   t = Clock::now();
-  const Refined refined = refineCandidates(ns, nt, found, params);
+  const Refined refined = refineCandidates(ns, nt, found, params, exec);
   stage("icp", t);
 
   // 6. The result, the runner-up and the ambiguity flags; back to original units.
@@ -475,7 +473,7 @@ RegistrationResult registerClouds(const PointCloud& sourceIn, const PointCloud& 
   r.bestCandidate = found.candidates[best].gridIndex;
   r.candidateRank = best;
   r.normalisedEnergy = found.candidates[best].energy;
-  measureAlignment(r, rs.cloud.points, rt.cloud.points, params.threads);
+  measureAlignment(r, rs.cloud.points, rt.cloud.points, exec.threads);
   stage("evaluate", t);
   stage("total", tTotal);
   return r;

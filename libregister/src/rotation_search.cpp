@@ -84,6 +84,7 @@ void RotationSearchParams::validate() const {
 
 struct RotationSearch::Impl {
   RotationSearchParams params;
+  Execution exec;
   std::vector<Eigen::Vector3d> source, target;              // shuffled copies (visit order)
   std::vector<Eigen::Vector3d> sourceCoarse, targetCoarse;  // their first coarsePoints
   std::vector<Eigen::Vector3d> sourceShift, targetShift;    // their first translationPoints
@@ -184,7 +185,7 @@ struct RotationSearch::Impl {
     for (std::size_t start = 0, block = std::min(keepCount, kBlock); start < order.size();
          start += block, block = kBlock) {
       const std::size_t count = std::min(block, order.size() - start);
-      parallelEach(count, params.threads, [&](std::size_t j) { e[j] = fn(order[start + j], bound); });
+      parallelEach(count, exec.threads, [&](std::size_t j) { e[j] = fn(order[start + j], bound); });
       if (evaluations) *evaluations += count;
       for (std::size_t j = 0; j < count; ++j)
         if (std::isfinite(e[j])) top.push_back({e[j], order[start + j]});
@@ -198,13 +199,14 @@ struct RotationSearch::Impl {
 };
 
 RotationSearch::RotationSearch(const std::vector<Eigen::Vector3d>& source, const std::vector<Eigen::Vector3d>& target,
-                               const RotationSearchParams& params)
+                               const RotationSearchParams& params, const Execution& exec)
     : impl_(std::make_unique<Impl>()) {
   params.validate();
   if (source.size() < 3 || target.size() < 3)
     throw std::invalid_argument("rotation search needs at least 3 points per cloud");
   Impl& m = *impl_;
   m.params = params;
+  m.exec = exec;
   m.source = shuffled(source, params.seed * 2 + 1);
   m.target = shuffled(target, params.seed * 2 + 2);
   m.sourceCoarse.assign(m.source.begin(), m.source.begin() + std::min(params.coarsePoints, m.source.size()));
@@ -274,9 +276,7 @@ RotationSearchResult RotationSearch::search(const std::vector<Eigen::Matrix3d>& 
   std::vector<std::size_t> all(grid.size());
   for (std::size_t i = 0; i < all.size(); ++i) all[i] = i;
   // Progress: the coarse pass is most of the work (≈ 90 %), the exact pass and the refinement the rest.
-  auto report = [&](double fraction) {
-    if (p.progress) p.progress(fraction);
-  };
+  auto report = [&](double fraction) { m.exec.report("search", fraction); };
   report(0.0);
   const auto coarse = m.bestOf(
       all, p.coarseKeep, [&](std::size_t i, double b) { return m.coarse(grid[i], Offset{}, b); }, nullptr,
@@ -286,7 +286,7 @@ RotationSearchResult RotationSearch::search(const std::vector<Eigen::Matrix3d>& 
   // survivors ordered by that energy so that the exact pass's bound tightens early.
   std::vector<Scored> shifted(coarse.size());
   std::vector<Offset> offsetOf(grid.size());
-  parallelEach(coarse.size(), p.threads, [&](std::size_t j) {
+  parallelEach(coarse.size(), m.exec.threads, [&](std::size_t j) {
     double e = kInf;
     offsetOf[coarse[j].index] = m.bestOffset(grid[coarse[j].index], &e);
     shifted[j] = {e, coarse[j].index};
@@ -331,7 +331,7 @@ RotationSearchResult RotationSearch::search(const std::vector<Eigen::Matrix3d>& 
     int moves = 0;
     for (int level = 0; level < p.refineLevels && moves < 64;) {
       const Eigen::Matrix3d current = c.rotation;
-      parallelEach(steps.size(), p.threads, [&](std::size_t j) {
+      parallelEach(steps.size(), m.exec.threads, [&](std::size_t j) {
         e[j] = m.full(expMap(h * steps[j].normalized()) * current, Offset{c.translation, c.scale}, c.energy);
       });
       result.exactEvaluations += steps.size();

@@ -183,12 +183,13 @@ py::tuple resampleBinding(const py::handle& points, long long n, const py::handl
     colourType = in.is(py::dtype::of<std::uint8_t>()) || in.itemsize() == 4 ? in : py::dtype::of<double>();
   }
   if (!attributes.is_none()) addAttributes(cloud, attributes);
-  ResampleParams params = resampleParams(kwargs);
+  Execution exec;
+  ResampleParams params = resampleParams(kwargs, exec);
   params.targetCount = static_cast<std::size_t>(n);
   ResampleResult result;
   try {
     py::gil_scoped_release release;
-    result = resample(std::move(cloud), params);
+    result = resample(std::move(cloud), params, exec);
   } catch (const InputError& e) {
     rethrowNamed(e, "points");
   }
@@ -203,11 +204,12 @@ py::tuple registerBinding(const py::handle& source, const py::handle& target, co
   PointCloud s, t;
   s.points = toPoints(source, "source");
   t.points = toPoints(target, "target");
-  const reg::RegistrationParams params = registrationParams(kwargs);
+  Execution exec;
+  const reg::RegistrationParams params = registrationParams(kwargs, exec);
   reg::RegistrationResult result;
   {
     py::gil_scoped_release release;
-    result = reg::registerClouds(s, t, params);
+    result = reg::registerClouds(s, t, params, exec);
   }
   py::array_t<double> matrix({4, 4});
   for (int r = 0; r < 4; ++r)
@@ -223,12 +225,13 @@ py::tuple reconstructBinding(const py::handle& points, long long n, const py::ha
     cloud.normals = toPoints(normals, "normals");
     if (cloud.normals.size() != cloud.size()) throw py::value_error("normals: expected one row per point");
   }
-  ReconstructParams params = reconstructParams(kwargs);
+  Execution exec;
+  ReconstructParams params = reconstructParams(kwargs, exec);
   params.targetCount = static_cast<std::size_t>(n);
   ReconstructResult result;
   try {
     py::gil_scoped_release release;
-    result = reconstruct(cloud, params);
+    result = reconstruct(cloud, params, exec);
   } catch (const InputError& e) {
     rethrowNamed(e, "points");
   }
@@ -362,11 +365,12 @@ py::object meshQualityBinding(const py::handle& vertices, const py::handle& face
       throw py::value_error(e.what());
     }
   }
-  const MeshQualityParams params = meshQualityParams(kwargs);
+  Execution exec;
+  const MeshQualityParams params = meshQualityParams(kwargs, exec);
   MeshQuality quality;
   {
     py::gil_scoped_release release;
-    quality = evaluateMesh(mesh, reference.is_none() ? nullptr : &cloud, params);
+    quality = evaluateMesh(mesh, reference.is_none() ? nullptr : &cloud, params, exec);
   }
   return toDict(quality.toJson());
 }

@@ -70,9 +70,15 @@ void checkChoice(const char* name, const std::string& value, std::initializer_li
   throw py::value_error(std::string(name) + " must be one of " + list + " (got '" + value + "')");
 }
 
+/// The threads keyword, into @p exec (0 = all cores).
+void takeThreads(Kwargs& args, Execution& exec) {
+  args.take("threads", exec.threads);
+  if (exec.threads < 0) throw py::value_error("threads must be >= 0 (0 = all cores)");
+}
+
 }  // namespace
 
-ResampleParams resampleParams(const py::dict& kwargs) {
+ResampleParams resampleParams(const py::dict& kwargs, Execution& exec) {
   Kwargs args(kwargs, "resample");
   ResampleParams params;
   std::string mode = "isotropic", outliers = "pull";
@@ -91,7 +97,7 @@ ResampleParams resampleParams(const py::dict& kwargs) {
   args.take("no_intrinsic", noIntrinsic);
   args.take("input_per_sample", params.maxInputPerSample);
   args.take("seed", params.seed);
-  args.take("threads", params.threads);
+  takeThreads(args, exec);
   args.finish();
   if (!(params.edgeRatio > 0)) throw py::value_error("edge_ratio must be positive");
   params.preprocessing.outliers.mode = parseOutlierMode(outliers);
@@ -112,7 +118,7 @@ ResampleParams resampleParams(const py::dict& kwargs) {
   return params;
 }
 
-reg::RegistrationParams registrationParams(const py::dict& kwargs) {
+reg::RegistrationParams registrationParams(const py::dict& kwargs, Execution& exec) {
   Kwargs args(kwargs, "register");
   reg::RegistrationParams params;
   long long samples = static_cast<long long>(params.samples);
@@ -126,7 +132,7 @@ reg::RegistrationParams registrationParams(const py::dict& kwargs) {
   args.take("no_scale", noScale);
   args.take("full_resample", fullResample);
   args.take("seed", params.seed);
-  args.take("threads", params.threads);
+  takeThreads(args, exec);
   args.finish();
   if (samples < 50) throw py::value_error("samples must be at least 50 (got " + std::to_string(samples) + ")");
   if (overlapGiven && !(params.overlap > 0.0 && params.overlap <= 1.0))
@@ -138,7 +144,7 @@ reg::RegistrationParams registrationParams(const py::dict& kwargs) {
   return params;
 }
 
-ReconstructParams reconstructParams(const py::dict& kwargs) {
+ReconstructParams reconstructParams(const py::dict& kwargs, Execution& exec) {
   Kwargs args(kwargs, "reconstruct");
   ReconstructParams params;
   std::string method = "local";
@@ -150,7 +156,7 @@ ReconstructParams reconstructParams(const py::dict& kwargs) {
   args.take("max_hole_edges", params.holes.maxEdges);
   args.take("max_hole_extent", params.holes.maxRefinedExtent);
   args.take("seed", params.seed);
-  args.take("threads", params.threads);
+  takeThreads(args, exec);
   args.finish();
   if (!(params.holes.maxRefinedExtent >= 0 && params.holes.maxRefinedExtent <= 1))
     throw py::value_error("max_hole_extent must be in [0, 1]");
@@ -160,12 +166,12 @@ ReconstructParams reconstructParams(const py::dict& kwargs) {
   return params;
 }
 
-MeshQualityParams meshQualityParams(const py::dict& kwargs) {
+MeshQualityParams meshQualityParams(const py::dict& kwargs, Execution& exec) {
   Kwargs args(kwargs, "mesh_quality");
   MeshQualityParams params;
   std::uint64_t seed = 0;
   args.take("seed", seed);
-  args.take("threads", params.threads);
+  takeThreads(args, exec);
   args.finish();
   params.seed = seed + 1;  // as iires-reconstruct --quality-only
   return params;

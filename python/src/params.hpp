@@ -13,17 +13,18 @@
 namespace iires::python {
 
 /// iires-resample's flags: mode, levels, ratios, sharp_edges, edge_ratio, outliers, no_denoise, no_intrinsic,
-/// input_per_sample, seed, threads (targetCount is set by the caller).
-ResampleParams resampleParams(const pybind11::dict& kwargs);
+/// input_per_sample, seed (targetCount is set by the caller); threads into @p exec.
+ResampleParams resampleParams(const pybind11::dict& kwargs, Execution& exec);
 
-/// iires-register's flags: samples (or m), grid, overlap, no_scale, full_resample, seed, threads.
-reg::RegistrationParams registrationParams(const pybind11::dict& kwargs);
+/// iires-register's flags: samples (or m), grid, overlap, no_scale, full_resample, seed; threads into
+/// @p exec.
+reg::RegistrationParams registrationParams(const pybind11::dict& kwargs, Execution& exec);
 
-/// iires-reconstruct's flags: method, no_resample, no_hole_filling, max_hole_edges, max_hole_extent, seed,
-/// threads (targetCount is set by the caller).
-ReconstructParams reconstructParams(const pybind11::dict& kwargs);
+/// iires-reconstruct's flags: method, no_resample, no_hole_filling, max_hole_edges, max_hole_extent, seed
+/// (targetCount is set by the caller); threads into @p exec.
+ReconstructParams reconstructParams(const pybind11::dict& kwargs, Execution& exec);
 
-/// The quality report's settings: seed, threads.
-MeshQualityParams meshQualityParams(const pybind11::dict& kwargs);
+/// The quality report's settings: seed; threads into @p exec.
+MeshQualityParams meshQualityParams(const pybind11::dict& kwargs, Execution& exec);
 
 }  // namespace iires::python

@@ -19,16 +19,15 @@ int main() {
   }
   iires::ResampleParams params;
   params.targetCount = 200;
-  params.threads = 1;
-  const iires::ResampleResult resampled = iires::resample(sphere, params);
+  const iires::Execution oneThread{1, {}};
+  const iires::ResampleResult resampled = iires::resample(sphere, params, oneThread);
   if (resampled.cloud.size() != 200) {
     std::fprintf(stderr, "resample gave %zu points\n", resampled.cloud.size());
     return 1;
   }
   iires::ReconstructParams rp;
   rp.targetCount = 200;
-  rp.threads = 1;
-  const iires::ReconstructResult mesh = iires::reconstruct(sphere, rp);
+  const iires::ReconstructResult mesh = iires::reconstruct(sphere, rp, oneThread);
   const iires::MeshQuality quality = iires::evaluateMesh(mesh.mesh);
   const double h = iires::reg::hausdorffDistance(resampled.cloud.points, sphere.points);
   std::printf("resampled %zu points (spacing cv %.3f); mesh %zu faces (Q mean %.3f); hausdorff %.4f\n",

@@ -60,7 +60,6 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   params.relaxPerPass = (b & 16) ? 2 : 1;
   params.neighbours = 6 + 2 * (b >> 5);
   params.seed = c >> 3;
-  params.threads = 1;
   const std::size_t fixedCount = c & 7;
   const bool raw = (flags & 1) != 0, normals = (flags & 8) != 0 && !raw;
   const double scale = std::pow(1000.0, static_cast<double>((flags >> 4) & 3)) / 1000.0;
@@ -85,7 +84,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   for (std::size_t i = 0; i < std::min(fixedCount, cloud.size()); ++i)
     if (cloud.points[i].allFinite()) params.fixedSamples.push_back(cloud.points[i]);
   try {
-    const iires::ResampleResult result = iires::resample(cloud, params);
+    const iires::ResampleResult result = iires::resample(cloud, params, iires::Execution{1});
     if (result.cloud.size() != params.targetCount) __builtin_trap();  // exactly N
     if (!result.cloud.hasNormals()) __builtin_trap();
     for (std::size_t i = 0; i < result.cloud.size(); ++i) {

@@ -8,6 +8,7 @@
 #include <functional>
 #include <vector>
 
+#include "iires/execution.hpp"
 #include "iires/types.hpp"
 
 namespace iires {
@@ -19,7 +20,6 @@ struct AttributeParams {
   /// plane at more than this angle (degrees): a facing sheet across a thin gap lies straight along the normal,
   /// neighbours on the same smooth sheet near the plane. 90 = off.
   double maxSlopeDeg = 40.0;
-  int threads = 0;     ///< 0 = all cores; the values do not depend on it
 
   /// @throws std::invalid_argument with a readable message when a field is out of range.
   void validate() const;
@@ -41,6 +41,7 @@ using SameSheet = std::function<bool(const Eigen::Vector3d& target, const Eigen:
 /// @param targetNormals empty, or one unit normal per target
 std::vector<PointAttribute> interpolateAttributes(const PointCloud& source, const std::vector<Eigen::Vector3d>& targets,
                                                   const std::vector<Eigen::Vector3d>& targetNormals = {},
-                                                  const SameSheet& sameSheet = {}, const AttributeParams& params = {});
+                                                  const SameSheet& sameSheet = {}, const AttributeParams& params = {},
+                                                  const Execution& exec = {});
 
 }  // namespace iires

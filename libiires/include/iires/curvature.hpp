@@ -17,6 +17,8 @@
 #include <cstddef>
 #include <vector>
 
+#include "iires/execution.hpp"
+
 namespace iires {
 
 /// @brief Parameters of computeCurvature().
@@ -40,7 +42,6 @@ struct CurvatureParams {
   /// adaptive layout at length l has about as many samples as the isotropic one. The resampler's count
   /// control still scales l to hit N exactly; this only makes its first guess right.
   bool normalize = true;
-  int threads = 0;        ///< 0 = all cores; results do not depend on it
 
   /// @throws std::invalid_argument with a readable message when a field is out of range.
   void validate() const;
@@ -77,7 +78,8 @@ std::vector<double> smoothField(const std::vector<Eigen::Vector3d>& points, std:
 /// @throws std::invalid_argument for bad parameters or normals.size() != points.size().
 /// @note O(n k log n + n log n). Deterministic for any thread count.
 CurvatureResult computeCurvature(const std::vector<Eigen::Vector3d>& points,
-                                 const std::vector<Eigen::Vector3d>& normals, const CurvatureParams& params = {});
+                                 const std::vector<Eigen::Vector3d>& normals, const CurvatureParams& params = {},
+                                 const Execution& exec = {});
 
 /// @brief Quantise a field into levels by equal-count quantiles (the part of computeCurvature() after eq. 8).
 /// @param[out] thresholds (optional) the levels − 1 bounds: thresholds[j] is the value at rank ⌊(j+1)·n/t⌋

@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "iires/execution.hpp"
 #include "iires/knn.hpp"
 #include "iires/types.hpp"
 
@@ -74,7 +75,6 @@ struct DenoiseParams {
   double cleanDisplacement = 0.0;
   bool orientNormals = true;  ///< input without normals: orient the fitted normals (MST over the k-NN graph)
   int orientNeighbours = 8;   ///< k of the k-NN graph the orientation propagates over (≤ neighbours)
-  int threads = 0;            ///< 0 = all cores; the output does not depend on it
 
   /// @throws std::invalid_argument with a readable message when a field is out of range.
   void validate() const;
@@ -113,7 +113,7 @@ std::size_t denoiseNeighbours(const DenoiseParams& params);
 /// borrowed, to save the neighbour search
 /// @note O(n k log n) for the neighbour search plus O(n k) per sweep. Deterministic: every sweep reads the
 /// previous positions only, so the output does not depend on the thread count.
-DenoiseResult denoise(const PointCloud& input, const DenoiseParams& params = {},
+DenoiseResult denoise(const PointCloud& input, const DenoiseParams& params = {}, const Execution& exec = {},
                       const NeighbourTable* table = nullptr);
 
 }  // namespace iires

@@ -25,6 +25,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "iires/execution.hpp"
 #include "iires/types.hpp"
 
 namespace iires {
@@ -55,7 +56,6 @@ struct FeatureParams {
   double sampleSpacing = 0.0;   ///< absolute units: spacing of the chain samples; 0 = do not sample
   double snapSigma = 1.5;       ///< spacings: Gaussian width of the local plane fits of snapToCreases()
   double maxOffCrease = 1.0;    ///< spacings: snapToCreases() adds a corner only this close to an input point
-  int threads = 0;              ///< 0 = all cores; results do not depend on it
 
   /// @throws std::invalid_argument with a readable message when a field is out of range.
   void validate() const;
@@ -90,7 +90,7 @@ struct FeatureResult {
 /// @throws InputError when the cloud has fewer than 8 points; std::invalid_argument for bad parameters.
 /// @note NormalVariation: O(n m log n), m the neighbours in the radius. Vcm: a 3-D Delaunay triangulation
 /// (sequential, CGAL) plus one half-space intersection per point. Deterministic for any thread count.
-FeatureResult detectFeatures(const PointCloud& cloud, const FeatureParams& params = {});
+FeatureResult detectFeatures(const PointCloud& cloud, const FeatureParams& params = {}, const Execution& exec = {});
 
 /// @brief Samples along @p chains at arc-length spacing ≈ @p spacing (each chain split into
 /// max(1, round(L/spacing)) equal pieces, ends included for open chains), each on its crease line; samples
@@ -117,7 +117,7 @@ std::vector<Eigen::Vector3d> sampleFeatureChains(const std::vector<FeatureChain>
 /// thread count.
 std::vector<Eigen::Vector3d> snapToCreases(const PointCloud& cloud, const std::vector<Eigen::Vector3d>& samples,
                                            const std::vector<std::uint32_t>& chainOfSample, double spacing,
-                                           const FeatureParams& params,
+                                           const FeatureParams& params, const Execution& exec = {},
                                            std::vector<std::uint32_t>* chainOut = nullptr);
 
 /// @brief A reference sharp edge (a mesh edge).

@@ -22,6 +22,7 @@
 #include <string>
 #include <vector>
 
+#include "iires/execution.hpp"
 #include "iires/io.hpp"
 #include "iires/knn.hpp"
 #include "iires/types.hpp"
@@ -47,7 +48,6 @@ struct GeodesicParams {
   /// Components with fewer points are attached to a larger one through their shortest k-NN link (isolated
   /// specks from filtering); 0 or 1 = never attach.
   std::size_t minComponentSize = 16;
-  int threads = 0;  ///< 0 = all cores; results do not depend on it
 
   /// @throws std::invalid_argument with a readable message when a field is out of range.
   void validate() const;
@@ -98,7 +98,7 @@ class GeodesicCoordinates {
   /// are serial), else after them. Its exceptions propagate.
   /// @throws InputError when the cloud is empty or has non-finite coordinates; std::invalid_argument for
   /// bad params.
-  explicit GeodesicCoordinates(const PointCloud& cloud, const GeodesicParams& params = {},
+  explicit GeodesicCoordinates(const PointCloud& cloud, const GeodesicParams& params = {}, const Execution& exec = {},
                                const NeighbourTable* table = nullptr, const Alongside& alongside = {});
   ~GeodesicCoordinates();
   GeodesicCoordinates(GeodesicCoordinates&&) noexcept;

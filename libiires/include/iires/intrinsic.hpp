@@ -17,6 +17,7 @@
 #include <memory>
 #include <vector>
 
+#include "iires/execution.hpp"
 #include "iires/geodesic.hpp"
 #include "iires/neighbourhood.hpp"
 
@@ -33,7 +34,6 @@ struct IntrinsicParams {
   /// Euclidean bound: reject pairs farther apart than this many *sample* spacings (estimated from the dense
   /// spacing and the sample count), so the rule is safe on its own against mirror points. 0 = no bound.
   double maxDistanceSpacings = 6.0;
-  int threads = 0;  ///< for update(); 0 = all cores
 
   /// @throws std::invalid_argument with a readable message when a field is out of range.
   void validate() const;
@@ -45,7 +45,9 @@ struct IntrinsicParams {
 class IntrinsicRule final : public NeighbourRule {
  public:
   /// @param geo geodesic coordinates of the dense cloud the samples live on (shared, must not be null)
-  explicit IntrinsicRule(std::shared_ptr<const GeodesicCoordinates> geo, const IntrinsicParams& params = {});
+  /// @param exec the threads of update()
+  explicit IntrinsicRule(std::shared_ptr<const GeodesicCoordinates> geo, const IntrinsicParams& params = {},
+                         const Execution& exec = {});
 
   void update(const std::vector<Eigen::Vector3d>& samples, const std::vector<Eigen::Vector3d>& normals) override;
   /// @brief Whether samples @p i and @p j (of the last update()) may be neighbours.
@@ -70,6 +72,7 @@ class IntrinsicRule final : public NeighbourRule {
 
   std::shared_ptr<const GeodesicCoordinates> geo_;
   IntrinsicParams params_;
+  int threads_ = 0;
   double tolerance_ = 0;
   double maxDistance_ = 0;
   std::size_t dims_ = 0;  // geo_->dimensions(), asked once (accept() runs for every candidate pair)

@@ -8,6 +8,7 @@
 #include <optional>
 #include <vector>
 
+#include "iires/execution.hpp"
 #include "iires/knn.hpp"
 
 namespace iires {
@@ -16,7 +17,6 @@ struct MlsParams {
   int k = 16;           ///< neighbours in each local fit (paper: 8 for the weights' kernel width)
   int degree = 2;       ///< 1 = weighted tangent plane (paper eq. 1–3), 2 = plane + quadric height field
   int iterations = 2;   ///< projection steps per query (each re-centres the fit on the last estimate)
-  int threads = 0;      ///< for the construction (kernel widths); 0 = all cores
   /// Sheet rule (sheets.hpp, acrossGap) in every fit: input points on a near-parallel sheet at least sheetGap
   /// local spacings off the query's get no weight (0 = off: the normals' sign test only).
   double sheetGap = 1.25;
@@ -46,7 +46,7 @@ class MlsSurface {
   /// @param nearSheets (optional) per point, 1 where the sheet rule found another sheet near (separateSheets):
   /// the sheet gate (MlsParams::sheetGap) applies only there; without it, everywhere
   MlsSurface(const std::vector<Eigen::Vector3d>& points, const std::vector<Eigen::Vector3d>& normals,
-             const MlsParams& params = {}, const KnnIndex* index = nullptr,
+             const MlsParams& params = {}, const Execution& exec = {}, const KnnIndex* index = nullptr,
              const NeighbourTable* table = nullptr, std::vector<std::uint8_t> nearSheets = {});
   ~MlsSurface();
 

@@ -8,11 +8,12 @@
 #include <cstdint>
 #include <vector>
 
+#include "iires/execution.hpp"
+
 namespace iires {
 
 struct NormalParams {
   int k = 12;        ///< neighbours for the PCA fit (Open3D/PCL habit: 10–30)
-  int threads = 0;   ///< 0 = all cores
   bool orient = true;  ///< propagate a consistent orientation over a minimum spanning tree
 };
 
@@ -21,7 +22,7 @@ struct NormalParams {
 /// largest x in each component, whose normal is made to point to +x — outwards for a closed surface).
 /// @note O(n k log n). Deterministic for any thread count.
 std::vector<Eigen::Vector3d> estimateNormals(const std::vector<Eigen::Vector3d>& points,
-                                             const NormalParams& params = {});
+                                             const NormalParams& params = {}, const Execution& exec = {});
 
 /// @brief Orient given (unoriented) normals consistently, as estimateNormals does.
 void orientNormals(const std::vector<Eigen::Vector3d>& points, std::vector<Eigen::Vector3d>& normals,

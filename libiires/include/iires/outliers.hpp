@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "iires/execution.hpp"
 #include "iires/knn.hpp"
 #include "iires/types.hpp"
 
@@ -43,7 +44,6 @@ struct OutlierParams {
   /// (armadillo, 100k points, noise 0.66·l, 2 % outliers at 3–6·l: recall 0.918 → 0.963, false positives
   /// 0 → 0.1 %). Infinity switches the test off.
   double nearPlaneThreshold = 1.5;
-  int threads = 0;  ///< 0 = all cores; the output does not depend on it
 
   /// @throws std::invalid_argument with a readable message when a field is out of range.
   void validate() const;
@@ -90,11 +90,12 @@ std::size_t outlierNeighbours(const OutlierParams& params);
 /// @param table (optional) neighbour lists of exactly input.points with k ≥ outlierNeighbours(params),
 /// borrowed, to save the k-NN search
 /// @note O(n k log n). Deterministic for any thread count.
-OutlierResult processOutliers(const PointCloud& input, const OutlierParams& params = {},
+OutlierResult processOutliers(const PointCloud& input, const OutlierParams& params = {}, const Execution& exec = {},
                               const NeighbourTable* table = nullptr);
 
 /// @brief @p cloud with its outliers pulled back or removed as params.mode says: the cloud itself for kKeep or
 /// when it has too few points for the test (outlierNeighbours()). @p found, when given, adds the outliers found.
-PointCloud cleanOutliers(const PointCloud& cloud, const OutlierParams& params, std::size_t* found = nullptr);
+PointCloud cleanOutliers(const PointCloud& cloud, const OutlierParams& params, const Execution& exec = {},
+                        std::size_t* found = nullptr);
 
 }  // namespace iires

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "iires/denoise.hpp"
+#include "iires/execution.hpp"
 #include "iires/outliers.hpp"
 #include "iires/sheets.hpp"
 #include "iires/types.hpp"
@@ -26,7 +27,6 @@ struct PreprocessParams {
   /// estimated and oriented over the same-sheet graph first. false = straight-line neighbourhoods.
   bool sheets = true;
   SheetParams sheet;       ///< tolerances of the sheet rule
-  int threads = 0;         ///< overrides outliers.threads and denoise.threads when > 0
 
   /// @throws std::invalid_argument with a readable message when a field is out of range.
   void validate() const;
@@ -60,7 +60,7 @@ std::size_t preprocessNeighbours(const PreprocessParams& params);
 /// borrowed, already filtered by the sheet rule when params.sheets (and then input has its normals);
 /// without it preprocess() finds them itself (once for both stages) and applies the rule
 /// @note O(n k log n). Deterministic for any thread count.
-PreprocessResult preprocess(const PointCloud& input, const PreprocessParams& params = {},
+PreprocessResult preprocess(const PointCloud& input, const PreprocessParams& params = {}, const Execution& exec = {},
                             const NeighbourTable* table = nullptr);
 
 }  // namespace iires

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "iires/curvature.hpp"
+#include "iires/execution.hpp"
 #include "iires/features.hpp"
 #include "iires/geodesic.hpp"
 #include "iires/intrinsic.hpp"
@@ -59,7 +60,6 @@ struct ResampleParams {
   MlsParams mls;                    ///< the surface every sample is projected onto
   NormalParams normals;             ///< used when the input has no normals
   std::uint64_t seed = 0;           ///< the initial candidates' voxel grid offset and elimination ties; same seed → same output
-  int threads = 0;                  ///< 0 = all cores; the output does not depend on it
   /// Intrinsic control (paper §3.2): neighbours must also be consistent in geodesic coordinates and lie on
   /// the same component, so samples never link across a thin gap or between objects. false = Euclidean.
   bool intrinsic = true;
@@ -71,10 +71,9 @@ struct ResampleParams {
   bool ringEdges = false;
   /// Samples that are kept exactly as given (never moved or removed) and count towards N (DESIGN §9).
   std::vector<Eigen::Vector3d> fixedSamples;
-  /// Optional progress report: called with a stage name ("validate", "preprocess", "normals", "surface",
-  /// "geodesic", "initialise", "resample") and the fraction of that stage done, in [0, 1]; from the calling
-  /// thread only. Empty = no reports. Does not affect the output.
-  std::function<void(const std::string& stage, double fraction)> progress;
+  /// Samples of finished neighbouring regions (a tile's neighbours, DESIGN §9): held like fixedSamples, so the
+  /// free samples keep their spacing to them, but not counted in N and not part of the output.
+  std::vector<Eigen::Vector3d> contextSamples;
 
   /// @throws std::invalid_argument with a readable message when a field is out of range.
   void validate() const;
@@ -136,6 +135,8 @@ struct ResampleResult {
 /// @note Deterministic: same input, params and seed give the same output for any thread count.
 /// Cost O(n log n) on the input plus O(N k) per pass. Taken by value: pass an rvalue (std::move) when the
 /// caller no longer needs the cloud, and the pipeline works in its memory instead of a copy.
-ResampleResult resample(PointCloud input, const ResampleParams& params);
+/// @param exec threads and progress reports (stages "validate", "preprocess", "normals", "surface", "geodesic",
+/// "initialise", "resample", ...); the output does not depend on it
+ResampleResult resample(PointCloud input, const ResampleParams& params, const Execution& exec = {});
 
 }  // namespace iires

@@ -20,6 +20,7 @@
 #include <string>
 #include <vector>
 
+#include "iires/execution.hpp"
 #include "iires/knn.hpp"
 
 namespace iires {
@@ -44,7 +45,6 @@ struct SheetParams {
   /// Estimated normals (no normals given) are oriented over the same-sheet graph; false leaves them unoriented
   /// and as the sheet fits gave them, for a caller that only needs the filtered rows (and fits its own normals).
   bool orient = true;
-  int threads = 0;               ///< 0 = all cores; the result does not depend on it
 
   /// @throws std::invalid_argument with a readable message when a field is out of range.
   void validate() const;
@@ -71,10 +71,11 @@ struct SheetReport {
 /// oriented by a minimum spanning tree over the same-sheet graph) unless @p givenNormals holds one normal per
 /// point (then a copy)
 /// @param near (optional) out: per point, 1 where a neighbour was found on another sheet
+/// @param exec threads (the result does not depend on them)
 /// @note O(n k). Deterministic for any thread count.
 SheetReport separateSheets(const std::vector<Eigen::Vector3d>& points, NeighbourTable& table,
                            std::vector<Eigen::Vector3d>& normals, const SheetParams& params = {},
-                           const std::vector<Eigen::Vector3d>* givenNormals = nullptr,
+                           const Execution& exec = {}, const std::vector<Eigen::Vector3d>* givenNormals = nullptr,
                            std::vector<std::uint8_t>* near = nullptr);
 
 /// @brief The distance-dependent part of the sheet tolerance for a pair @p d apart with unit normals @p np,

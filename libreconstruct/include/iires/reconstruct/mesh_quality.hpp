@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "iires/execution.hpp"
 #include "iires/types.hpp"
 
 namespace iires {
@@ -40,7 +41,6 @@ struct MeshQualityParams {
   std::size_t meshSamples = 100000;  ///< points drawn on the mesh for the mesh→reference side (plus its vertices)
   std::size_t referenceSamples = 100000;  ///< points drawn on a reference *mesh* for the reference→mesh side
   std::uint64_t seed = 1;            ///< seed of those samplings
-  int threads = 0;                   ///< 0 = all cores; the report does not depend on it
 
   /// @throws std::invalid_argument when meshSamples or referenceSamples is 0.
   void validate() const;
@@ -116,7 +116,7 @@ struct MeshQuality {
 /// point), and the reference points farther than two output spacings from the mesh (uncovered).
 /// @note O(F log F + (n + s) log F). Deterministic for any thread count.
 MeshQuality evaluateMesh(const TriangleMesh& mesh, const PointCloud* reference = nullptr,
-                         const MeshQualityParams& params = {});
+                         const MeshQualityParams& params = {}, const Execution& exec = {});
 
 /// @brief The points of @p reference that @p quality found uncovered (MeshQuality::uncoveredPoints), with their
 /// normals when it has them, in index order. @p reference must be the cloud evaluateMesh() measured.
@@ -126,6 +126,6 @@ PointCloud uncoveredInput(const PointCloud& reference, const MeshQuality& qualit
 /// sampled from): both sides from area-uniform samples (plus vertices) measured exactly against the other mesh.
 /// The diagonal is the reference's.
 SurfaceDistance surfaceDistance(const TriangleMesh& mesh, const TriangleMesh& referenceMesh,
-                                const MeshQualityParams& params = {});
+                                const MeshQualityParams& params = {}, const Execution& exec = {});
 
 }  // namespace iires

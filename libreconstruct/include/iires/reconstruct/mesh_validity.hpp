@@ -8,6 +8,7 @@
 #include <cstddef>
 #include <vector>
 
+#include "iires/execution.hpp"
 #include "iires/reconstruct/mesh_repair.hpp"
 #include "iires/types.hpp"
 
@@ -21,7 +22,6 @@ struct ValidityParams {
   bool refill = true;                   ///< fill the holes the removal opens (false: leave them open)
   HoleFillingParams holes;              ///< how they are filled (fillSmallHoles, then fillLargeHoles)
   std::size_t minComponentFaces = 20;   ///< components this small left by a removal are dropped (0 = keep)
-  int threads = 0;                      ///< 0 = all cores; the result does not depend on it
 
   /// @throws std::invalid_argument when a field is out of range.
   void validate() const;
@@ -50,6 +50,6 @@ struct ValidityReport {
 /// @post no self-intersecting pair, no non-manifold edge or vertex (removing faces cannot create either).
 /// @note Deterministic for any thread count. Nothing is changed for a valid mesh (one check, O(F log F)).
 ValidityReport repairValidity(TriangleMesh& mesh, std::vector<Eigen::Vector3d>& normals,
-                              const ValidityParams& params = {});
+                              const ValidityParams& params = {}, const Execution& exec = {});
 
 }  // namespace iires

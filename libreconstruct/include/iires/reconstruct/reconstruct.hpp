@@ -35,10 +35,9 @@ ReconstructMethod parseReconstructMethod(const std::string& name);
 
 /// @brief The resampler settings reconstruct() starts from: ResampleParams{} with more clean-up passes, a
 /// longer final Lloyd relaxation (maxPasses 8 instead of 5, maxRelaxIterations 48 instead of 8; it still stops
-/// once the spacing CV stops improving) and the MLS surface of up to 16·N input points instead of 6·N (with 6·N,
-/// armadillo 10k kept a 22-edge hole and hand 10k's Hausdorff rose to 0.98 %). Triangle shape
-/// follows the spacing's regularity: on a 100k sampling of fandisk at N = 10k, Q_avg 0.899 → 0.905 (the mean
-/// is set by the bulk, not the creases); see BENCHMARKS.md (issue 7) for the cost.
+/// once the spacing CV stops improving) and the MLS surface of up to 16·N input points instead of 6·N (a finer
+/// surface keeps thin parts and small holes). Triangle shape follows the spacing's regularity, so a mesh pays for
+/// the longer relaxation.
 ResampleParams meshResampling();
 
 /// @brief Parameters of reconstruct().
@@ -46,10 +45,10 @@ struct ReconstructParams {
   std::size_t targetCount = 10000;  ///< N, the vertex count of the mesh when resampling (≥ 4)
   bool resample = true;             ///< resample isotropically to N first; false = triangulate the input points
   ReconstructMethod method = ReconstructMethod::kLocal;  ///< triangulation method
-  ResampleParams resampling = meshResampling();  ///< resampler settings (targetCount, seed, threads, rule are
-                                                 ///< set from here)
-  TriangulateParams local;          ///< local method settings (threads are set from here; its neighbourRule, when
-                                    ///< set, is kept, e.g. EuclideanRule for Euclidean 1-rings after resampling)
+  ResampleParams resampling = meshResampling();  ///< resampler settings (targetCount, seed, rule are set from
+                                                 ///< here)
+  TriangulateParams local;          ///< local method settings (its neighbourRule, when set, is kept, e.g.
+                                    ///< EuclideanRule for Euclidean 1-rings after resampling)
   AdvancingFrontParams advancingFront;  ///< advancing-front settings
   std::size_t minComponentFaces = 20;  ///< components with fewer faces are removed before hole filling (0 = keep)
   bool fillHoles = true;            ///< close small holes (loops short in edges and perimeter)
@@ -64,19 +63,13 @@ struct ReconstructParams {
   /// Make the mesh valid after the repairs above (repairValidity): no self-intersection, no non-manifold edge or
   /// vertex; intersecting faces are removed with a neighbourhood and the hole is filled again (when fillHoles)
   bool repairValidity = true;
-  ValidityParams validity;          ///< its settings (holes, minComponentFaces and threads are set from here)
+  ValidityParams validity;          ///< its settings (holes and minComponentFaces are set from here)
   bool evaluate = true;             ///< compute the quality report (distance to the validated input cloud)
-  MeshQualityParams quality;        ///< report settings (threads and seed are set from here)
+  MeshQualityParams quality;        ///< report settings (its seed is set from here)
   /// Neighbour rule for resampling and the 1-rings. nullptr = the resampler's default (intrinsic unless
   /// resampling.intrinsic is false), whose rule the 1-rings then use too; Euclidean 1-rings without resampling.
   std::shared_ptr<NeighbourRule> neighbourRule;
   std::uint64_t seed = 0;  ///< seed of the resampling and the report's mesh sampling; same seed → same mesh
-  int threads = 0;         ///< 0 = all cores; the mesh does not depend on it
-  /// Optional progress report: called with a stage name and the fraction of that stage done, in [0, 1], from
-  /// the calling thread only — the resampler's stages (see ResampleParams::progress, used when
-  /// resampling.progress is empty), then "normals" (no resampling), "triangulate", "holes", "validity", "orient",
-  /// "quality". Empty = no reports. Does not affect the output.
-  std::function<void(const std::string& stage, double fraction)> progress;
 
   /// @throws std::invalid_argument with a readable message when a field is out of range.
   void validate() const;
@@ -114,6 +107,8 @@ struct ReconstructResult {
 /// @throws InputError for an unusable cloud (empty, NaN, fewer than 4 distinct points, collinear);
 /// std::invalid_argument for bad parameters.
 /// @note Deterministic: same input, params and seed give the same mesh for any thread count.
-ReconstructResult reconstruct(const PointCloud& input, const ReconstructParams& params = {});
+/// @param exec threads and progress reports: the resampler's stages (see resample()), then "normals" (no
+/// resampling), "triangulate", "holes", "validity", "orient", "quality"
+ReconstructResult reconstruct(const PointCloud& input, const ReconstructParams& params = {}, const Execution& exec = {});
 
 }  // namespace iires

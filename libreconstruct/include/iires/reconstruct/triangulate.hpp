@@ -7,6 +7,7 @@
 #include <cstddef>
 #include <memory>
 
+#include "iires/execution.hpp"
 #include "iires/neighbourhood.hpp"
 #include "iires/types.hpp"
 
@@ -28,7 +29,6 @@ struct TriangulateParams {
   int maxFlipSweeps = 10;        ///< cap on the flip sweeps
   /// Neighbour rule for the 1-rings (nullptr = Euclidean); an intrinsic rule keeps rings off thin gaps.
   std::shared_ptr<NeighbourRule> neighbourRule;
-  int threads = 0;  ///< 0 = all cores; the output does not depend on it
 
   /// @throws std::invalid_argument with a readable message when a field is out of range.
   void validate() const;
@@ -59,6 +59,7 @@ struct TriangulateResult {
 /// @throws InputError when the cloud has fewer than 3 points, no normals, or non-finite values;
 /// std::invalid_argument for bad parameters.
 /// @note Deterministic for any thread count; O(n k log n).
-TriangulateResult triangulateLocal(const PointCloud& cloud, const TriangulateParams& params = {});
+TriangulateResult triangulateLocal(const PointCloud& cloud, const TriangulateParams& params = {},
+                                   const Execution& exec = {});
 
 }  // namespace iires

@@ -8,6 +8,7 @@
 #include <cstddef>
 #include <vector>
 
+#include "iires/execution.hpp"
 #include "iires/knn.hpp"
 
 namespace iires::reg {
@@ -28,7 +29,6 @@ struct IcpParams {
                                ///< trimmed to overlap): a part missing from either cloud cannot pull the fit
   double tolerance = 1e-6;     ///< stop when the update's rotation angle (rad) and relative translation and
                                ///< scale change all fall below this (> 0)
-  int threads = 0;             ///< 0 = all cores; the result does not depend on it
 
   /// @throws std::invalid_argument when a field is out of range.
   void validate() const;
@@ -69,7 +69,8 @@ FractionalFit fractionalRmsd(const std::vector<double>& sortedD2, double minOver
 /// @throws std::invalid_argument for bad parameters or fewer than 3 source points.
 /// @note Deterministic for any thread count (queries per point, then a serial solve).
 IcpResult similarityIcp(const std::vector<Eigen::Vector3d>& source, const std::vector<Eigen::Vector3d>& target,
-                        const KnnIndex& targetIndex, const Eigen::Matrix4d& init, const IcpParams& params);
+                        const KnnIndex& targetIndex, const Eigen::Matrix4d& init, const IcpParams& params,
+                        const Execution& exec = {});
 
 /// @brief Closed-form similarity (or rigid) transform minimising Σ‖s·R·aᵢ + t − bᵢ‖² (Umeyama 1991).
 /// @throws std::invalid_argument when the sizes differ or fewer than 3 pairs are given.

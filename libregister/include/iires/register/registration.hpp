@@ -48,9 +48,9 @@ struct RegistrationParams {
   double ambiguityTolerance = 0.05;  ///< another ICP result within this relative score of the best but
                                      ///< ≥ 10° away marks the result ambiguous (symmetric shape)
   double planarityThreshold = 1e-3;  ///< smallest/largest covariance eigenvalue below this → planar flag
-  RotationSearchParams search;  ///< coarse/fine search settings (overlap, seed, threads are set from here)
-  IcpParams icp;               ///< ICP settings (overlap, estimateScale, threads are set from here)
-  ResampleParams resample = defaultResample();  ///< resampler settings (targetCount, seed, threads set here)
+  RotationSearchParams search;  ///< coarse/fine search settings (overlap and seed are set from here)
+  IcpParams icp;               ///< ICP settings (overlap and estimateScale are set from here)
+  ResampleParams resample = defaultResample();  ///< resampler settings (targetCount and seed are set from here)
   /// A cloud with more than this × M points is first cut to a seeded random subset of that many (cheap; the
   /// resampler then evens out the density). 0 = never. [4: the surface stays sampled twice as finely as M]
   std::size_t maxInputPerSample = 4;
@@ -58,12 +58,7 @@ struct RegistrationParams {
   /// (default), removed, or kept. Points far from the object would otherwise move the centroid and the RMS
   /// radius of the normalisation; they are removed in every mode but keep.
   OutlierParams outliers;
-  /// Optional progress report, called from the calling thread with a stage name ("resample source",
-  /// "resample target", "search", "icp") and the fraction of that stage done, in [0, 1]. Empty = none.
-  /// Does not affect the result.
-  std::function<void(const std::string& stage, double fraction)> progress;
   std::uint64_t seed = 0;      ///< resampling tie-breaks and the search's visiting order
-  int threads = 0;             ///< 0 = all cores; the result does not depend on it
 
   /// @brief Resampler settings tuned for registration: the resampler's density initialisation only (weighted
   /// sample elimination to M: blue-noise, density-independent), without pre-processing, intrinsic control,
@@ -129,8 +124,9 @@ struct RegistrationResult {
 /// @throws InputError when a cloud is unusable: empty, NaN/Inf, fewer than 10 distinct points, collinear
 /// (messages start with "source: " or "target: "); std::invalid_argument for bad parameters.
 /// @note Deterministic: same inputs and parameters give the same result for any thread count.
+/// @param exec threads and progress reports (stages "resample source", "resample target", "search", "icp")
 RegistrationResult registerClouds(const PointCloud& source, const PointCloud& target,
-                                  const RegistrationParams& params = {});
+                                  const RegistrationParams& params = {}, const Execution& exec = {});
 
 /// @brief Apply a 4×4 similarity to a cloud (normals are rotated and stay unit).
 PointCloud transformCloud(const PointCloud& cloud, const Eigen::Matrix4d& T);

@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "iires/execution.hpp"
 #include "iires/knn.hpp"
 
 namespace iires::reg {
@@ -48,10 +49,6 @@ struct RotationSearchParams {
   double translationStep = 0.4;     ///< lattice step of the translation search (> 0)
   int translationRefineLevels = 2;  ///< step halvings of the local translation refinement (≥ 0)
   std::uint64_t seed = 0;         ///< order in which points are visited (early exits come early in random order)
-  int threads = 0;                ///< 0 = all cores; the result does not depend on it
-  /// Optional: called from the calling thread with the fraction of the search done, in [0, 1] (the coarse
-  /// pass over the grid is most of it). Does not affect the result.
-  std::function<void(double fraction)> progress;
 
   /// @throws std::invalid_argument when a field is out of range.
   void validate() const;
@@ -84,8 +81,10 @@ class RotationSearch {
   /// @param source normalised source S (centroid at the origin, unit RMS radius), ≥ 3 points
   /// @param target normalised target T, ≥ 3 points
   /// @throws std::invalid_argument for bad parameters or too few points.
+  /// @param exec threads, and progress reports of search() as stage "search" (the coarse pass over the grid is
+  /// most of it)
   RotationSearch(const std::vector<Eigen::Vector3d>& source, const std::vector<Eigen::Vector3d>& target,
-                 const RotationSearchParams& params = {});
+                 const RotationSearchParams& params = {}, const Execution& exec = {});
   ~RotationSearch();
   RotationSearch(const RotationSearch&) = delete;
   RotationSearch& operator=(const RotationSearch&) = delete;

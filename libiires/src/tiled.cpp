@@ -1,0 +1,388 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#include "iires/tiled.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <numeric>
+#include <stdexcept>
+
+#include <Eigen/Geometry>
+
+#include "iires/detail/json.hpp"
+#include "iires/detail/parallel.hpp"
+#include "iires/detail/stage_clock.hpp"
+#include "iires/detail/tile_grid.hpp"
+#include "iires/detail/tile_spill.hpp"
+#include "iires/knn.hpp"
+#include "iires/metrics.hpp"
+#include "iires/point_stream.hpp"
+
+namespace iires {
+namespace {
+
+using detail::TileGrid;
+using detail::TileSpill;
+using Clock = std::chrono::steady_clock;
+
+constexpr std::size_t kMaxTiles = 4096;
+constexpr int kAreaNeighbours = 8;
+constexpr int kContextRelaxFactor = 3;  // the k-th neighbour's distance gives a sample point's share of the area
+
+std::uint64_t splitMix(std::uint64_t& state) {
+  std::uint64_t z = (state += 0x9e3779b97f4a7c15ull);
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+  return z ^ (z >> 31);
+}
+
+/// What the first pass learns: bounds, the point count and a uniform sample (reservoir sampling, seeded) with
+/// each sample point's share of the surface area.
+struct Survey {
+  Eigen::AlignedBox3d bounds;
+  std::size_t points = 0;
+  bool normals = false;
+  std::vector<Eigen::Vector3d> sample;
+  std::vector<double> area;
+  double totalArea = 0;
+};
+
+Survey survey(PointStream& stream, const ResampleParams& params, const TileParams& tp) {
+  Survey s;
+  s.normals = stream.hasNormals();
+  std::uint64_t state = params.seed;
+  PointCloud chunk;
+  while (stream.next(chunk, tp.chunkPoints)) {
+    for (const Eigen::Vector3d& p : chunk.points) {
+      s.bounds.extend(p);
+      if (s.sample.size() < tp.surveyPoints) {
+        s.sample.push_back(p);
+      } else if (const std::uint64_t j = splitMix(state) % (s.points + 1); j < tp.surveyPoints) {
+        s.sample[j] = p;
+      }
+      ++s.points;
+    }
+  }
+  if (s.points == 0) throw InputError("the input holds no points");
+  return s;
+}
+
+/// Each sample point's share of the surface: for points spread uniformly on a surface, π r_k² / k with r_k the
+/// distance to the k-th nearest neighbour estimates the area per point (unbiased for a Poisson sample).
+void surveyAreas(Survey& s, int threads) {
+  s.area.assign(s.sample.size(), 0.0);
+  if (s.sample.size() <= static_cast<std::size_t>(kAreaNeighbours)) {
+    const double d = s.bounds.diagonal().norm();
+    s.area.assign(s.sample.size(), d * d / static_cast<double>(std::max<std::size_t>(s.sample.size(), 1)));
+  } else {
+    const KnnIndex index(s.sample);
+    parallelFor(s.sample.size(), threads, [&](std::size_t i) {
+      thread_local std::vector<std::uint32_t> idx;
+      thread_local std::vector<double> d2;
+      index.knn(s.sample[i], kAreaNeighbours + 1, idx, d2);
+      s.area[i] = M_PI * d2.back() / kAreaNeighbours;
+    });
+  }
+  s.totalArea = std::accumulate(s.area.begin(), s.area.end(), 0.0);
+}
+
+/// Shares of @p n proportional to @p weights, summing to @p n exactly: floors, then one more to the largest
+/// remainders (ties to the lower index).
+std::vector<std::size_t> apportion(const std::vector<double>& weights, std::size_t n) {
+  const double total = std::accumulate(weights.begin(), weights.end(), 0.0);
+  std::vector<std::size_t> share(weights.size(), 0);
+  std::vector<std::pair<double, std::size_t>> remainder;
+  std::size_t given = 0;
+  for (std::size_t t = 0; t < weights.size(); ++t) {
+    const double q = total > 0 ? static_cast<double>(n) * weights[t] / total : 0.0;
+    share[t] = static_cast<std::size_t>(std::floor(q));
+    given += share[t];
+    remainder.emplace_back(-(q - std::floor(q)), t);
+  }
+  std::sort(remainder.begin(), remainder.end());
+  for (std::size_t r = 0; given < n; r = (r + 1) % remainder.size(), ++given) ++share[remainder[r].second];
+  return share;
+}
+
+/// The grid with tiles of edge @p size over the survey's bounds.
+TileGrid makeGrid(const Survey& s, double size, double margin) {
+  TileGrid g;
+  g.origin = s.bounds.min();
+  g.size = size;
+  g.margin = margin;
+  for (int a = 0; a < 3; ++a)
+    g.dims[a] = std::max(1, static_cast<int>(std::ceil(s.bounds.sizes()[a] / size)));
+  if (g.count() > kMaxTiles)
+    throw std::invalid_argument("a tile size of " + std::to_string(size) + " makes " + std::to_string(g.count()) +
+                                " tiles; at most " + std::to_string(kMaxTiles));
+  return g;
+}
+
+/// The largest number of input points one tile's region holds, estimated from the survey sample.
+double largestRegion(const Survey& s, const TileGrid& g) {
+  std::vector<std::size_t> count(g.count(), 0);
+  for (const Eigen::Vector3d& p : s.sample) g.forEachRegion(p, [&](std::size_t t) { ++count[t]; });
+  return static_cast<double>(*std::max_element(count.begin(), count.end())) * static_cast<double>(s.points) /
+         static_cast<double>(s.sample.size());
+}
+
+/// The tile grid: the given tile size, or the largest tiles whose regions fit @p capacity points. Tiles are
+/// never smaller than two margins (a region then meets only adjacent tiles).
+TileGrid chooseGrid(const Survey& s, const TileParams& tp, double margin, std::size_t capacity) {
+  const double minSize = std::max(2.0 * margin, 1e-12 * s.bounds.diagonal().norm());
+  if (tp.tileSize > 0) return makeGrid(s, std::max(tp.tileSize, minSize), margin);
+  double size = std::max(s.bounds.sizes().maxCoeff() * (1 + 1e-9), minSize);
+  for (;;) {
+    const TileGrid g = makeGrid(s, size, margin);
+    if (largestRegion(s, g) <= 0.9 * static_cast<double>(capacity) || size <= minSize) return g;
+    const double next = std::max(size * 0.8, minSize);
+    if (makeGrid(s, next, margin).count() > kMaxTiles) return g;
+    size = next;
+  }
+}
+
+/// Pass 2: every point into the spill file of each tile whose region holds it.
+void spill(PointStream& stream, const TileGrid& g, TileSpill& files, std::size_t chunkPoints) {
+  stream.rewind();
+  PointCloud chunk;
+  while (stream.next(chunk, chunkPoints))
+    for (std::size_t i = 0; i < chunk.size(); ++i)
+      g.forEachRegion(chunk.points[i], [&](std::size_t t) { files.add(t, chunk, i); });
+  files.flush();
+}
+
+/// The state of a tiled run: which tiles are finished, their samples, and the quotas still to meet.
+struct TileRun {
+  const ResampleParams& params;
+  int threads;
+  const TileGrid& grid;
+  const Survey& survey;
+  const TileSpill& files;
+  std::size_t capacity;
+  double contextReach;  // context samples come from the region grown by this much: a free sample at the
+                        // region's edge still sees the finished samples just beyond it
+  std::vector<std::vector<std::size_t>> regionSample;  // per tile: the survey sample points in its region
+  std::vector<std::size_t> sampleTile;                  // per survey sample point: its tile
+  std::vector<char> finished;
+  std::vector<PointCloud> samples;
+  std::vector<TileReport> reports;
+
+  /// Resamples tile @p t and hands its deviation from its quota to its largest unfinished neighbour.
+  void process(std::size_t t);
+
+ private:
+  std::vector<Eigen::Vector3d> context(std::size_t t) const;
+  std::size_t unfinishedMargin(std::size_t t) const;
+  PointCloud keepOwn(std::size_t t, PointCloud out) const;
+};
+
+std::vector<Eigen::Vector3d> TileRun::context(std::size_t t) const {
+  TileGrid reach = grid;
+  reach.margin += contextReach;
+  std::vector<Eigen::Vector3d> held;
+  grid.forEachNeighbour(t, [&](std::size_t u) {
+    if (!finished[u]) return;
+    for (const Eigen::Vector3d& p : samples[u].points)
+      if (reach.inRegion(t, p)) held.push_back(p);
+  });
+  return held;
+}
+
+/// Samples the part of @p t's margin in unfinished tiles will take (they are resampled and dropped: the core's
+/// samples near the seam then see the surface go on).
+std::size_t TileRun::unfinishedMargin(std::size_t t) const {
+  double area = 0;
+  for (std::size_t i : regionSample[t])
+    if (const std::size_t u = sampleTile[i]; u != t && !finished[u]) area += survey.area[i];
+  return static_cast<std::size_t>(
+      std::llround(area / survey.totalArea * static_cast<double>(params.targetCount)));
+}
+
+/// The samples of @p out not in an unfinished tile's core (those are that tile's to place).
+PointCloud TileRun::keepOwn(std::size_t t, PointCloud out) const {
+  PointCloud own;
+  for (std::size_t i = 0; i < out.size(); ++i) {
+    const std::size_t u = grid.tileOf(out.points[i]);
+    if (u != t && !finished[u]) continue;
+    own.points.push_back(out.points[i]);
+    own.normals.push_back(out.normals[i]);
+  }
+  return own;
+}
+
+void TileRun::process(std::size_t t) {
+  const auto start = Clock::now();
+  TileReport& report = reports[t];
+  const long long quota = report.quota;
+  if (quota > 0 && files.count(t) >= 4) {
+    ResampleParams p = params;
+    p.contextSamples = context(t);
+    p.targetCount = static_cast<std::size_t>(quota) + unfinishedMargin(t);
+    if (!p.contextSamples.empty()) {  // free samples settle against held ones more slowly: relax them longer
+      p.maxRelaxIterations *= kContextRelaxFactor;
+      p.relaxPatience = std::max(p.relaxPatience, kContextRelaxFactor);
+    }
+    report.context = p.contextSamples.size();
+    report.requested = p.targetCount;
+    PointCloud points = files.read(t, capacity, params.seed);
+    report.loadedPoints = points.size();
+    try {
+      samples[t] = keepOwn(t, resample(std::move(points), p, Execution{threads, {}}).cloud);
+    } catch (const InputError&) {
+      samples[t] = {};  // too few or degenerate points for a surface: the quota passes on
+    }
+  }
+  finished[t] = 1;
+  report.produced = samples[t].size();
+  report.seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  const long long rest = quota - static_cast<long long>(report.produced);
+  if (rest == 0) return;
+  std::size_t heir = grid.count();
+  grid.forEachNeighbour(t, [&](std::size_t u) {
+    if (!finished[u] && reports[u].share > 0 && (heir == grid.count() || reports[u].share > reports[heir].share))
+      heir = u;
+  });
+  if (heir == grid.count())
+    throw std::runtime_error("tiled resampling: tile " + std::to_string(t) + " produced " +
+                             std::to_string(report.produced) + " samples for a quota of " + std::to_string(quota) +
+                             " and has no unfinished neighbour to take the difference");
+  reports[heir].quota += rest;
+}
+
+/// The run's tiles in order: reports, and the survey sample assigned to tiles and regions.
+TileRun prepareRun(const ResampleParams& params, int threads, const TileGrid& grid, const Survey& s,
+                   const TileSpill& files, std::size_t capacity, double contextReach) {
+  TileRun run{params, threads, grid, s, files, capacity, contextReach,
+              std::vector<std::vector<std::size_t>>(grid.count()), {}, {}, {}, {}};
+  run.sampleTile.resize(s.sample.size());
+  std::vector<double> area(grid.count(), 0.0);
+  for (std::size_t i = 0; i < s.sample.size(); ++i) {
+    run.sampleTile[i] = grid.tileOf(s.sample[i]);
+    area[run.sampleTile[i]] += s.area[i];
+    grid.forEachRegion(s.sample[i], [&](std::size_t t) { run.regionSample[t].push_back(i); });
+  }
+  const std::vector<std::size_t> share = apportion(area, params.targetCount);
+  run.finished.assign(grid.count(), 0);
+  run.samples.resize(grid.count());
+  run.reports.resize(grid.count());
+  for (std::size_t t = 0; t < grid.count(); ++t) {
+    TileReport& r = run.reports[t];
+    r.index = t;
+    r.cell = grid.cell(t);
+    r.colour = grid.colour(t);
+    r.points = files.count(t);
+    r.share = share[t];
+    r.quota = static_cast<long long>(share[t]);
+  }
+  return run;
+}
+
+}  // namespace
+
+void TileParams::validate() const {
+  if (!(tileSize >= 0)) throw std::invalid_argument("the tile size must be > 0 (or 0 = auto)");
+  if (!(memoryBudgetGB > 0)) throw std::invalid_argument("the memory budget must be > 0 GB");
+  if (!(marginSpacings >= 2)) throw std::invalid_argument("the tile margin must be at least 2 spacings");
+  if (surveyPoints < 1000) throw std::invalid_argument("the survey sample must hold at least 1000 points");
+  if (chunkPoints < 1) throw std::invalid_argument("chunkPoints must be >= 1");
+}
+
+std::size_t TileParams::tileCapacity(std::size_t outputPoints) const {
+  constexpr double kOutputBytesPerPoint = 128;  // finished samples, their copy in the output, context copies
+  constexpr double kReserveBytes = 2e8;         // the survey sample and its k-d tree, read buffers
+  const double free = memoryBudgetGB * 1e9 - kOutputBytesPerPoint * static_cast<double>(outputPoints) - kReserveBytes;
+  return static_cast<std::size_t>(std::max(1e5, free / kBytesPerInputPoint));
+}
+
+std::string TiledResult::toJson() const {
+  detail::JsonWriter j;
+  j.beginObject(true).member("input_points", inputPoints).member("requested_points", requestedPoints);
+  j.member("output_points", cloud.size());
+  j.key("grid").beginArray().value(grid[0]).value(grid[1]).value(grid[2]).endArray();
+  j.member("tile_size", tileSize).member("margin", margin).member("target_spacing", spacing).member("area", area);
+  j.member("tile_capacity", tileCapacity);
+  j.key("spacing").beginObject().member("mean", spacingStats.mean).member("min", spacingStats.min);
+  j.member("max", spacingStats.max).member("cv", spacingStats.cv).endObject();
+  j.key("tiles").beginArray();
+  for (const TileReport& t : tiles) {
+    j.beginObject().member("index", t.index).member("colour", t.colour).member("points", t.points);
+    j.member("loaded_points", t.loadedPoints).member("share", t.share).member("quota", t.quota);
+    j.member("requested", t.requested).member("context", t.context).member("produced", t.produced);
+    j.member("time_s", t.seconds).endObject();
+  }
+  j.endArray();
+  j.key("time_s").beginObject();
+  for (const StageTime& t : timings) j.member(t.name, t.seconds);
+  j.endObject().endObject();
+  return j.str() + "\n";
+}
+
+TiledResult resampleTiled(const std::string& path, const ResampleParams& params, const TileParams& tp,
+                          const Execution& exec) {
+  params.validate();
+  exec.validate();
+  tp.validate();
+  if (!params.fixedSamples.empty() || !params.contextSamples.empty() || params.ringEdges)
+    throw std::invalid_argument("tiled resampling takes no fixed or context samples and gives no ring edges");
+  const auto start = Clock::now();
+  TiledResult result;
+  result.requestedPoints = params.targetCount;
+  const StageClock clock(result.timings, exec.progress);
+
+  auto t0 = clock.begin("survey");
+  PointStream stream(path);
+  Survey s = survey(stream, params, tp);
+  surveyAreas(s, exec.threads);
+  result.inputPoints = s.points;
+  result.area = s.totalArea;
+  result.spacing = std::sqrt(2.0 * s.totalArea / (std::sqrt(3.0) * static_cast<double>(params.targetCount)));
+  result.margin = tp.marginSpacings * result.spacing;
+  result.tileCapacity = tp.tileCapacity(params.targetCount);
+  const TileGrid grid = chooseGrid(s, tp, result.margin, result.tileCapacity);
+  result.grid = grid.dims;
+  result.origin = grid.origin;
+  result.tileSize = grid.size;
+  clock.end("survey", t0);
+
+  t0 = clock.begin("spill");
+  const detail::ScratchDirectory scratch(tp.scratchDir);
+  constexpr double kSpillBufferBytes = 6.4e7;  // all tiles' write buffers together
+  TileSpill files(scratch.path(), grid.count(), s.normals,
+                  static_cast<std::size_t>(std::clamp(kSpillBufferBytes / static_cast<double>(grid.count()), 6.5e4, 4e6)));
+  spill(stream, grid, files, tp.chunkPoints);
+  clock.end("spill", t0);
+
+  TileRun run = prepareRun(params, exec.threads, grid, s, files, result.tileCapacity, 2 * result.spacing);
+  const std::vector<std::size_t> order = grid.order();
+  std::size_t done = 0;
+  for (int colour = 0; colour < 8; ++colour) {
+    const std::string stage = "colour_" + std::to_string(colour);
+    const auto tc = Clock::now();
+    bool any = false;
+    for (std::size_t t : order) {
+      if (grid.colour(t) != colour) continue;
+      any = true;
+      run.process(t);
+      files.release(t);
+      exec.report("tiles", static_cast<double>(++done) / static_cast<double>(grid.count()));
+    }
+    if (any) result.timings.push_back({stage, std::chrono::duration<double>(Clock::now() - tc).count()});
+  }
+
+  t0 = clock.begin("assemble");
+  for (PointCloud& c : run.samples) {
+    result.cloud.points.insert(result.cloud.points.end(), c.points.begin(), c.points.end());
+    result.cloud.normals.insert(result.cloud.normals.end(), c.normals.begin(), c.normals.end());
+    c = {};
+  }
+  if (result.cloud.size() != params.targetCount)
+    throw std::runtime_error("tiled resampling produced " + std::to_string(result.cloud.size()) + " points, not " +
+                             std::to_string(params.targetCount));
+  result.spacingStats = spacingStats(result.cloud.points, exec.threads);
+  result.tiles = std::move(run.reports);
+  clock.end("assemble", t0);
+  clock.end("total", start);
+  return result;
+}
+
+}  // namespace iires

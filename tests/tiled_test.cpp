@@ -1,0 +1,219 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+#include "iires/tiled.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <random>
+
+#include "iires/io.hpp"
+#include "iires/knn.hpp"
+#include "iires/metrics.hpp"
+#include "test_util.hpp"
+
+namespace {
+
+using iires::PointCloud;
+using Eigen::Vector3d;
+
+constexpr double kSphereRadius = 0.25;
+const Vector3d kSphereCentre(0.5, 0.5, 0.45);
+
+/// A terrain z = 0.15 sin(1.5x) cos(2y) over [0,4] × [0,2] with a square hole at its far corner (x > 2.9,
+/// y > 0.9: tile (3,1) of a unit grid holds no point) and a floating sphere inside tile (0,0).
+PointCloud scene(std::size_t terrainPoints, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::normal_distribution<double> g(0.0, 1.0);
+  PointCloud c;
+  while (c.points.size() < terrainPoints) {
+    const double x = 4 * u(rng), y = 2 * u(rng);
+    if (x > 2.9 && y > 0.9) continue;
+    c.points.emplace_back(x, y, 0.15 * std::sin(1.5 * x) * std::cos(2 * y));
+  }
+  const auto sphere = static_cast<std::size_t>(static_cast<double>(terrainPoints) * 0.8 / 7.0);
+  for (std::size_t i = 0; i < sphere; ++i) {
+    Vector3d d(g(rng), g(rng), g(rng));
+    c.points.push_back(kSphereCentre + kSphereRadius * d.normalized());
+  }
+  return c;
+}
+
+/// Per output point, the distance to its nearest other point and whether that neighbour lies in another tile.
+struct Spacing {
+  std::vector<double> nearest;
+  std::vector<char> acrossSeam;
+};
+
+Spacing spacings(const PointCloud& c, const iires::TiledResult& r) {
+  const iires::KnnIndex index(c.points);
+  Spacing s;
+  std::vector<std::uint32_t> idx;
+  std::vector<double> d2;
+  auto tileOf = [&](const Vector3d& p) {
+    return std::make_pair(static_cast<int>(std::floor((p.x() - r.origin.x()) / r.tileSize)),
+                          static_cast<int>(std::floor((p.y() - r.origin.y()) / r.tileSize)));
+  };
+  for (const Vector3d& p : c.points) {
+    index.knn(p, 2, idx, d2);
+    s.nearest.push_back(std::sqrt(d2[1]));
+    s.acrossSeam.push_back(tileOf(p) != tileOf(c.points[idx[1]]));
+  }
+  return s;
+}
+
+/// Distance from @p p to the nearest interior tile boundary (x or y) of the unit grid.
+double toSeam(const Vector3d& p, const iires::TiledResult& r) {
+  double d = 1e300;
+  for (int a = 0; a < 2; ++a)
+    for (int k = 1; k < r.grid[a]; ++k) d = std::min(d, std::abs(p[a] - (r.origin[a] + k * r.tileSize)));
+  return d;
+}
+
+double cv(const std::vector<double>& v) {
+  double mean = 0, var = 0;
+  for (double x : v) mean += x;
+  mean /= static_cast<double>(v.size());
+  for (double x : v) var += (x - mean) * (x - mean);
+  return std::sqrt(var / static_cast<double>(v.size())) / mean;
+}
+
+std::size_t onSphere(const PointCloud& c) {
+  std::size_t n = 0;
+  for (const Vector3d& p : c.points) n += std::abs((p - kSphereCentre).norm() - kSphereRadius) < 0.02;
+  return n;
+}
+
+iires::ResampleParams paramsFor(std::size_t n) {
+  iires::ResampleParams p;
+  p.targetCount = n;
+  return p;
+}
+
+iires::TileParams unitTiles(const std::string& scratch) {
+  iires::TileParams tp;
+  tp.tileSize = 1.0;
+  tp.scratchDir = scratch;
+  return tp;
+}
+
+bool emptyDirectory(const std::string& dir) { return std::filesystem::is_empty(dir); }
+
+TEST(Tiled, EightTilesMatchTheInMemoryRunWithoutSeams) {
+  const std::string dir = iires::test::tempDir();
+  const PointCloud input = scene(240000, 3);
+  iires::writePointCloud(dir + "/scene.ply", input);
+  constexpr std::size_t kN = 16000;
+  const iires::ResampleResult memory = iires::resample(input, paramsFor(kN));
+  const std::string scratch = iires::test::tempDir();
+  const iires::TiledResult tiled = iires::resampleTiled(dir + "/scene.ply", paramsFor(kN), unitTiles(scratch));
+  EXPECT_TRUE(emptyDirectory(scratch)) << "spill files left behind";
+
+  ASSERT_EQ(tiled.cloud.size(), kN);
+  ASSERT_EQ(tiled.cloud.normals.size(), kN);
+  EXPECT_EQ(tiled.grid[0] * tiled.grid[1] * tiled.grid[2], 8);
+  EXPECT_EQ(tiled.inputPoints, input.size());
+  const iires::SpacingStats m = iires::spacingStats(memory.cloud.points);
+  const iires::SpacingStats t = iires::spacingStats(tiled.cloud.points);
+  EXPECT_LT(t.cv, 1.1 * m.cv) << "in memory " << m.cv << ", tiled " << t.cv;
+  EXPECT_NEAR(t.mean, m.mean, 0.03 * m.mean);
+
+  const Spacing s = spacings(tiled.cloud, tiled);
+  std::vector<double> seam, interior;
+  double minAcross = 1e300;
+  for (std::size_t i = 0; i < kN; ++i) {
+    (toSeam(tiled.cloud.points[i], tiled) < 2 * t.mean ? seam : interior).push_back(s.nearest[i]);
+    if (s.acrossSeam[i]) minAcross = std::min(minAcross, s.nearest[i]);
+  }
+  ASSERT_GT(seam.size(), 500u);
+  EXPECT_GE(minAcross, 0.5 * t.mean) << "a near-duplicate pair across a seam";
+  EXPECT_LE(cv(seam), 1.1 * cv(interior)) << "seam " << cv(seam) << ", interior " << cv(interior);
+  // The sphere lies whole in tile (0,0): it gets its share of N as in memory.
+  const double sphere = static_cast<double>(onSphere(memory.cloud));
+  EXPECT_NEAR(static_cast<double>(onSphere(tiled.cloud)), sphere, 0.05 * sphere);
+  // Tile (3,1) holds no point: no share, nothing produced.
+  const iires::TileReport& empty = tiled.tiles[1 * 4 + 3];
+  EXPECT_EQ(empty.points, 0u);
+  EXPECT_EQ(empty.share, 0u);
+  EXPECT_EQ(empty.produced, 0u);
+}
+
+TEST(Tiled, ScratchIsRemovedWhenATileFails) {
+  const std::string dir = iires::test::tempDir(), scratch = iires::test::tempDir();
+  iires::writePointCloud(dir + "/scene.xyz", scene(30000, 4));
+  bool spilled = false;
+  iires::Execution exec;
+  exec.progress = [&](const std::string& stage, double) {
+    if (stage != "tiles") return;
+    spilled = !emptyDirectory(scratch);
+    throw std::runtime_error("stop");
+  };
+  EXPECT_THROW(iires::resampleTiled(dir + "/scene.xyz", paramsFor(2000), unitTiles(scratch), exec),
+               std::runtime_error);
+  EXPECT_TRUE(spilled) << "the spill files were there while the tiles ran";
+  EXPECT_TRUE(emptyDirectory(scratch));
+}
+
+TEST(Tiled, SameOutputForOneAndTwoThreads) {
+  const std::string dir = iires::test::tempDir();
+  iires::writePointCloud(dir + "/scene.ply", scene(16000, 5));
+  const iires::TiledResult one = iires::resampleTiled(dir + "/scene.ply", paramsFor(1000), unitTiles(dir), {1, {}});
+  const iires::TiledResult two = iires::resampleTiled(dir + "/scene.ply", paramsFor(1000), unitTiles(dir), {2, {}});
+  ASSERT_EQ(one.cloud.size(), 1000u);
+  EXPECT_EQ(one.cloud.points, two.cloud.points);
+  EXPECT_EQ(one.cloud.normals, two.cloud.normals);
+}
+
+TEST(Tiled, FewerPointsThanTilesStillExact) {
+  const std::string dir = iires::test::tempDir();
+  iires::writePointCloud(dir + "/scene.ply", scene(20000, 6));
+  for (std::size_t n : {1u, 5u, 40u}) {
+    iires::TileParams tp = unitTiles(dir);
+    tp.tileSize = 0.05;  // raised to two margins: few tiles at such spacings
+    const iires::TiledResult r = iires::resampleTiled(dir + "/scene.ply", paramsFor(n), tp);
+    EXPECT_EQ(r.cloud.size(), n);
+    EXPECT_GE(r.tileSize, 2 * r.margin);
+  }
+}
+
+TEST(Tiled, AutoTileSizeFollowsTheMemoryBudget) {
+  const std::string dir = iires::test::tempDir();
+  iires::writePointCloud(dir + "/scene.ply", scene(20000, 7));
+  iires::TileParams tp;
+  tp.scratchDir = dir;
+  const iires::TiledResult whole = iires::resampleTiled(dir + "/scene.ply", paramsFor(1000), tp);
+  EXPECT_EQ(whole.grid[0] * whole.grid[1] * whole.grid[2], 1) << "fits the default budget: one tile";
+  EXPECT_EQ(whole.cloud.size(), 1000u);
+}
+
+TEST(Tiled, BadInputAndParameters) {
+  const std::string dir = iires::test::tempDir();
+  EXPECT_THROW(iires::resampleTiled(dir + "/missing.ply", paramsFor(10), unitTiles(dir)), iires::InputError);
+  iires::writePointCloud(dir + "/scene.ply", scene(5000, 8));
+  iires::TileParams tp = unitTiles(dir + "/no-such-dir");
+  EXPECT_THROW(iires::resampleTiled(dir + "/scene.ply", paramsFor(10), tp), iires::InputError);
+  tp = unitTiles(dir);
+  tp.memoryBudgetGB = 0;
+  EXPECT_THROW(iires::resampleTiled(dir + "/scene.ply", paramsFor(10), tp), std::invalid_argument);
+}
+
+TEST(Tiled, ToolWritesExactlyNOrNothing) {
+  const std::string dir = iires::test::tempDir(), scratch = iires::test::tempDir();
+  iires::writePointCloud(dir + "/in.ply", scene(8000, 9));
+  const std::string tool = iires::test::tool("iires-resample") + " " + dir + "/in.ply " + dir + "/out.ply -n 500 -q ";
+  std::string output;
+  EXPECT_EQ(iires::test::run(tool + "--tiles 1.0 --scratch " + scratch, &output), 0) << output;
+  EXPECT_EQ(iires::readPointCloud(dir + "/out.ply").size(), 500u);
+  EXPECT_TRUE(emptyDirectory(scratch));
+  std::filesystem::remove(dir + "/out.ply");
+  for (const std::string& bad : std::vector<std::string>{"--tiles nope", "--tiles -1", "--tiles 1 --scratch " + dir + "/missing",
+                                "--tiles auto --memory 0", "--tiles 1 --sharp-edges"}) {
+    EXPECT_EQ(iires::test::run(tool + bad, &output), 2) << bad << ": " << output;
+    EXPECT_NE(output.find("error"), std::string::npos) << output;
+    EXPECT_FALSE(iires::test::fileExists(dir + "/out.ply")) << bad;
+  }
+}
+
+}  // namespace
+
