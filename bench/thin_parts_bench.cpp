@@ -109,26 +109,9 @@ int main(int argc, char** argv) {
       off += d > 0.1 * t.gap;
     }
     const double share = near ? static_cast<double>(sides[1]) / static_cast<double>(near) : 0.0;
-    // Uniformity along the surface: each near part's points among themselves (across a gap narrower than the
-    // output spacing the straight-line nearest neighbour is on the other sheet); the fold / rim not counted.
-    std::vector<Eigen::Vector3d> part[3];
-    for (const auto& q : r.cloud.points) part[t.side(q) + 1].push_back(q);
-    double sum = 0, sq = 0, count = 0;
-    for (int side = 1; side < 3; ++side) {
-      const auto& pts = part[side];
-      if (pts.size() < 2) continue;
-      const iires::KnnIndex index(pts);
-      std::vector<std::uint32_t> idx;
-      std::vector<double> d2;
-      for (const auto& q : pts) {
-        index.knn(q, 2, idx, d2);
-        const double d = std::sqrt(d2[1]);
-        sum += d, sq += d * d, ++count;
-      }
-    }
-    iires::SpacingStats spacing;
-    spacing.mean = sum / count;
-    spacing.cv = std::sqrt(std::max(0.0, sq / count - spacing.mean * spacing.mean)) / spacing.mean;
+    iires::SpacingStats spacing;  // uniformity along the surface: each near part's points among themselves
+    spacing.cv = iires::test::sideSpacingCv(t, r.cloud.points);
+    spacing.mean = r.spacing.mean;
     std::printf("%s N=%zu points=%zu time_s=%.3f working=%zu off_sheet=%zu of=%zu max_dist_per_gap=%.4f "
                 "mean_dist_per_gap=%.4f side0=%zu side1=%zu share_err_pct=%.2f cv=%.4f components=%zu "
                 "clean=%d sweeps=%d out_spacing_per_gap=%.2f\n",

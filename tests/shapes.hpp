@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "iires/knn.hpp"
 #include "iires/types.hpp"
 
 namespace iires::test {
@@ -264,6 +265,29 @@ inline int ThinCase::side(const Eigen::Vector3d& p) const {
     default:
       return p.norm() < 1.0 + gap / 2 ? 0 : 1;
   }
+}
+
+/// Nearest-neighbour spacing cv of @p points, each near surface's points among their own (across a gap
+/// narrower than the output spacing the straight-line nearest neighbour is on the other surface); points on
+/// the fold or the rim are not counted.
+inline double sideSpacingCv(const ThinCase& t, const std::vector<Eigen::Vector3d>& points) {
+  std::vector<Eigen::Vector3d> part[2];
+  for (const auto& p : points)
+    if (const int s = t.side(p); s >= 0) part[s].push_back(p);
+  double sum = 0, sq = 0, count = 0;
+  for (const auto& pts : part) {
+    if (pts.size() < 2) continue;
+    const KnnIndex index(pts);
+    std::vector<std::uint32_t> idx;
+    std::vector<double> d2;
+    for (const auto& p : pts) {
+      index.knn(p, 2, idx, d2);
+      const double d = std::sqrt(d2[1]);
+      sum += d, sq += d * d, ++count;
+    }
+  }
+  const double mean = sum / count;
+  return std::sqrt(std::max(0.0, sq / count - mean * mean)) / mean;
 }
 
 }  // namespace iires::test

@@ -43,30 +43,16 @@ Outcome resampleCase(const ThinCase& t, std::size_t n) {
   Outcome o;
   o.points = r.cloud.size();
   o.components = r.components;
-  std::vector<Eigen::Vector3d> part[2];
   for (const auto& p : r.cloud.points) {
     const int s = t.side(p);
     if (s < 0) continue;
     ++o.near;
     ++o.side[s];
-    part[s].push_back(p);
     o.off += t.distance(p) > 0.1 * t.gap;
   }
   const double expected = t.kind == 3 ? (1 + t.gap) * (1 + t.gap) / (1 + (1 + t.gap) * (1 + t.gap)) : 0.5;
   o.shareError = std::abs(static_cast<double>(o.side[1]) / static_cast<double>(o.near) - expected) / expected;
-  double sum = 0, sq = 0, count = 0;
-  for (const auto& pts : part) {
-    const KnnIndex index(pts);
-    std::vector<std::uint32_t> idx;
-    std::vector<double> d2;
-    for (const auto& p : pts) {
-      index.knn(p, 2, idx, d2);
-      const double d = std::sqrt(d2[1]);
-      sum += d, sq += d * d, ++count;
-    }
-  }
-  const double mean = sum / count;
-  o.cv = std::sqrt(std::max(0.0, sq / count - mean * mean)) / mean;
+  o.cv = test::sideSpacingCv(t, r.cloud.points);
   std::printf("  %s: %zu points, %zu on the near parts (%zu / %zu), %zu off by > 0.1 gap, share error %.2f %%, "
               "cv %.4f, components %zu, sheets %s\n",
               t.name.c_str(), o.points, o.near, o.side[0], o.side[1], o.off, 100 * o.shareError, o.cv,

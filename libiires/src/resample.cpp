@@ -145,6 +145,40 @@ void reportLevels(const CurvatureResult& curvature, const KnnIndex& working, Res
     if (result.pointsPerLevel[q]) result.spacingPerLevel[q] /= static_cast<double>(result.pointsPerLevel[q]);
 }
 
+/// The sheet rule (intrinsic control from the first graph on): filters @p neighbours so that every stage below
+/// reads neighbours on each point's own sheet only; a cloud without normals gets them from that graph
+/// (estimated and oriented) unless pre-processing fits its own over the filtered rows (as the feature detector
+/// expects them). Sets result.sheets; returns which points have another sheet near (the MLS surface's gate).
+std::vector<std::uint8_t> sheetRule(PointCloud& cloud, NeighbourTable& neighbours, bool preprocessing,
+                                    const SheetParams& params, const Execution& exec, const StageClock& clock,
+                                    ResampleResult& result) {
+  const auto t = clock.begin("sheets");
+  std::vector<std::uint8_t> near;
+  std::vector<Eigen::Vector3d> normals;
+  SheetParams sp = params;
+  sp.orient = !preprocessing;  // pre-processing's normals replace these
+  result.sheets = separateSheets(cloud.points, neighbours, normals, sp, exec,
+                                 cloud.hasNormals() ? &cloud.normals : nullptr, &near);
+  if (!preprocessing) cloud.normals = std::move(normals);
+  clock.end("sheets", t);
+  return near;
+}
+
+/// After pre-processing moved or dropped points: the later stages' table (@p laterK columns) on the final
+/// positions, through the sheet rule again (on rows as long as the first time, @p tableK: shorter ones would not
+/// reach a sheet as far off); returns which points have another sheet near.
+std::vector<std::uint8_t> refilter(const PointCloud& cloud, std::optional<KnnIndex>& index,
+                                   std::optional<NeighbourTable>& neighbours, std::size_t tableK, std::size_t laterK,
+                                   const SheetParams& params, const Execution& exec) {
+  index.emplace(cloud.points);
+  neighbours.emplace(*index, cloud.points, tableK, exec.threads);
+  std::vector<std::uint8_t> near;
+  std::vector<Eigen::Vector3d> normals;
+  separateSheets(cloud.points, *neighbours, normals, params, exec, &cloud.normals, &near);
+  neighbours->truncate(laterK);
+  return near;
+}
+
 }  // namespace
 
 void ResampleParams::validate() const {
@@ -226,24 +260,11 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params, const Ex
   const std::size_t tableK = std::max(preprocessing ? preprocessNeighbours(pp) : std::size_t{0}, laterK);
   std::optional<NeighbourTable> neighbours(std::in_place, *index, cloud.points, tableK, exec.threads);
   clock.end("neighbours", t);
-  // The sheet rule (intrinsic control from the first graph on): every stage below reads neighbours on each
-  // point's own sheet only, and a cloud without normals gets them from that graph (estimated and oriented).
   const SheetParams& sp = params.preprocessing.sheet;
   pp.sheets = params.intrinsic;
   const bool sheets = params.intrinsic && cloud.size() > static_cast<std::size_t>(sp.pcaNeighbours);
   std::vector<std::uint8_t> nearSheets;  // per point of the final working cloud (the MLS surface's gate)
-  if (sheets) {
-    t = clock.begin("sheets");
-    std::vector<Eigen::Vector3d> normals;
-    SheetParams first = sp;
-    first.orient = !preprocessing;  // pre-processing fits (and orients) its own normals over the filtered rows
-    result.sheets = separateSheets(cloud.points, *neighbours, normals, first, exec,
-                                   cloud.hasNormals() ? &cloud.normals : nullptr, &nearSheets);
-    // Pre-processing fits its own normals over the filtered rows (as the feature detector expects them);
-    // without it, these are the cloud's.
-    if (!preprocessing) cloud.normals = std::move(normals);
-    clock.end("sheets", t);
-  }
+  if (sheets) nearSheets = sheetRule(cloud, *neighbours, preprocessing, sp, exec, clock, result);
   if (preprocessing) {
     t = clock.begin("preprocess");
     result.preprocessing = iires::preprocess(cloud, pp, exec, &*neighbours);
@@ -254,14 +275,7 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params, const Ex
       neighbours.reset();
       index.reset();
       cloud = std::move(result.preprocessing.cloud);
-      if (sheets) {  // the later stages' table, on the final positions and through the sheet rule again (on
-                     // rows as long as the first time: shorter ones would not reach a sheet as far off)
-        index.emplace(cloud.points);
-        neighbours.emplace(*index, cloud.points, tableK, exec.threads);
-        std::vector<Eigen::Vector3d> normals;
-        separateSheets(cloud.points, *neighbours, normals, sp, exec, &cloud.normals, &nearSheets);
-        neighbours->truncate(laterK);
-      }
+      if (sheets) nearSheets = refilter(cloud, index, neighbours, tableK, laterK, sp, exec);
     }
     result.preprocessing.cloud = {};
     clock.end("preprocess", t);

@@ -83,6 +83,24 @@ std::optional<Eigen::Vector2d> gapBisector(const Eigen::Vector2d& from, const Ei
 /// current distances instead of querying a new k-d tree (samples moved by a fraction of a spacing, so the few
 /// neighbours that shape a cell stay among the nearest of a step ago). Its rings are moved into the result (the
 /// caller replaces them with it). Without it every ring is computed from scratch.
+void Resampler::acceptedNearest(const KnnIndex& index, const Samples& s, std::size_t i, std::size_t stride,
+                                std::vector<std::uint32_t>& idx, std::vector<double>& d2) const {
+  index.knn(s.pos[i], stride, idx, d2);
+  // Samples the rule refuses (another sheet a gap away, narrower than the spacing) take the places of
+  // neighbours: then a wider query, of which the first stride accepted ones are kept.
+  std::size_t w = 0;
+  for (std::size_t c = 0; c < idx.size(); ++c)
+    if (idx[c] == i || rule_.accept(i, idx[c])) idx[w] = idx[c], d2[w] = d2[c], ++w;
+  if (w < idx.size()) {
+    index.knn(s.pos[i], kWiderQuery * stride, idx, d2);
+    w = 0;
+    for (std::size_t c = 0; c < idx.size() && w < stride; ++c)
+      if (idx[c] == i || rule_.accept(i, idx[c])) idx[w] = idx[c], d2[w] = d2[c], ++w;
+  }
+  idx.resize(w);
+  d2.resize(w);
+}
+
 Rings Resampler::computeRings(const Samples& s, double cellRadius, Relaxation* relaxation, bool requery) const {
   const bool previous = relaxation && relaxation->rings;
   if (!previous) requery = true;
@@ -136,19 +154,7 @@ Rings Resampler::computeRings(const Samples& s, double cellRadius, Relaxation* r
     const auto candidates = r.candidates.begin() + static_cast<long>(i * stride);
     const bool queried = requery || (stale && (*stale)[i]);  // then idx holds accepted samples only
     if (queried) {
-      index->knn(s.pos[i], stride, idx, d2);
-      // Samples the rule refuses (another sheet a gap away, narrower than the spacing) take the places of
-      // neighbours: then a wider query, of which the first stride accepted ones are kept.
-      std::size_t w = 0;
-      for (std::size_t c = 0; c < idx.size(); ++c)
-        if (idx[c] == i || rule_.accept(i, idx[c])) idx[w] = idx[c], d2[w] = d2[c], ++w;
-      if (w < idx.size()) {
-        index->knn(s.pos[i], kWiderQuery * stride, idx, d2);
-        w = 0;
-        for (std::size_t c = 0; c < idx.size() && w < stride; ++c)
-          if (idx[c] == i || rule_.accept(i, idx[c])) idx[w] = idx[c], d2[w] = d2[c], ++w;
-      }
-      idx.resize(w), d2.resize(w);
+      acceptedNearest(*index, s, i, stride, idx, d2);
     } else {
       byDistance.clear();
       for (std::size_t c = 0; c < stride; ++c)
