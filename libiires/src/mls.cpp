@@ -156,11 +156,14 @@ Eigen::Vector3d MlsSurface::project(const Eigen::Vector3d& x0, Eigen::Vector3d* 
     if (std::none_of(idx.begin(), idx.end(), facing)) reference = normals_[idx[0]];
     // The sheet rule (sheets.hpp) against an anchor on the query's sheet — the nearest facing input point, then
     // the estimate itself — so that a sheet facing the same way a few spacings off (a shell inside a shell)
-    // gets no weight either.
+    // gets no weight either; only where a neighbour has another sheet near (all of them without near flags).
+    bool gate = params_.sheetGap > 0 &&
+                (nearSheets_.empty() || std::any_of(idx.begin(), idx.begin() + static_cast<long>(found),
+                                                    [&](std::uint32_t j) { return nearSheets_[j] != 0; }));
     Eigen::Vector3d anchor = x, anchorNormal = normal;
     double anchorSpacing = 0;
     bool anchorNear = nearSheets_.empty();
-    if (params_.sheetGap > 0) {
+    if (gate) {
       std::size_t first = 0;
       while (first + 1 < found && !facing(idx[first])) ++first;
       anchorSpacing = kSpacingPerWidth * h_[idx[first]];
@@ -168,11 +171,10 @@ Eigen::Vector3d MlsSurface::project(const Eigen::Vector3d& x0, Eigen::Vector3d* 
       if (it == 0) anchor = points_[idx[first]], anchorNormal = normals_[idx[first]];
     }
     auto onSheet = [&](std::uint32_t j) {
-      if (params_.sheetGap <= 0 || !(anchorNear || nearSheets_[j])) return true;
+      if (!(anchorNear || nearSheets_[j])) return true;
       return !acrossGap(anchor, anchorNormal, points_[j], normals_[j],
                         params_.sheetGap * std::max(anchorSpacing, kSpacingPerWidth * h_[j]), kGapParallelCos);
     };
-    bool gate = params_.sheetGap > 0;
     if (gate && std::none_of(idx.begin(), idx.end(), [&](std::uint32_t j) { return facing(j) && onSheet(j); }))
       gate = false;
     h = 0;
