@@ -9,7 +9,7 @@
 #include "common.hpp"
 #include "progress.hpp"
 #include "tiling.hpp"
-#include "iires/tiled_mpi.hpp"
+#include "iires/mpi/tiled_mpi.hpp"
 
 int main(int argc, char** argv) {
   const iires::MpiSession mpi(argc, argv);

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
-#include "iires/tiled_mpi.hpp"
+#include "iires/mpi/tiled_mpi.hpp"
 
 #include <mpi.h>
 
