@@ -63,11 +63,12 @@ const char* kRealPoints = "kitten.xyz,hippo1.ply,hippo2.ply,building.ply,sphere_
 /// The line a method reports. @p truth may be empty (a real point set): distances then go to @p input.
 std::string describe(const iires::TriangleMesh& mesh, const iires::TriangleMesh& truth, const iires::PointCloud& input,
                      double seconds, int threads) {
-  const iires::MeshQuality q = iires::evaluateMesh(mesh, &input, {}, iires::Execution{threads, {}});
+  const iires::Execution exec{threads, {}};
+  const iires::MeshQuality q = iires::evaluateMesh(mesh, &input, {}, exec);
   double toTruth = q.distance.forwardMax, fromTruth = q.distance.backwardMax, diagonal = q.distance.diagonal,
          mean = q.distance.mean;
   if (!truth.triangles.empty()) {
-    const iires::SurfaceDistance d = iires::surfaceDistance(mesh, truth, qp);
+    const iires::SurfaceDistance d = iires::surfaceDistance(mesh, truth, {}, exec);
     toTruth = d.forwardMax, fromTruth = d.backwardMax, diagonal = d.diagonal, mean = d.mean;
   }
   std::ostringstream os;

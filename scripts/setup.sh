@@ -8,7 +8,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 
 bash scripts/install_packages.sh build-essential cmake libeigen3-dev libnanoflann-dev libcgal-dev libcli11-dev \
-  libgtest-dev python3-dev pybind11-dev python3-numpy python3-pytest
+  libgtest-dev python3-dev pybind11-dev python3-numpy python3-pytest libopenmpi-dev openmpi-bin
 [ "${1:-}" = --install-only ] && exit 0
 
 cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DIIRES_PYTHON=ON -DPython3_EXECUTABLE=/usr/bin/python3 "$@"

@@ -215,5 +215,49 @@ TEST(Tiled, ToolWritesExactlyNOrNothing) {
   }
 }
 
+/// `mpiexec -n R` as the MPI test runs it: as root too, and with more ranks than cores (OpenMPI's switches,
+/// given as environment variables, which other MPIs ignore).
+std::string mpiexec(int ranks) {
+#ifdef IIRES_MPIEXEC
+  return "env OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1 " +
+         std::string(IIRES_MPIEXEC) + " -n " + std::to_string(ranks) + " ";
+#else
+  return std::to_string(ranks) + " ";
+#endif
+}
+
+TEST(Tiled, MpiRanksWriteTheBytesOfTheSingleProcessRun) {
+#ifndef IIRES_MPIEXEC
+  GTEST_SKIP() << "built without MPI (configure with -DIIRES_WITH_MPI=ON)";
+#endif
+  const std::string mpiTool = iires::test::tool("iires-resample-mpi");
+  std::string output;
+  if (iires::test::run(mpiexec(2) + mpiTool + " --version", &output) != 0)
+    GTEST_SKIP() << "mpiexec cannot start two ranks here: " << output;
+  const std::string dir = iires::test::tempDir(), scratch = iires::test::tempDir();
+  iires::writePointCloud(dir + "/in.ply", scene(12000, 10));
+  const std::string args = " " + dir + "/in.ply " + dir + "/%.ply -n 800 -q --tiles 1.0 --memory 1 --scratch " + scratch;
+  auto command = [&](const std::string& tool, const std::string& out) {
+    std::string c = tool + args;
+    c.replace(c.find('%'), 1, out);
+    return c;
+  };
+  ASSERT_EQ(iires::test::run(command(iires::test::tool("iires-resample"), "one") + " --threads 2", &output), 0)
+      << output;
+  const std::string one = iires::test::readText(dir + "/one.ply");
+  ASSERT_EQ(iires::readPointCloud(dir + "/one.ply").size(), 800u);
+  for (int ranks : {2, 3}) {
+    const std::string out = "ranks" + std::to_string(ranks);
+    ASSERT_EQ(iires::test::run(mpiexec(ranks) + command(mpiTool, out) + " --threads 1", &output), 0) << output;
+    EXPECT_TRUE(iires::test::readText(dir + "/" + out + ".ply") == one) << ranks << " ranks: other bytes";
+  }
+  EXPECT_TRUE(emptyDirectory(scratch)) << "spill files left behind";
+  // A failure stops every rank with a message and exit code 2, and nothing is written.
+  EXPECT_EQ(iires::test::run(mpiexec(2) + mpiTool + " " + dir + "/missing.ply " + dir + "/bad.ply -n 10", &output), 2)
+      << output;
+  EXPECT_NE(output.find("rank 1"), std::string::npos) << output;
+  EXPECT_FALSE(iires::test::fileExists(dir + "/bad.ply"));
+}
+
 }  // namespace
 

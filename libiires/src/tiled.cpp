@@ -4,7 +4,9 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <exception>
 #include <numeric>
+#include <optional>
 #include <stdexcept>
 
 #include <Eigen/Geometry>
@@ -17,6 +19,7 @@
 #include "iires/knn.hpp"
 #include "iires/metrics.hpp"
 #include "iires/point_stream.hpp"
+#include "iires/tile_executor.hpp"
 
 namespace iires {
 namespace {
@@ -141,14 +144,37 @@ TileGrid chooseGrid(const Survey& s, const TileParams& tp, double margin, std::s
   }
 }
 
-/// Pass 2: every point into the spill file of each tile whose region holds it.
-void spill(PointStream& stream, const TileGrid& g, TileSpill& files, std::size_t chunkPoints) {
+/// Each tile's process: the k-th tile of a colour (in tile order) goes to rank k mod @p ranks.
+std::vector<int> owners(const TileGrid& g, int ranks) {
+  std::vector<int> owner(g.count(), 0);
+  std::array<int, 8> position{};
+  for (std::size_t t = 0; t < g.count(); ++t) owner[t] = position[g.colour(t)]++ % ranks;
+  return owner;
+}
+
+/// Pass 2: every point into the spill file of each tile of @p rank whose region holds it.
+void spill(PointStream& stream, const TileGrid& g, TileSpill& files, std::size_t chunkPoints,
+           const std::vector<int>& owner, int rank) {
   stream.rewind();
   PointCloud chunk;
   while (stream.next(chunk, chunkPoints))
     for (std::size_t i = 0; i < chunk.size(); ++i)
-      g.forEachRegion(chunk.points[i], [&](std::size_t t) { files.add(t, chunk, i); });
+      g.forEachRegion(chunk.points[i], [&](std::size_t t) {
+        if (owner[t] == rank) files.add(t, chunk, i);
+      });
   files.flush();
+}
+
+/// Runs @p f; every process of @p executor then learns whether it failed anywhere (and throws if so).
+template <class F>
+void together(TileExecutor& executor, F&& f) {
+  std::exception_ptr failure;
+  try {
+    f();
+  } catch (...) {
+    failure = std::current_exception();
+  }
+  executor.agree(failure);
 }
 
 /// The state of a tiled run: which tiles are finished, their samples, and the quotas still to meet.
@@ -167,8 +193,11 @@ struct TileRun {
   std::vector<PointCloud> samples;
   std::vector<TileReport> reports;
 
-  /// Resamples tile @p t and hands its deviation from its quota to its largest unfinished neighbour.
-  void process(std::size_t t);
+  /// Resamples tile @p t (reading only tiles of earlier colours) and picks the largest unfinished neighbour
+  /// to take its deviation from its quota.
+  TileOutcome process(std::size_t t) const;
+  /// Records @p t's outcome: its samples, its report, and its deviation added to its heir's quota.
+  void finish(std::size_t t, TileOutcome outcome);
 
  private:
   std::vector<Eigen::Vector3d> context(std::size_t t) const;
@@ -210,9 +239,11 @@ PointCloud TileRun::keepOwn(std::size_t t, PointCloud out) const {
   return own;
 }
 
-void TileRun::process(std::size_t t) {
+TileOutcome TileRun::process(std::size_t t) const {
   const auto start = Clock::now();
-  TileReport& report = reports[t];
+  TileOutcome outcome;
+  TileReport& report = outcome.report;
+  report = reports[t];
   const long long quota = report.quota;
   if (quota > 0 && files.count(t) >= 4) {
     ResampleParams p = params;
@@ -227,26 +258,34 @@ void TileRun::process(std::size_t t) {
     PointCloud points = files.read(t, capacity, params.seed);
     report.loadedPoints = points.size();
     try {
-      samples[t] = keepOwn(t, resample(std::move(points), p, Execution{threads, {}}).cloud);
+      outcome.samples = keepOwn(t, resample(std::move(points), p, Execution{threads, {}}).cloud);
     } catch (const InputError&) {
-      samples[t] = {};  // too few or degenerate points for a surface: the quota passes on
+      outcome.samples = {};  // too few or degenerate points for a surface: the quota passes on
     }
   }
-  finished[t] = 1;
-  report.produced = samples[t].size();
+  report.produced = outcome.samples.size();
   report.seconds = std::chrono::duration<double>(Clock::now() - start).count();
-  const long long rest = quota - static_cast<long long>(report.produced);
-  if (rest == 0) return;
-  std::size_t heir = grid.count();
+  outcome.rest = quota - static_cast<long long>(report.produced);
+  if (outcome.rest == 0) return outcome;
+  // Tiles of t's colour are never its neighbours: the heir is the same whichever of them finished first.
+  outcome.heir = grid.count();
   grid.forEachNeighbour(t, [&](std::size_t u) {
-    if (!finished[u] && reports[u].share > 0 && (heir == grid.count() || reports[u].share > reports[heir].share))
-      heir = u;
+    if (!finished[u] && reports[u].share > 0 &&
+        (outcome.heir == grid.count() || reports[u].share > reports[outcome.heir].share))
+      outcome.heir = u;
   });
-  if (heir == grid.count())
+  if (outcome.heir == grid.count())
     throw std::runtime_error("tiled resampling: tile " + std::to_string(t) + " produced " +
                              std::to_string(report.produced) + " samples for a quota of " + std::to_string(quota) +
                              " and has no unfinished neighbour to take the difference");
-  reports[heir].quota += rest;
+  return outcome;
+}
+
+void TileRun::finish(std::size_t t, TileOutcome outcome) {
+  finished[t] = 1;
+  samples[t] = std::move(outcome.samples);
+  reports[t] = outcome.report;
+  if (outcome.rest != 0) reports[outcome.heir].quota += outcome.rest;
 }
 
 /// The run's tiles in order: reports, and the survey sample assigned to tiles and regions.
@@ -275,6 +314,38 @@ TileRun prepareRun(const ResampleParams& params, int threads, const TileGrid& gr
     r.quota = static_cast<long long>(share[t]);
   }
   return run;
+}
+
+/// Pass 3: the tiles colour by colour, each process resampling its own; after each colour every process holds
+/// every outcome and records them in tile order.
+void runColours(TileRun& run, TileSpill& files, const std::vector<int>& owner, TileExecutor& executor,
+                const Execution& exec, std::vector<StageTime>& timings) {
+  const TileGrid& grid = run.grid;
+  std::size_t before = 0;
+  for (int colour = 0; colour < 8; ++colour) {
+    std::vector<std::size_t> tiles;
+    std::vector<int> owners;
+    for (std::size_t t = 0; t < grid.count(); ++t)
+      if (grid.colour(t) == colour) tiles.push_back(t), owners.push_back(owner[t]);
+    if (tiles.empty()) continue;
+    const auto tc = Clock::now();
+    std::vector<TileOutcome> outcomes(tiles.size());
+    std::exception_ptr failure;
+    try {
+      for (std::size_t i = 0; i < tiles.size(); ++i) {
+        if (owners[i] != executor.rank()) continue;
+        outcomes[i] = run.process(tiles[i]);
+        files.release(tiles[i]);
+        exec.report("tiles", static_cast<double>(before + i + 1) / static_cast<double>(grid.count()));
+      }
+    } catch (...) {
+      failure = std::current_exception();
+    }
+    executor.share(tiles, owners, outcomes, failure);
+    for (std::size_t i = 0; i < tiles.size(); ++i) run.finish(tiles[i], std::move(outcomes[i]));
+    before += tiles.size();
+    timings.push_back({"colour_" + std::to_string(colour), std::chrono::duration<double>(Clock::now() - tc).count()});
+  }
 }
 
 }  // namespace
@@ -319,6 +390,12 @@ std::string TiledResult::toJson() const {
 
 TiledResult resampleTiled(const std::string& path, const ResampleParams& params, const TileParams& tp,
                           const Execution& exec) {
+  TileExecutor local;
+  return resampleTiled(path, params, tp, exec, local);
+}
+
+TiledResult resampleTiled(const std::string& path, const ResampleParams& params, const TileParams& tp,
+                          const Execution& exec, TileExecutor& executor) {
   params.validate();
   exec.validate();
   tp.validate();
@@ -330,44 +407,40 @@ TiledResult resampleTiled(const std::string& path, const ResampleParams& params,
   const StageClock clock(result.timings, exec.progress);
 
   auto t0 = clock.begin("survey");
-  PointStream stream(path);
-  Survey s = survey(stream, params, tp);
-  surveyAreas(s, exec.threads);
-  result.inputPoints = s.points;
-  result.area = s.totalArea;
-  result.spacing = std::sqrt(2.0 * s.totalArea / (std::sqrt(3.0) * static_cast<double>(params.targetCount)));
-  result.margin = tp.marginSpacings * result.spacing;
-  result.tileCapacity = tp.tileCapacity(params.targetCount);
-  const TileGrid grid = chooseGrid(s, tp, result.margin, result.tileCapacity);
+  std::optional<PointStream> stream;
+  Survey s;
+  TileGrid grid;
+  together(executor, [&] {
+    stream.emplace(path);
+    s = survey(*stream, params, tp);
+    surveyAreas(s, exec.threads);
+    result.inputPoints = s.points;
+    result.area = s.totalArea;
+    result.spacing = std::sqrt(2.0 * s.totalArea / (std::sqrt(3.0) * static_cast<double>(params.targetCount)));
+    result.margin = tp.marginSpacings * result.spacing;
+    result.tileCapacity = tp.tileCapacity(params.targetCount);
+    grid = chooseGrid(s, tp, result.margin, result.tileCapacity);
+  });
   result.grid = grid.dims;
   result.origin = grid.origin;
   result.tileSize = grid.size;
   clock.end("survey", t0);
 
   t0 = clock.begin("spill");
-  const detail::ScratchDirectory scratch(tp.scratchDir);
-  constexpr double kSpillBufferBytes = 6.4e7;  // all tiles' write buffers together
-  TileSpill files(scratch.path(), grid.count(), s.normals,
+  const std::vector<int> owner = owners(grid, executor.ranks());
+  std::optional<detail::ScratchDirectory> scratch;
+  std::optional<TileSpill> files;
+  together(executor, [&] {
+    scratch.emplace(tp.scratchDir);
+    constexpr double kSpillBufferBytes = 6.4e7;  // all tiles' write buffers together
+    files.emplace(scratch->path(), grid.count(), s.normals,
                   static_cast<std::size_t>(std::clamp(kSpillBufferBytes / static_cast<double>(grid.count()), 6.5e4, 4e6)));
-  spill(stream, grid, files, tp.chunkPoints);
+    spill(*stream, grid, *files, tp.chunkPoints, owner, executor.rank());
+  });
   clock.end("spill", t0);
 
-  TileRun run = prepareRun(params, exec.threads, grid, s, files, result.tileCapacity, 2 * result.spacing);
-  const std::vector<std::size_t> order = grid.order();
-  std::size_t done = 0;
-  for (int colour = 0; colour < 8; ++colour) {
-    const std::string stage = "colour_" + std::to_string(colour);
-    const auto tc = Clock::now();
-    bool any = false;
-    for (std::size_t t : order) {
-      if (grid.colour(t) != colour) continue;
-      any = true;
-      run.process(t);
-      files.release(t);
-      exec.report("tiles", static_cast<double>(++done) / static_cast<double>(grid.count()));
-    }
-    if (any) result.timings.push_back({stage, std::chrono::duration<double>(Clock::now() - tc).count()});
-  }
+  TileRun run = prepareRun(params, exec.threads, grid, s, *files, result.tileCapacity, 2 * result.spacing);
+  runColours(run, *files, owner, executor, exec, result.timings);
 
   t0 = clock.begin("assemble");
   for (PointCloud& c : run.samples) {
