@@ -257,7 +257,7 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params, const Ex
   std::vector<std::uint32_t> candidates;
   auto independent = [&](int threads, const KnnIndex* pointIndex) {
     auto t = clock.begin("surface");
-    surface.emplace(cloud.points, cloud.normals, params.mls, Execution{threads, {}}, index ? &*index : pointIndex,
+    surface.emplace(cloud.points, cloud.normals, params.mls, Execution{threads}, index ? &*index : pointIndex,
                     neighbours ? &*neighbours : nullptr);
     neighbours.reset();  // read by nothing after the surface and the geodesic graph (memory at 5M)
     clock.end("surface", t);
