@@ -207,7 +207,7 @@ void runIires(const ModelCase& c, const iires::PointCloud& noisy, const std::vec
               double normalSeconds, const Options& opt, const iires::MeshDistance& md, Report&& report) {
   const std::size_t n = c.clean.size();
   const iires::PreprocessParams& pp = opt.pre;
-  const iires::Execution exec{opt.threads, {}};
+  const iires::Execution exec{opt.threads};
   const auto t0 = Clock::now();
   const iires::PreprocessResult r = iires::preprocess(noisy, pp, exec);
   const double seconds = since(t0);
@@ -246,7 +246,7 @@ void runModel(const ModelCase& c, const Options& opt) {
       double normalSeconds = 0;
       if (opt.estimatedNormals) {
         const auto t0 = Clock::now();
-        noisy.normals = iires::estimateNormals(noisy.points, {}, iires::Execution{T, {}});
+        noisy.normals = iires::estimateNormals(noisy.points, {}, iires::Execution{T});
         normalSeconds = since(t0);
       }
       const std::string tag = "model=" + c.name + " noise=" + std::to_string(noise).substr(0, 4) +
@@ -302,7 +302,7 @@ void runSpeed(const Options& opt) {
   sp.outlierMax = 6 * l;
   iires::PointCloud noisy = iires::sampleMesh(mesh, sp);
   noisy.normals.clear();
-  const iires::Execution exec{T, {}};
+  const iires::Execution exec{T};
   auto run = [&](const char* what, auto&& fn) {
     const auto t0 = Clock::now();
     const std::clock_t c0 = std::clock();

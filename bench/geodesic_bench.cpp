@@ -21,7 +21,7 @@ int main(int argc, char** argv) {
       iires::PointCloud input = cloud;
       if (!normals) input.normals.clear();
       const auto start = std::chrono::steady_clock::now();
-      const iires::GeodesicCoordinates geo(input, {}, iires::Execution{threads, {}});
+      const iires::GeodesicCoordinates geo(input, {}, iires::Execution{threads});
       const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       const auto& r = geo.report();
       std::printf("bench=geodesic model=%s points=%zu normals=%d threads=%d time_s=%.3f graph_s=%.3f "

@@ -63,7 +63,7 @@ const char* kRealPoints = "kitten.xyz,hippo1.ply,hippo2.ply,building.ply,sphere_
 /// The line a method reports. @p truth may be empty (a real point set): distances then go to @p input.
 std::string describe(const iires::TriangleMesh& mesh, const iires::TriangleMesh& truth, const iires::PointCloud& input,
                      double seconds, int threads) {
-  const iires::Execution exec{threads, {}};
+  const iires::Execution exec{threads};
   const iires::MeshQuality q = iires::evaluateMesh(mesh, &input, {}, exec);
   double toTruth = q.distance.forwardMax, fromTruth = q.distance.backwardMax, diagonal = q.distance.diagonal,
          mean = q.distance.mean;
@@ -124,7 +124,7 @@ std::string runMethod(const ChildJob& job) {
   if (method == "local" || method == "advancing-front" || method == "input-advancing-front") {
     iires::ReconstructParams p;
     p.evaluate = false;
-    const iires::Execution exec{job.threads, {}};
+    const iires::Execution exec{job.threads};
     p.method = iires::parseReconstructMethod(method == "local" ? method : "advancing-front");
     iires::ReconstructResult r;
     if (method == "local") {  // the whole pipeline, as iires-reconstruct runs it
@@ -213,7 +213,7 @@ void runCase(const Case& c, const std::vector<std::string>& counts, const std::v
     iires::ResampleParams rp = iires::meshResampling();  // the resampling reconstruct() does
     rp.targetCount = std::stoul(count);
     const auto t = Clock::now();
-    const iires::ResampleResult rs = iires::resample(c.input, rp, iires::Execution{threads, {}});
+    const iires::ResampleResult rs = iires::resample(c.input, rp, iires::Execution{threads});
     const std::string head = "model=" + c.name + " density_ratio=" + (c.truthFile.empty() ? "real" : std::to_string(ratio).substr(0, 3)) +
                              " input_points=" + std::to_string(c.input.size()) + " n=" + count + " genus_truth=" + genusTruth;
     std::cout << head << " method=resample spacing_cv=" << rs.spacing.cv << " time_s=" << since(t) << std::endl;

@@ -463,7 +463,7 @@ Estimate runMethod(const std::string& method, const Trial& t, int trial, const O
     if (method == "iires-euler") p.grid = iires::reg::RotationGridType::kEuler;
     iires::PointCloud sc;
     sc.points = t.source;
-    const auto r = iires::reg::registerClouds(sc, t.target, p, iires::Execution{o.threads, {}});
+    const auto r = iires::reg::registerClouds(sc, t.target, p, iires::Execution{o.threads});
     e.T = r.T_target_source;
     e.ambiguous = r.ambiguous;
     e.overlap = r.sourceOverlap;

@@ -70,7 +70,7 @@ int main(int argc, char** argv) {
     iires::ResampleParams p;
     p.targetCount = n;
     double t = now();
-    const auto r = iires::resample(cloud, p, iires::Execution{threads, {}});
+    const auto r = iires::resample(cloud, p, iires::Execution{threads});
     const double seconds = now() - t;
     std::string stages;  // time per stage, from the result
     for (const auto& s : r.timings)

@@ -240,7 +240,7 @@ int main(int argc, char** argv) {
       p.targetCount = n;
       p.sharpEdges = sharp;
       const double t = now();
-      const auto r = iires::resample(cloud, p, iires::Execution{threads, {}});
+      const auto r = iires::resample(cloud, p, iires::Execution{threads});
       report(prefix, sharp ? "iires_sharp" : "iires", r.cloud.points, now() - t, ref,
              sharp ? " feature_samples=" + std::to_string(r.featureSamples) : "");
       if (dump > 0) dumpWorst(r.cloud.points, r.fixedIndices, ref, dump);

@@ -76,7 +76,7 @@ int main(int argc, char** argv) {
                              " gap_spacings=" + std::to_string(gapSpacings).substr(0, 4) +
                              " noise_spacings=" + std::to_string(noise).substr(0, 4);
   if (std::getenv("THIN_PARTS_NO_DENOISE_ONLY") == nullptr) {  // --denoise-only
-    const iires::Execution exec{threads, {}};
+    const iires::Execution exec{threads};
     const double t0 = now();
     const iires::PreprocessResult r = iires::preprocess(t.cloud, {}, exec);
     double sum = 0, before = 0;
@@ -94,7 +94,7 @@ int main(int argc, char** argv) {
     p.intrinsic = intrinsic;
     if (inputPerSample >= 0) p.maxInputPerSample = static_cast<std::size_t>(inputPerSample);
     const double t0 = now();
-    const iires::ResampleResult r = iires::resample(t.cloud, p, iires::Execution{threads, {}});
+    const iires::ResampleResult r = iires::resample(t.cloud, p, iires::Execution{threads});
     const double seconds = now() - t0;
     std::size_t off = 0, near = 0, sides[2] = {0, 0};
     double worst = 0, mean = 0;

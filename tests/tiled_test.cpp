@@ -158,8 +158,8 @@ TEST(Tiled, ScratchIsRemovedWhenATileFails) {
 TEST(Tiled, SameOutputForOneAndTwoThreads) {
   const std::string dir = iires::test::tempDir();
   iires::writePointCloud(dir + "/scene.ply", scene(16000, 5));
-  const iires::TiledResult one = iires::resampleTiled(dir + "/scene.ply", paramsFor(1000), unitTiles(dir), {1, {}});
-  const iires::TiledResult two = iires::resampleTiled(dir + "/scene.ply", paramsFor(1000), unitTiles(dir), {2, {}});
+  const iires::TiledResult one = iires::resampleTiled(dir + "/scene.ply", paramsFor(1000), unitTiles(dir), iires::Execution{1});
+  const iires::TiledResult two = iires::resampleTiled(dir + "/scene.ply", paramsFor(1000), unitTiles(dir), iires::Execution{2});
   ASSERT_EQ(one.cloud.size(), 1000u);
   EXPECT_EQ(one.cloud.points, two.cloud.points);
   EXPECT_EQ(one.cloud.normals, two.cloud.normals);

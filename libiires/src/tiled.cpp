@@ -258,7 +258,7 @@ TileOutcome TileRun::process(std::size_t t) const {
     PointCloud points = files.read(t, capacity, params.seed);
     report.loadedPoints = points.size();
     try {
-      outcome.samples = keepOwn(t, resample(std::move(points), p, Execution{threads, {}}).cloud);
+      outcome.samples = keepOwn(t, resample(std::move(points), p, Execution{threads}).cloud);
     } catch (const InputError&) {
       outcome.samples = {};  // too few or degenerate points for a surface: the quota passes on
     }

@@ -19,7 +19,7 @@ int main() {
   }
   iires::ResampleParams params;
   params.targetCount = 200;
-  const iires::Execution oneThread{1, {}};
+  const iires::Execution oneThread{1};
   const iires::ResampleResult resampled = iires::resample(sphere, params, oneThread);
   if (resampled.cloud.size() != 200) {
     std::fprintf(stderr, "resample gave %zu points\n", resampled.cloud.size());

@@ -6,6 +6,7 @@
 #include <functional>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 namespace iires {
 
@@ -14,10 +15,15 @@ namespace iires {
 /// all cores, no reports). No result depends on it: same input and parameters give the same output for any
 /// thread count.
 struct Execution {
+  using Progress = std::function<void(const std::string& stage, double fraction)>;
+
+  Execution() = default;
+  explicit Execution(int threadCount, Progress report = {}) : threads(threadCount), progress(std::move(report)) {}
+
   int threads = 0;  ///< threads of parallel loops; 0 = all cores
   /// Optional progress report: called with a stage name and the fraction of that stage done, in [0, 1], from
   /// the calling thread only. Empty = no reports.
-  std::function<void(const std::string& stage, double fraction)> progress;
+  Progress progress;
 
   /// Reports @p fraction of @p stage when a progress callback is set.
   void report(const std::string& stage, double fraction) const {
