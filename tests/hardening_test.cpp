@@ -327,11 +327,12 @@ TEST(Hardening, ExtremelyAnisotropicCloudStaysInItsBoundsOrFails) {
 // runs failed with "left the input's bounding box", the allowance being a tenth of the 3-spacing thickness).
 TEST(Hardening, ThinClosedBoxIsResampledNotRejected) {
   for (const std::uint64_t seed : {22u, 27u}) {
-    double spacing = 0, thickness = 0;
-    const PointCloud cloud = thinBoxCloud(40000, 3.0, seed, &spacing, &thickness);
+    test::ThinCase box3 = thinPlate(40000, 3.0, 0.0, seed);
+    box3.cloud.normals.clear();  // positions only
+    const double spacing = box3.spacing, thickness = box3.gap;
     iires::ResampleParams p;
     p.targetCount = 600;
-    const iires::ResampleResult r = iires::resample(cloud, p);
+    const iires::ResampleResult r = iires::resample(box3.cloud, p);
     ASSERT_EQ(r.cloud.size(), 600u) << seed;
     Eigen::AlignedBox3d box(Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(1, 1, thickness));
     for (const auto& q : r.cloud.points) EXPECT_LE(box.exteriorDistance(q), spacing) << seed << ": " << q.transpose();

@@ -446,9 +446,10 @@ TEST(MeshValidity, ValidMeshIsUnchanged) {
 
 // A noisy scan of a sphere (radial noise of 0.05, about 0.7 mesh spacings at N = 3,000): the small-hole fill
 // closes some loops through the neighbouring sheet. Found on CGAL's sphere_20k (σ ≈ 0.04); the repair removes
-// those faces with a ring and fills again: closed, genus 0, no self-intersection.
+// those faces with a ring and fills again: closed, genus 0, no self-intersection. (The seed is one whose mesh
+// needs the repair: with the sheet rule's neighbourhoods seed 2 no longer does.)
 TEST(Reconstruct, NoisySphereHasNoSelfIntersections) {
-  std::mt19937_64 rng(2);
+  std::mt19937_64 rng(0);
   std::normal_distribution<double> g(0.0, 1.0);
   PointCloud noisy;
   for (int i = 0; i < 8000; ++i) {

@@ -5,8 +5,10 @@
 #include <algorithm>
 #include <cmath>
 #include <random>
+#include <string>
 #include <vector>
 
+#include "iires/knn.hpp"
 #include "iires/types.hpp"
 
 namespace iires::test {
@@ -23,33 +25,6 @@ inline PointCloud sphereCloud(std::size_t n, double radius = 1.0, std::uint64_t 
     c.points.push_back(centre + radius * d);
     c.normals.push_back(d);
   }
-  return c;
-}
-
-/// A closed box [0,1]² × [0, t] sampled uniformly by area on all six faces, t = @p thicknessSpacings times the
-/// sampling's spacing (0.5/√density, the mean nearest-neighbour distance); positions only. @p spacing receives it.
-inline PointCloud thinBoxCloud(std::size_t n, double thicknessSpacings, std::uint64_t seed, double* spacing = nullptr,
-                               double* thickness = nullptr) {
-  double t = 0, s = 0;
-  for (int it = 0; it < 20; ++it) {  // the thickness changes the area, which changes the spacing
-    s = 0.5 / std::sqrt(static_cast<double>(n) / (2.0 + 4.0 * t));
-    t = thicknessSpacings * s;
-  }
-  std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<double> u(0.0, 1.0);
-  PointCloud c;
-  for (std::size_t i = 0; i < n; ++i) {
-    const double pick = u(rng) * (2.0 + 4.0 * t), a = u(rng), b = u(rng);
-    if (pick < 2.0) {
-      c.points.emplace_back(a, b, pick < 1.0 ? 0.0 : t);
-      continue;
-    }
-    const int face = std::min(3, static_cast<int>((pick - 2.0) / t));  // which rim face
-    const Eigen::Vector3d rim[4] = {{0, a, b * t}, {1, a, b * t}, {a, 0, b * t}, {a, 1, b * t}};
-    c.points.push_back(rim[face]);
-  }
-  if (spacing) *spacing = s;
-  if (thickness) *thickness = t;
   return c;
 }
 
@@ -100,6 +75,219 @@ inline PointCloud uStrip(std::size_t perSquare, double gap, std::uint64_t seed) 
     c.normals.emplace_back(std::sin(th), 0, -std::cos(th));
   }
   return c;
+}
+
+
+// Thin parts and near-contact surfaces with known answers (issue 19): two sheets joined by a fold, a thin
+// closed plate, two spheres nearly touching, a sphere inside a sphere. Every case is sampled uniformly at
+// random by area with a fixed seed; the gap is given in *input spacings*, the project's spacing of a cloud
+// (mean distance to the nearest neighbour), which for a uniform random sampling of density ρ is 0.5/√ρ.
+// Used by the tests (small clouds) and by bench/thin_parts_bench (large ones).
+
+
+/// A generated thin case: the cloud (outward unit normals), its input spacing and gap, and the truth.
+struct ThinCase {
+  std::string name;
+  PointCloud cloud;
+  double spacing = 0;  ///< mean nearest-neighbour distance of the sampling (0.5/√ρ)
+  double gap = 0;      ///< distance between the two surfaces that nearly touch
+  int kind = 0;        ///< 0 folded sheets, 1 plate, 2 two spheres, 3 sphere in sphere
+  double size = 1;     ///< sheets/plate: side; spheres: radius of the (outer/first) sphere
+  int components = 1;  ///< connected surfaces
+  int genus = 0;       ///< genus of each component
+
+  /// Distance from @p p to the true surface.
+  double distance(const Eigen::Vector3d& p) const;
+  /// Which of the two near surfaces @p p belongs to (0 or 1), or −1 for points on the fold (within a gap of
+  /// it) or the plate's rim (within two gaps of its edges: the rim face and the rounded creases beside it).
+  int side(const Eigen::Vector3d& p) const;
+};
+
+namespace thin {
+inline Eigen::Vector3d gaussianDirection(std::mt19937_64& rng) {
+  std::normal_distribution<double> g(0.0, 1.0);
+  Eigen::Vector3d d(g(rng), g(rng), g(rng));
+  return d.normalized();
+}
+/// Gap in absolute units for @p count points on a surface of area area(gap) (fixed point: the area may
+/// depend on the gap).
+template <typename Area>
+double solveGap(std::size_t count, double gapSpacings, Area area, double& spacing) {
+  double gap = 0;
+  for (int it = 0; it < 20; ++it) {
+    spacing = 0.5 / std::sqrt(static_cast<double>(count) / area(gap));
+    gap = gapSpacings * spacing;
+  }
+  return gap;
+}
+inline void addNoise(PointCloud& c, double sigma, std::mt19937_64& rng) {
+  if (sigma <= 0) return;
+  std::normal_distribution<double> g(0.0, sigma);
+  for (std::size_t i = 0; i < c.size(); ++i) c.points[i] += g(rng) * c.normals[i];
+}
+}  // namespace thin
+
+/// Two unit squares z = 0 and z = gap over [0,1]², joined at x = 1 by a half-cylinder of radius gap/2.
+/// @param noiseSpacings Gaussian noise along the normal, σ in input spacings
+inline ThinCase foldedSheets(std::size_t count, double gapSpacings, double noiseSpacings, std::uint64_t seed) {
+  ThinCase t;
+  t.name = "folded-sheets";
+  t.kind = 0;
+  t.gap = thin::solveGap(count, gapSpacings, [](double g) { return 2.0 + M_PI * g / 2; }, t.spacing);
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const double r = t.gap / 2, area = 2.0 + M_PI * r;
+  for (std::size_t i = 0; i < count; ++i) {
+    const double pick = u(rng) * area;
+    if (pick < 2.0) {
+      const int sheet = pick < 1.0 ? 0 : 1;
+      t.cloud.points.emplace_back(u(rng), u(rng), sheet ? t.gap : 0.0);
+      t.cloud.normals.emplace_back(0, 0, sheet ? 1 : -1);
+    } else {
+      const double th = M_PI * u(rng), y = u(rng);
+      t.cloud.points.emplace_back(1 + r * std::sin(th), y, r - r * std::cos(th));
+      t.cloud.normals.emplace_back(std::sin(th), 0, -std::cos(th));
+    }
+  }
+  thin::addNoise(t.cloud, noiseSpacings * t.spacing, rng);
+  return t;
+}
+
+/// A closed box [0,1]² × [0, t], t = gapSpacings input spacings, every face sampled.
+inline ThinCase thinPlate(std::size_t count, double gapSpacings, double noiseSpacings, std::uint64_t seed) {
+  ThinCase t;
+  t.name = "plate";
+  t.kind = 1;
+  t.gap = thin::solveGap(count, gapSpacings, [](double g) { return 2.0 + 4.0 * g; }, t.spacing);
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const double g = t.gap, area = 2.0 + 4.0 * g;
+  for (std::size_t i = 0; i < count; ++i) {
+    double pick = u(rng) * area;
+    const double a = u(rng), b = u(rng);
+    if (pick < 2.0) {
+      const int top = pick < 1.0 ? 0 : 1;
+      t.cloud.points.emplace_back(a, b, top ? g : 0.0);
+      t.cloud.normals.emplace_back(0, 0, top ? 1 : -1);
+      continue;
+    }
+    pick = (pick - 2.0) / g;  // which rim face: [0, 4)
+    const int face = std::min(3, static_cast<int>(pick));
+    const double z = b * g;
+    if (face == 0) t.cloud.points.emplace_back(0, a, z), t.cloud.normals.emplace_back(-1, 0, 0);
+    if (face == 1) t.cloud.points.emplace_back(1, a, z), t.cloud.normals.emplace_back(1, 0, 0);
+    if (face == 2) t.cloud.points.emplace_back(a, 0, z), t.cloud.normals.emplace_back(0, -1, 0);
+    if (face == 3) t.cloud.points.emplace_back(a, 1, z), t.cloud.normals.emplace_back(0, 1, 0);
+  }
+  thin::addNoise(t.cloud, noiseSpacings * t.spacing, rng);
+  return t;
+}
+
+/// Two unit spheres whose surfaces are gapSpacings input spacings apart (centres on the x axis).
+inline ThinCase twoSpheres(std::size_t count, double gapSpacings, double noiseSpacings, std::uint64_t seed) {
+  ThinCase t;
+  t.name = "two-spheres";
+  t.kind = 2;
+  t.components = 2;
+  t.gap = thin::solveGap(count, gapSpacings, [](double) { return 8.0 * M_PI; }, t.spacing);
+  std::mt19937_64 rng(seed);
+  for (std::size_t i = 0; i < count; ++i) {
+    const Eigen::Vector3d d = thin::gaussianDirection(rng);
+    const double cx = i % 2 ? 1.0 + t.gap / 2 : -1.0 - t.gap / 2;
+    t.cloud.points.push_back(Eigen::Vector3d(cx, 0, 0) + d);
+    t.cloud.normals.push_back(d);
+  }
+  thin::addNoise(t.cloud, noiseSpacings * t.spacing, rng);
+  return t;
+}
+
+/// A unit sphere inside a sphere of radius 1 + gap (same centre), both sampled at the same density.
+inline ThinCase nestedSpheres(std::size_t count, double gapSpacings, double noiseSpacings, std::uint64_t seed) {
+  ThinCase t;
+  t.name = "nested-spheres";
+  t.kind = 3;
+  t.components = 2;
+  t.gap = thin::solveGap(
+      count, gapSpacings, [](double g) { return 4.0 * M_PI * (1.0 + (1.0 + g) * (1.0 + g)); }, t.spacing);
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const double outer = 1.0 + t.gap, share = 1.0 / (1.0 + outer * outer);
+  for (std::size_t i = 0; i < count; ++i) {
+    const Eigen::Vector3d d = thin::gaussianDirection(rng);
+    t.cloud.points.push_back((u(rng) < share ? 1.0 : outer) * d);
+    t.cloud.normals.push_back(d);
+  }
+  thin::addNoise(t.cloud, noiseSpacings * t.spacing, rng);
+  return t;
+}
+
+inline double ThinCase::distance(const Eigen::Vector3d& p) const {
+  auto clamp01 = [](double v) { return std::clamp(v, 0.0, 1.0); };
+  switch (kind) {
+    case 0: {
+      const double r = gap / 2, dy = p.y() - clamp01(p.y());
+      double best = 1e300;
+      for (double z : {0.0, gap}) {
+        const double dx = p.x() - std::min(p.x(), 1.0) + std::min(0.0, p.x());
+        best = std::min(best, std::sqrt(dx * dx + dy * dy + (p.z() - z) * (p.z() - z)));
+      }
+      if (p.x() >= 1.0) {
+        const double radial = std::abs(Eigen::Vector2d(p.x() - 1.0, p.z() - r).norm() - r);
+        best = std::min(best, std::sqrt(radial * radial + dy * dy));
+      }
+      return best;
+    }
+    case 1: {  // distance to the box surface
+      const Eigen::Vector3d lo(0, 0, 0), hi(1, 1, gap);
+      const Eigen::Vector3d c = p.cwiseMax(lo).cwiseMin(hi);
+      if (c != p) return (p - c).norm();
+      return std::min({p.x(), 1 - p.x(), p.y(), 1 - p.y(), p.z(), gap - p.z()});
+    }
+    case 2: {
+      const double a = (p - Eigen::Vector3d(-1 - gap / 2, 0, 0)).norm(), b = (p - Eigen::Vector3d(1 + gap / 2, 0, 0)).norm();
+      return std::min(std::abs(a - 1), std::abs(b - 1));
+    }
+    default: {
+      const double r = p.norm();
+      return std::min(std::abs(r - 1), std::abs(r - 1 - gap));
+    }
+  }
+}
+
+inline int ThinCase::side(const Eigen::Vector3d& p) const {
+  switch (kind) {
+    case 0:
+      return p.x() > 1.0 - gap ? -1 : (p.z() < gap / 2 ? 0 : 1);
+    case 1:
+      return std::min({p.x(), 1 - p.x(), p.y(), 1 - p.y()}) < 2 * gap ? -1 : (p.z() < gap / 2 ? 0 : 1);
+    case 2:
+      return p.x() < 0 ? 0 : 1;  // the whole spheres: their areas are equal
+    default:
+      return p.norm() < 1.0 + gap / 2 ? 0 : 1;
+  }
+}
+
+/// Nearest-neighbour spacing cv of @p points, each near surface's points among their own (across a gap
+/// narrower than the output spacing the straight-line nearest neighbour is on the other surface); points on
+/// the fold or the rim are not counted.
+inline double sideSpacingCv(const ThinCase& t, const std::vector<Eigen::Vector3d>& points) {
+  std::vector<Eigen::Vector3d> part[2];
+  for (const auto& p : points)
+    if (const int s = t.side(p); s >= 0) part[s].push_back(p);
+  double sum = 0, sq = 0, count = 0;
+  for (const auto& pts : part) {
+    if (pts.size() < 2) continue;
+    const KnnIndex index(pts);
+    std::vector<std::uint32_t> idx;
+    std::vector<double> d2;
+    for (const auto& p : pts) {
+      index.knn(p, 2, idx, d2);
+      const double d = std::sqrt(d2[1]);
+      sum += d, sq += d * d, ++count;
+    }
+  }
+  const double mean = sum / count;
+  return std::sqrt(std::max(0.0, sq / count - mean * mean)) / mean;
 }
 
 }  // namespace iires::test

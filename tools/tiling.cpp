@@ -99,6 +99,7 @@ void ResampleOptions::applyToParams(bool needCount) {
   params.preprocessing.outliers.mode = parseOutlierMode(outlierMode);
   params.preprocessing.runDenoise = !noDenoise;
   params.intrinsic = !noIntrinsic;
+  params.preprocessing.sheets = !noIntrinsic;  // the sheet rule, also for --denoise-only
   if (!needCount) return;
   if (count < 1) throw InputError("-n must be at least 1 (got " + std::to_string(count) + ")");
   checkCount("-n", count, kBytesPerOutputPoint);

@@ -267,7 +267,7 @@ DenoiseResult denoise(const PointCloud& input, const DenoiseParams& params, cons
   result.sweepSeconds = std::chrono::duration<double>(orientStart - sweepStart).count();
   if (!given && params.orientNormals)
     orientNormals(cur, normals, nbr, K, std::min<std::size_t>(K, static_cast<std::size_t>(params.orientNeighbours) + 1),
-                  exec.threads);
+                  exec.threads, true);
   result.orientSeconds = std::chrono::duration<double>(Clock::now() - orientStart).count();
 
   result.cloud.points.resize(n);

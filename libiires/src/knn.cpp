@@ -127,6 +127,29 @@ void NeighbourTable::truncate(std::size_t k) {
   rows_.shrink_to_fit();
 }
 
+std::size_t NeighbourTable::filter(const std::function<bool(std::size_t, std::size_t)>& keep, std::size_t minKept,
+                                   int threads) {
+  std::vector<std::uint8_t> kept(found_.size());
+  std::vector<std::uint32_t> scratch(rows_.size());
+  parallelFor(found_.size(), threads, [&](std::size_t i) {
+    const std::uint32_t* row = rows_.data() + i * k_;
+    std::uint32_t* out = scratch.data() + i * k_;
+    std::size_t w = 0, others = 0;
+    for (std::size_t a = 0; a < found_[i]; ++a)
+      if (row[a] == i || keep(i, static_cast<std::size_t>(row[a]))) {
+        others += row[a] != i;
+        out[w++] = row[a];
+      }
+    kept[i] = static_cast<std::uint8_t>(others >= minKept ? w : found_[i]);
+    if (others < minKept) std::copy_n(row, found_[i], out);
+  });
+  std::size_t removed = 0;
+  for (std::size_t i = 0; i < found_.size(); ++i) removed += found_[i] - kept[i];
+  rows_.swap(scratch);
+  found_.swap(kept);
+  return removed;
+}
+
 namespace {
 /// The 21 low bits of @p x spread to every third bit.
 std::uint64_t spreadBits(std::uint64_t x) {

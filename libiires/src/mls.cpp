@@ -7,12 +7,17 @@
 #include <cmath>
 
 #include "iires/detail/parallel.hpp"
+#include "iires/sheets.hpp"
 #include "quadric_fit.hpp"
 
 namespace iires {
 namespace {
 constexpr std::size_t kKernelNeighbour = MlsSurface::kWidthNeighbours - 1;  // paper: h from the 8th neighbour
 constexpr double kMaxQuadricHeight = 2.0;     // kernel widths: a quadric fit beyond this is not trusted
+// Input spacing (mean nearest-neighbour distance) per kernel width: a uniform sampling's 8th neighbour lies
+// √(8/π) grid spacings away, its nearest half a grid spacing.
+const double kSpacingPerWidth = 0.5 / std::sqrt(8.0 / M_PI);
+const double kGapParallelCos = std::cos(25.0 * M_PI / 180.0);  // SheetParams::gapAngleDeg
 
 /// Distance from the origin to the segment [p, r].
 double segmentDistance(const Eigen::Vector2d& p, const Eigen::Vector2d& r) {
@@ -78,8 +83,14 @@ double beyondHull(const std::vector<Eigen::Vector3d>& points, const std::vector<
 
 MlsSurface::MlsSurface(const std::vector<Eigen::Vector3d>& points,
                        const std::vector<Eigen::Vector3d>& normals, const MlsParams& params, const Execution& exec,
-                       const KnnIndex* index, const NeighbourTable* table)
-    : points_(points), normals_(normals), params_(params), index_(index ? index : &own_.emplace(points)) {
+                       const KnnIndex* index, const NeighbourTable* table, std::vector<std::uint8_t> nearSheets)
+    : points_(points),
+      normals_(normals),
+      params_(params),
+      index_(index ? index : &own_.emplace(points)),
+      nearSheets_(std::move(nearSheets)) {
+  if (!nearSheets_.empty() && nearSheets_.size() != points.size())
+    throw std::invalid_argument("MlsSurface: nearSheets must hold one flag per point");
   const std::size_t n = points.size();
   h_.assign(n, 0.0);
   std::vector<double> nearest(n, 0.0);
@@ -141,8 +152,31 @@ Eigen::Vector3d MlsSurface::project(const Eigen::Vector3d& x0, Eigen::Vector3d* 
     if (found == 0) break;
     // Only the sheet the query belongs to: neighbours whose normals face away from the reference get no weight.
     Eigen::Vector3d reference = it > 0 ? normal : hint ? *hint : normals_[idx[0]];
-    if (std::none_of(idx.begin(), idx.end(), [&](std::uint32_t j) { return normals_[j].dot(reference) > 0; }))
-      reference = normals_[idx[0]];
+    auto facing = [&](std::uint32_t j) { return normals_[j].dot(reference) > 0; };
+    if (std::none_of(idx.begin(), idx.end(), facing)) reference = normals_[idx[0]];
+    // The sheet rule (sheets.hpp) against an anchor on the query's sheet — the nearest facing input point, then
+    // the estimate itself — so that a sheet facing the same way a few spacings off (a shell inside a shell)
+    // gets no weight either; only where a neighbour has another sheet near (all of them without near flags).
+    bool gate = params_.sheetGap > 0 &&
+                (nearSheets_.empty() || std::any_of(idx.begin(), idx.begin() + static_cast<long>(found),
+                                                    [&](std::uint32_t j) { return nearSheets_[j] != 0; }));
+    Eigen::Vector3d anchor = x, anchorNormal = normal;
+    double anchorSpacing = 0;
+    bool anchorNear = nearSheets_.empty();
+    if (gate) {
+      std::size_t first = 0;
+      while (first + 1 < found && !facing(idx[first])) ++first;
+      anchorSpacing = kSpacingPerWidth * h_[idx[first]];
+      anchorNear = anchorNear || nearSheets_[idx[first]];
+      if (it == 0) anchor = points_[idx[first]], anchorNormal = normals_[idx[first]];
+    }
+    auto onSheet = [&](std::uint32_t j) {
+      if (!(anchorNear || nearSheets_[j])) return true;
+      return !acrossGap(anchor, anchorNormal, points_[j], normals_[j],
+                        params_.sheetGap * std::max(anchorSpacing, kSpacingPerWidth * h_[j]), kGapParallelCos);
+    };
+    if (gate && std::none_of(idx.begin(), idx.end(), [&](std::uint32_t j) { return facing(j) && onSheet(j); }))
+      gate = false;
     h = 0;
     for (std::size_t j = 0; j < found; ++j) h += h_[idx[j]];
     h /= static_cast<double>(found);
@@ -154,7 +188,7 @@ Eigen::Vector3d MlsSurface::project(const Eigen::Vector3d& x0, Eigen::Vector3d* 
     Eigen::Vector3d a = Eigen::Vector3d::Zero(), nsum = Eigen::Vector3d::Zero();
     w.resize(found);
     for (std::size_t j = 0; j < found; ++j) {
-      w[j] = normals_[idx[j]].dot(reference) > 0.0 ? std::exp(-d2[j] * inv) + 1e-12 : 0.0;
+      w[j] = facing(idx[j]) && (!gate || onSheet(idx[j])) ? std::exp(-d2[j] * inv) + 1e-12 : 0.0;
       wsum += w[j];
       a += w[j] * points_[idx[j]];
       nsum += w[j] * normals_[idx[j]];

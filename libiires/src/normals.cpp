@@ -36,12 +36,23 @@ std::vector<std::uint32_t> knnLists(const std::vector<Eigen::Vector3d>& points, 
 /// 1 − |nᵢ·nⱼ|, each normal flipped to agree with its tree parent. Kruskal: the edges (each once) sorted by
 /// weight, ties by their order in the lists, so the tree is unique; then per component a walk from its root.
 void orientOverGraph(const std::vector<Eigen::Vector3d>& points, std::vector<Eigen::Vector3d>& normals,
-                     const std::vector<std::uint32_t>& nbr, std::size_t stride, std::size_t k, int threads) {
+                     const std::vector<std::uint32_t>& nbr, std::size_t stride, std::size_t k, int threads,
+                     bool acrossEdge = false) {
   const std::size_t n = points.size();
   if (n == 0) return;
   auto listed = [&](std::uint32_t i, std::uint32_t j) {  // j among i's first k
     const std::uint32_t* row = nbr.data() + static_cast<std::size_t>(i) * stride;
     return std::find(row, row + k, j) != row + k;
+  };
+  // How far n_i and n_j agree: their dot product, or with acrossEdge that of their parts orthogonal to the edge
+  // d = p_j − p_i, n_i·n_j − (n_i·d̂)(n_j·d̂): on a surface consistently oriented normals agree there however
+  // sharply it turns between them (a crease, a tight fold), and across a gap (d along both normals) it vanishes.
+  auto agreement = [&](std::size_t i, std::size_t j) {
+    const double c = normals[i].dot(normals[j]);
+    if (!acrossEdge) return c;
+    const Eigen::Vector3d d = points[j] - points[i];
+    const double d2 = d.squaredNorm();
+    return d2 > 0 ? c - normals[i].dot(d) * normals[j].dot(d) / d2 : c;
   };
   // Each undirected edge once: from the lower end, or from the higher one when the lower does not list it.
   auto kept = [&](std::uint32_t i, std::uint32_t j) { return j != i && (i < j || !listed(j, i)); };
@@ -58,7 +69,7 @@ void orientOverGraph(const std::vector<Eigen::Vector3d>& points, std::vector<Eig
       const std::uint32_t j = nbr[i * stride + a];
       if (!kept(static_cast<std::uint32_t>(i), j)) continue;
       // Non-negative floats order like their bit patterns.
-      const float w = std::max(0.0f, static_cast<float>(1.0 - std::abs(normals[i].dot(normals[j]))));
+      const float w = std::max(0.0f, static_cast<float>(1.0 - std::abs(agreement(i, j))));
       std::uint32_t bits;
       std::memcpy(&bits, &w, sizeof bits);
       edges[e] = {static_cast<std::uint32_t>(i), j};
@@ -96,7 +107,7 @@ void orientOverGraph(const std::vector<Eigen::Vector3d>& points, std::vector<Eig
         const std::uint32_t t = adjacent[e];
         if (done[t]) continue;
         done[t] = 1;
-        if (normals[t].dot(normals[v]) < 0) normals[t] = -normals[t];
+        if (agreement(v, t) < 0) normals[t] = -normals[t];
         queue.push_back(t);
       }
     }
@@ -149,8 +160,9 @@ void orientNormals(const std::vector<Eigen::Vector3d>& points, std::vector<Eigen
 }
 
 void orientNormals(const std::vector<Eigen::Vector3d>& points, std::vector<Eigen::Vector3d>& normals,
-                   const std::vector<std::uint32_t>& neighbours, std::size_t stride, std::size_t k, int threads) {
-  orientOverGraph(points, normals, neighbours, stride, std::min(k, stride), threads);
+                   const std::vector<std::uint32_t>& neighbours, std::size_t stride, std::size_t k, int threads,
+                   bool acrossEdge) {
+  orientOverGraph(points, normals, neighbours, stride, std::min(k, stride), threads, acrossEdge);
 }
 
 }  // namespace iires

@@ -13,6 +13,7 @@ namespace iires {
 
 void PreprocessParams::validate() const {
   if (!(cleanDisplacement >= 0)) throw std::invalid_argument("PreprocessParams: cleanDisplacement must be >= 0");
+  if (sheets) sheet.validate();
   outliers.validate();
   if (runDenoise) denoise.validate();
 }
@@ -24,6 +25,7 @@ std::string PreprocessResult::toJson() const {
   j.member("outliers_removed", outliersRemoved).member("denoise_iterations", denoiseIterations);
   j.member("clean_input", cleanInput).member("mean_displacement", meanDisplacement);
   j.member("outlier_time_s", outlierSeconds).member("denoise_time_s", denoiseSeconds).member("time_s", seconds);
+  j.key("sheets").embed(sheets.toJson());
   return j.endObject().str();
 }
 
@@ -37,18 +39,33 @@ PreprocessResult preprocess(const PointCloud& input, const PreprocessParams& par
   params.validate();
   const auto start = std::chrono::steady_clock::now();
   DenoiseParams dp = params.denoise;
+  const SheetParams& sp = params.sheet;
 
   PreprocessResult result;
   result.inputPoints = input.size();
-  // One k-NN search for both stages, unless the outlier stage moved or removed points.
+  // One k-NN search for both stages, unless the outlier stage moved or removed points. Without a table the
+  // sheet rule runs here: it filters the table and gives the input normals (the denoising's bilateral term
+  // then reads them oriented), so both stages see each point's own sheet only.
   std::optional<KnnIndex> index;
   std::optional<NeighbourTable> own;
+  std::optional<PointCloud> withNormals;
+  const PointCloud* cloud = &input;
   if (!table) {
+    if (input.empty()) throw InputError("preprocess: the cloud is empty");
     index.emplace(input.points);
     table = &own.emplace(*index, input.points, preprocessNeighbours(params), exec.threads);
+    if (params.sheets && input.size() > static_cast<std::size_t>(sp.pcaNeighbours)) {
+      withNormals.emplace();
+      withNormals->points = input.points;
+      result.sheets = separateSheets(input.points, *own, withNormals->normals, sp, exec,
+                                     input.hasNormals() ? &input.normals : nullptr);
+      cloud = &*withNormals;
+    }
   }
-  OutlierResult outliers = processOutliers(input, params.outliers, exec, table);  // eq. (4)–(5)
-  const bool unchanged = outliers.found == 0;
+  OutlierResult outliers = processOutliers(*cloud, params.outliers, exec, table);  // eq. (4)–(5)
+  // Pulled or kept outliers leave the indices as they were: the table still serves the denoising (only the
+  // pulled points' own rows are out of date). Removed ones renumber the points: a new table, filtered again.
+  const bool sameIndices = outliers.cloud.size() == cloud->size();
   result.outliersFound = outliers.found;
   result.outliersPulled = outliers.pulled;
   result.outliersRemoved = outliers.removed;
@@ -59,7 +76,18 @@ PreprocessResult preprocess(const PointCloud& input, const PreprocessParams& par
     // cleanDisplacement input spacings on average, the cloud is already clean and further sweeps would only
     // erode tight curvature (folds, thin parts, sparse clouds) — denoise() keeps the positions then.
     dp.cleanDisplacement = params.cleanDisplacement;
-    DenoiseResult denoised = denoise(outliers.cloud, dp, exec, unchanged ? table : nullptr);
+    std::optional<KnnIndex> renumbered;
+    std::optional<NeighbourTable> renumberedTable;
+    const NeighbourTable* denoiseTable = sameIndices && (outliers.found == 0 || params.sheets) ? table : nullptr;
+    if (!denoiseTable && params.sheets && outliers.cloud.hasNormals() &&
+        outliers.cloud.size() > static_cast<std::size_t>(sp.pcaNeighbours)) {
+      renumbered.emplace(outliers.cloud.points);
+      denoiseTable = &renumberedTable.emplace(*renumbered, outliers.cloud.points, preprocessNeighbours(params),
+                                              exec.threads);
+      std::vector<Eigen::Vector3d> normals;
+      separateSheets(outliers.cloud.points, *renumberedTable, normals, sp, exec, &outliers.cloud.normals);
+    }
+    DenoiseResult denoised = denoise(outliers.cloud, dp, exec, denoiseTable);
     result.denoiseSeconds = denoised.seconds;
     result.cleanInput = denoised.cleanInput;
     result.denoiseIterations = denoised.iterations;

@@ -97,9 +97,11 @@ PointCloud workingCloud(PointCloud cloud, const ResampleParams& params, const Ex
   if (params.maxInputPerSample > 0 && cloud.size() > workingTarget) {
     const auto t = clock.begin("thin");
     const std::size_t target = workingTarget;
+    // Intrinsic control: cells holding two sheets (a gap the input resolves, narrower than a cell) keep all
+    // their points, so that no later stage sees the sheets merged.
     cloud = select(cloud, voxelThin(cloud.points, cloud.normals, target,
                                     bboxDiagonal(cloud.points) / std::sqrt(static_cast<double>(target)), 0,
-                                    exec.threads));
+                                    exec.threads, 0.0, params.intrinsic));
     clock.end("thin", t);
   }
   return select(cloud, mortonOrder(cloud.points, exec.threads));
@@ -143,6 +145,40 @@ void reportLevels(const CurvatureResult& curvature, const KnnIndex& working, Res
     if (result.pointsPerLevel[q]) result.spacingPerLevel[q] /= static_cast<double>(result.pointsPerLevel[q]);
 }
 
+/// The sheet rule (intrinsic control from the first graph on): filters @p neighbours so that every stage below
+/// reads neighbours on each point's own sheet only; a cloud without normals gets them from that graph
+/// (estimated and oriented) unless pre-processing fits its own over the filtered rows (as the feature detector
+/// expects them). Sets result.sheets; returns which points have another sheet near (the MLS surface's gate).
+std::vector<std::uint8_t> sheetRule(PointCloud& cloud, NeighbourTable& neighbours, bool preprocessing,
+                                    const SheetParams& params, const Execution& exec, const StageClock& clock,
+                                    ResampleResult& result) {
+  const auto t = clock.begin("sheets");
+  std::vector<std::uint8_t> near;
+  std::vector<Eigen::Vector3d> normals;
+  SheetParams sp = params;
+  sp.orient = !preprocessing;  // pre-processing's normals replace these
+  result.sheets = separateSheets(cloud.points, neighbours, normals, sp, exec,
+                                 cloud.hasNormals() ? &cloud.normals : nullptr, &near);
+  if (!preprocessing) cloud.normals = std::move(normals);
+  clock.end("sheets", t);
+  return near;
+}
+
+/// After pre-processing moved or dropped points: the later stages' table (@p laterK columns) on the final
+/// positions, through the sheet rule again (on rows as long as the first time, @p tableK: shorter ones would not
+/// reach a sheet as far off); returns which points have another sheet near.
+std::vector<std::uint8_t> refilter(const PointCloud& cloud, std::optional<KnnIndex>& index,
+                                   std::optional<NeighbourTable>& neighbours, std::size_t tableK, std::size_t laterK,
+                                   const SheetParams& params, const Execution& exec) {
+  index.emplace(cloud.points);
+  neighbours.emplace(*index, cloud.points, tableK, exec.threads);
+  std::vector<std::uint8_t> near;
+  std::vector<Eigen::Vector3d> normals;
+  separateSheets(cloud.points, *neighbours, normals, params, exec, &cloud.normals, &near);
+  neighbours->truncate(laterK);
+  return near;
+}
+
 }  // namespace
 
 void ResampleParams::validate() const {
@@ -173,6 +209,7 @@ std::string ResampleResult::toJson() const {
   j.member("working_points", thinnedPoints).member("initial_samples", initialSamples).member("passes", passes);
   j.member("relax_iterations", relaxIterations).member("splits", splits).member("collapses", collapses);
   j.member("target_length", targetLength).member("components", components).member("satellites", satellites);
+  j.key("sheets").embed(sheets.toJson());
   j.member("feature_points", featurePoints).member("feature_samples", featureSamples);
   j.array("points_per_level", pointsPerLevel).array("spacing_per_level", spacingPerLevel);
   j.key("preprocess").embed(preprocessing.toJson());
@@ -211,7 +248,7 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params, const Ex
 
   constexpr std::size_t kPreprocessMinPoints = 25;
   const bool preprocessing = params.preprocess && cloud.size() >= kPreprocessMinPoints;
-  const PreprocessParams& pp = params.preprocessing;
+  PreprocessParams pp = params.preprocessing;
   const GeodesicParams& gp = params.geodesic;
   // One k-NN search for every stage that reads the working cloud's neighbours (pre-processing, the geodesic
   // graph, the MLS kernel widths) while pre-processing keeps the positions; one k-d tree for it and the MLS.
@@ -223,6 +260,11 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params, const Ex
   const std::size_t tableK = std::max(preprocessing ? preprocessNeighbours(pp) : std::size_t{0}, laterK);
   std::optional<NeighbourTable> neighbours(std::in_place, *index, cloud.points, tableK, exec.threads);
   clock.end("neighbours", t);
+  const SheetParams& sp = params.preprocessing.sheet;
+  pp.sheets = params.intrinsic;
+  const bool sheets = params.intrinsic && cloud.size() > static_cast<std::size_t>(sp.pcaNeighbours);
+  std::vector<std::uint8_t> nearSheets;  // per point of the final working cloud (the MLS surface's gate)
+  if (sheets) nearSheets = sheetRule(cloud, *neighbours, preprocessing, sp, exec, clock, result);
   if (preprocessing) {
     t = clock.begin("preprocess");
     result.preprocessing = iires::preprocess(cloud, pp, exec, &*neighbours);
@@ -233,6 +275,7 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params, const Ex
       neighbours.reset();
       index.reset();
       cloud = std::move(result.preprocessing.cloud);
+      if (sheets) nearSheets = refilter(cloud, index, neighbours, tableK, laterK, sp, exec);
     }
     result.preprocessing.cloud = {};
     clock.end("preprocess", t);
@@ -257,8 +300,10 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params, const Ex
   std::vector<std::uint32_t> candidates;
   auto independent = [&](int threads, const KnnIndex* pointIndex) {
     auto t = clock.begin("surface");
-    surface.emplace(cloud.points, cloud.normals, params.mls, Execution{threads}, index ? &*index : pointIndex,
-                    neighbours ? &*neighbours : nullptr);
+    MlsParams mp = params.mls;
+    if (!params.intrinsic) mp.sheetGap = 0;  // straight-line neighbourhoods
+    surface.emplace(cloud.points, cloud.normals, mp, Execution{threads}, index ? &*index : pointIndex,
+                    neighbours ? &*neighbours : nullptr, std::move(nearSheets));
     neighbours.reset();  // read by nothing after the surface and the geodesic graph (memory at 5M)
     clock.end("surface", t);
     t = clock.begin("candidates");

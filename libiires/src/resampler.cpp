@@ -28,6 +28,8 @@ constexpr double kOffSurfaceLimit = 0.6;  // MlsSurface::project's offSurface be
 // boundary of a sparse input is several output spacings past the data (upsampling).
 constexpr double kBeyondLimit = 0.05;
 constexpr double kCarryShare = 0.05;     // edits touching more than this share of samples restart the relaxation
+constexpr std::size_t kWiderQuery = 3;   // candidates queried for a sample the rule refuses some of
+constexpr double kCellSheetHeight = 1.25;  // voxel cells: another sheet lies this × the sheet height off a plane
 
 /// The samples of @p s not marked in @p removed, in Morton order (loops over samples and their k-NN queries then
 /// stay in cache).
@@ -81,6 +83,24 @@ std::optional<Eigen::Vector2d> gapBisector(const Eigen::Vector2d& from, const Ei
 /// current distances instead of querying a new k-d tree (samples moved by a fraction of a spacing, so the few
 /// neighbours that shape a cell stay among the nearest of a step ago). Its rings are moved into the result (the
 /// caller replaces them with it). Without it every ring is computed from scratch.
+void Resampler::acceptedNearest(const KnnIndex& index, const Samples& s, std::size_t i, std::size_t stride,
+                                std::vector<std::uint32_t>& idx, std::vector<double>& d2) const {
+  index.knn(s.pos[i], stride, idx, d2);
+  // Samples the rule refuses (another sheet a gap away, narrower than the spacing) take the places of
+  // neighbours: then a wider query, of which the first stride accepted ones are kept.
+  std::size_t w = 0;
+  for (std::size_t c = 0; c < idx.size(); ++c)
+    if (idx[c] == i || rule_.accept(i, idx[c])) idx[w] = idx[c], d2[w] = d2[c], ++w;
+  if (w < idx.size()) {
+    index.knn(s.pos[i], kWiderQuery * stride, idx, d2);
+    w = 0;
+    for (std::size_t c = 0; c < idx.size() && w < stride; ++c)
+      if (idx[c] == i || rule_.accept(i, idx[c])) idx[w] = idx[c], d2[w] = d2[c], ++w;
+  }
+  idx.resize(w);
+  d2.resize(w);
+}
+
 Rings Resampler::computeRings(const Samples& s, double cellRadius, Relaxation* relaxation, bool requery) const {
   const bool previous = relaxation && relaxation->rings;
   if (!previous) requery = true;
@@ -132,8 +152,9 @@ Rings Resampler::computeRings(const Samples& s, double cellRadius, Relaxation* r
     auto& byDistance = sc.byDistance;
     auto& nb = sc.nb;
     const auto candidates = r.candidates.begin() + static_cast<long>(i * stride);
-    if (requery || (stale && (*stale)[i])) {
-      index->knn(s.pos[i], stride, idx, d2);
+    const bool queried = requery || (stale && (*stale)[i]);  // then idx holds accepted samples only
+    if (queried) {
+      acceptedNearest(*index, s, i, stride, idx, d2);
     } else {
       byDistance.clear();
       for (std::size_t c = 0; c < stride; ++c)
@@ -157,7 +178,7 @@ Rings Resampler::computeRings(const Samples& s, double cellRadius, Relaxation* r
     coincident.clear();
     for (std::size_t c = 0; c < idx.size(); ++c) {
       const std::uint32_t j = idx[c];
-      if (j == i || !rule_.accept(i, j)) continue;
+      if (j == i || (!queried && !rule_.accept(i, j))) continue;
       const Eigen::Vector3d d = s.pos[j] - s.pos[i];
       Eigen::Vector2d q(d.dot(u), d.dot(v));
       const double qn = q.norm(), dist = std::sqrt(d2[c]);
@@ -597,8 +618,13 @@ std::vector<std::uint32_t> initialCandidates(const PointCloud& cloud, const MlsS
     std::iota(all.begin(), all.end(), 0u);
     return all;
   }
+  // Intrinsic control: one candidate per sheet in each cell (sheets.hpp's height, without the slope term:
+  // a cell spans several spacings, and a curved sheet split in two only adds a candidate).
+  const double sheetHeight = params.intrinsic ? kCellSheetHeight * params.preprocessing.sheet.heightSpacings *
+                                                    surface.meanSpacing()
+                                              : 0.0;
   return voxelThin(cloud.points, cloud.normals, count, std::sqrt(surface.area() / static_cast<double>(count)),
-                   params.seed, threads);
+                   params.seed, threads, sheetHeight);
 }
 
 Samples Resampler::initialise(const std::vector<std::uint32_t>& chosen, ResampleResult& result) {

@@ -9,6 +9,7 @@
 #include <optional>
 #include <vector>
 
+#include "iires/knn.hpp"
 #include "iires/mls.hpp"
 #include "iires/neighbourhood.hpp"
 #include "iires/resample.hpp"
@@ -77,6 +78,10 @@ class Resampler {
  private:
   Rings computeRings(const Samples& s, double cellRadius, Relaxation* relaxation = nullptr,
                      bool requery = true) const;
+  /// The stride nearest samples to sample i in @p index that the rule accepts (i itself among them), nearest
+  /// first.
+  void acceptedNearest(const KnnIndex& index, const Samples& s, std::size_t i, std::size_t stride,
+                       std::vector<std::uint32_t>& idx, std::vector<double>& d2) const;
   std::vector<Edge> edges(const Samples& s, const Rings& r) const;
   /// @p projectionSteps: MLS projection steps per move (0 = MlsParams::iterations).
   double relax(Samples& s, double l, int iterations, Relaxation& state, int projectionSteps = 0);

@@ -12,7 +12,14 @@ namespace iires::detail {
 /// @p target (−15 % to +20 %) are occupied; per cell the point nearest its centre, indices ascending. With
 /// normals, the normal's dominant signed axis is part of the cell key, so facing sheets of a thin part that
 /// share a cell (a gap narrower than the cell) each keep a point.
+/// @param sheetHeight > 0 (with normals): per cell one point per sheet — the cell's points off the planes of
+/// the points picked so far by more than this (another sheet a gap away, e.g. facing the same way) are picked
+/// too, nearest the centre first
+/// @param keepLayers a cell whose points form two layers (an empty band wider than the input resolves between
+/// their heights along the cell's thinnest direction) holds two sheets closer than the cell is wide: all of
+/// its points are kept
 std::vector<std::uint32_t> voxelThin(const std::vector<Eigen::Vector3d>& pts, const std::vector<Eigen::Vector3d>& normals,
-                                     std::size_t target, double cell, std::uint64_t seed, int threads);
+                                     std::size_t target, double cell, std::uint64_t seed, int threads,
+                                     double sheetHeight = 0, bool keepLayers = false);
 
 }  // namespace iires::detail

@@ -5,6 +5,7 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -61,6 +62,13 @@ class NeighbourTable {
   /// @brief Keeps the first @p k neighbours of every row and frees the rest, for readers that need no more
   /// (get() with up to @p k gives what it gave). No effect when k ≥ k().
   void truncate(std::size_t k);
+  /// @brief Keeps, in every row, the neighbours @p keep(i, j) accepts (in their order; the point itself is
+  /// always kept), so that every reader of the table sees only those (e.g. the sheet rule, sheets.hpp).
+  /// Rows in which fewer than @p minKept neighbours besides the point itself would remain are left whole.
+  /// @p keep is called concurrently. @return the number of (directed) entries removed.
+  /// @param threads 0 = all cores; the result does not depend on it
+  std::size_t filter(const std::function<bool(std::size_t i, std::size_t j)>& keep, std::size_t minKept,
+                     int threads = 0);
 
  private:
   const std::vector<Eigen::Vector3d>& points_;

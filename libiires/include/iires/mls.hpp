@@ -17,6 +17,9 @@ struct MlsParams {
   int k = 16;           ///< neighbours in each local fit (paper: 8 for the weights' kernel width)
   int degree = 2;       ///< 1 = weighted tangent plane (paper eq. 1–3), 2 = plane + quadric height field
   int iterations = 2;   ///< projection steps per query (each re-centres the fit on the last estimate)
+  /// Sheet rule (sheets.hpp, acrossGap) in every fit: input points on a near-parallel sheet at least sheetGap
+  /// local spacings off the query's get no weight (0 = off: the normals' sign test only).
+  double sheetGap = 1.25;
 };
 
 /// @brief The input neighbourhood of a previous projection, kept by a caller that projects the same moving
@@ -40,9 +43,11 @@ class MlsSurface {
 
   /// @param table (optional) neighbour lists of exactly these points (k ≥ kWidthNeighbours), borrowed while
   /// constructing, to save the kernel widths' k-NN search
+  /// @param nearSheets (optional) per point, 1 where the sheet rule found another sheet near (separateSheets):
+  /// the sheet gate (MlsParams::sheetGap) applies only there; without it, everywhere
   MlsSurface(const std::vector<Eigen::Vector3d>& points, const std::vector<Eigen::Vector3d>& normals,
              const MlsParams& params = {}, const Execution& exec = {}, const KnnIndex* index = nullptr,
-             const NeighbourTable* table = nullptr);
+             const NeighbourTable* table = nullptr, std::vector<std::uint8_t> nearSheets = {});
   ~MlsSurface();
 
   /// @brief Project @p x onto the surface. @p normal (optional) receives the surface normal there,
@@ -78,6 +83,7 @@ class MlsSurface {
   std::optional<KnnIndex> own_;
   const KnnIndex* index_;
   std::vector<double> h_;
+  std::vector<std::uint8_t> nearSheets_;  // empty: the sheet gate everywhere
   double meanSpacing_ = 0;
   double area_ = 0;
 };

@@ -32,10 +32,14 @@ void orientNormals(const std::vector<Eigen::Vector3d>& points, std::vector<Eigen
 /// @param neighbours point i's neighbours are neighbours[i·stride + 0 … i·stride + k − 1] (the point itself
 /// may be among them and is skipped); the graph is made symmetric.
 /// @param threads for the edge weights (0 = all cores); the result does not depend on it
+/// @param acrossEdge compare the normals' parts orthogonal to each edge d = pⱼ − pᵢ (nᵢ·nⱼ − (nᵢ·d̂)(nⱼ·d̂))
+/// instead of the normals: consistent normals keep a positive value over a crease or a tight fold, and a pair
+/// across a thin gap (d along both normals) has none, so the tree neither guesses a sign across a right angle
+/// nor carries one sheet's orientation to the other
 /// @note O(n k) (Kruskal's minimum spanning tree on 1 − |nᵢ·nⱼ| after a radix sort of the weights, roots as
 /// estimateNormals). Deterministic.
 void orientNormals(const std::vector<Eigen::Vector3d>& points, std::vector<Eigen::Vector3d>& normals,
                    const std::vector<std::uint32_t>& neighbours, std::size_t stride, std::size_t k,
-                   int threads = 0);
+                   int threads = 0, bool acrossEdge = false);
 
 }  // namespace iires

@@ -8,6 +8,7 @@
 #include "iires/denoise.hpp"
 #include "iires/execution.hpp"
 #include "iires/outliers.hpp"
+#include "iires/sheets.hpp"
 #include "iires/types.hpp"
 
 namespace iires {
@@ -21,6 +22,11 @@ struct PreprocessParams {
   /// on average: the input is clean, and smoothing it further would only erode tight curvature. Overrides
   /// denoise.cleanDisplacement (whose default, 0, is off for denoise() on its own).
   double cleanDisplacement = 0.07;
+  /// Sheet rule (sheets.hpp): both stages take their neighbours on the point's own sheet only, so sheets a few
+  /// spacings apart (thin parts, near contact) are not pulled together; an input without normals gets normals
+  /// estimated and oriented over the same-sheet graph first. false = straight-line neighbourhoods.
+  bool sheets = true;
+  SheetParams sheet;       ///< tolerances of the sheet rule
 
   /// @throws std::invalid_argument with a readable message when a field is out of range.
   void validate() const;
@@ -36,6 +42,7 @@ struct PreprocessResult {
   bool cleanInput = false;      ///< the first sweep's probe found no noise to remove (positions kept)
   double meanDisplacement = 0;  ///< mean move of the denoising sweeps, input units
   double outlierSeconds = 0, denoiseSeconds = 0, seconds = 0;  ///< wall times
+  SheetReport sheets;           ///< what the sheet rule found (all zero when it did not run here)
 
   /// @brief The report as a one-line JSON object (keys as the fields, snake_case).
   std::string toJson() const;
@@ -50,7 +57,8 @@ std::size_t preprocessNeighbours(const PreprocessParams& params);
 /// @throws InputError for an unusable cloud (empty, NaN/Inf, fewer points than the stages need);
 /// std::invalid_argument for bad parameters.
 /// @param table (optional) neighbour lists of exactly input.points with k ≥ preprocessNeighbours(params),
-/// borrowed; without it preprocess() finds them itself (once for both stages)
+/// borrowed, already filtered by the sheet rule when params.sheets (and then input has its normals);
+/// without it preprocess() finds them itself (once for both stages) and applies the rule
 /// @note O(n k log n). Deterministic for any thread count.
 PreprocessResult preprocess(const PointCloud& input, const PreprocessParams& params = {}, const Execution& exec = {},
                             const NeighbourTable* table = nullptr);

@@ -21,6 +21,7 @@
 #include "iires/neighbourhood.hpp"
 #include "iires/normals.hpp"
 #include "iires/preprocess.hpp"
+#include "iires/sheets.hpp"
 #include "iires/types.hpp"
 
 namespace iires {
@@ -109,6 +110,9 @@ struct ResampleResult {
   /// Indices into cloud of the held samples (ResampleParams::fixedSamples and the feature samples), increasing.
   std::vector<std::uint32_t> fixedIndices;
   std::size_t components = 0;        ///< connected components of the input (intrinsic control), else 0
+  /// The sheet rule on the working cloud (intrinsic control): neighbour pairs found across a gap, near-contact
+  /// zones and the pairs of sheets kept apart; all zero without intrinsic control.
+  SheetReport sheets;
   std::size_t satellites = 0;        ///< geodesic satellites in all (3 per component)
   /// The geodesic coordinates of the input (intrinsic control), e.g. for writeGeodesicPly; else null.
   std::shared_ptr<const GeodesicCoordinates> geodesic;
