@@ -306,7 +306,8 @@ EOF
     echo
     sed -n 's/^# about: //p' "$runner"
     echo
-    table "$(sed -n 's/^# columns: //p' "$runner")" "$out/$name.txt"
+    if [ -s "$out/$name.txt" ]; then table "$(sed -n 's/^# columns: //p' "$runner")" "$out/$name.txt"
+    else echo "Not measured in this run."; fi
   done
 } > "$tmp/BENCHMARKS.md"
 mv "$tmp/BENCHMARKS.md" BENCHMARKS.md

@@ -1,8 +1,13 @@
 #!/bin/sh
 # SPDX-License-Identifier: GPL-3.0-or-later
+# title: Thin parts and near-contact surfaces (issue 19)
+# about: `bench/run_thin_parts.sh quick|full`: generated cases (tests/shapes.hpp, seed 19), positions only, resampled
+# about: with the library's defaults; off_sheet = output points farther than 0.1·gap from the truth (fold and rim
+# about: excepted), share_err_pct = one side's share of the points against its share of the area.
+# columns: case input gap_spacings noise_spacings N off_sheet max_dist_per_gap share_err_pct cv components time_s
 # Thin parts and near-contact surfaces (issue 19): generated cases (tests/shapes.hpp, seed 19), positions only,
-# resampled with the library's defaults (the CLI's). Usage: bench/run_thin_parts.sh [BUILD_DIR]
-# (a build with -DIIRES_BUILD_BENCH=ON). One key=value line per (case, input, gap, noise, N), and one per
+# resampled with the library's defaults (the CLI's). Usage: bench/run_thin_parts.sh [quick|full]
+# (env BUILD, default build-bench: a build with -DIIRES_BUILD_BENCH=ON). One key=value line per (case, input, gap, noise, N), and one per
 # --denoise-only run (mode=denoise-only):
 #   case            folded-sheets | plate | two-spheres | nested-spheres
 #   input           input points;  gap_spacings / noise_spacings: gap and Gaussian noise σ in input spacings
@@ -14,7 +19,8 @@
 #   components      connected components found;  clean, sweeps: the clean-input probe and denoising sweeps
 #   out_spacing_per_gap  mean output spacing over the gap
 #   (denoise-only)  mean_dist_per_gap of the cleaned input, input_mean_dist_per_gap of the raw one
-B=${1:-build-bench}/bin/thin_parts_bench
+cd "$(dirname "$0")/.."
+B=${BUILD:-build-bench}/bin/thin_parts_bench
 export THIN_PARTS_NO_DENOISE_ONLY=1
 for g in 2.5 3 4 6; do
   for noise in 0 0.2; do
