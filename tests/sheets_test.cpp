@@ -22,6 +22,14 @@ namespace {
 
 using test::ThinCase;
 
+/// The sheet rule's report on @p points, from k-NN rows of @p k columns.
+SheetReport sheetsOf(const std::vector<Eigen::Vector3d>& points, std::size_t k) {
+  const KnnIndex index(points);
+  NeighbourTable table(index, points, k);
+  std::vector<Eigen::Vector3d> normals;
+  return separateSheets(points, table, normals);
+}
+
 /// A raw scan of the case: positions only.
 PointCloud positionsOnly(const ThinCase& t) {
   PointCloud c;
@@ -93,24 +101,17 @@ TEST(Sheets, FoldedSheetsRowsStayOnTheirSheet) {
 // No false alarm: a single sphere has no near-contact zone and keeps every row.
 TEST(Sheets, SingleSphereHasNoNearZone) {
   ThinCase t = test::twoSpheres(30000, 1000.0, 0.0, 6);  // the second sphere far away
-  const KnnIndex index(t.cloud.points);
-  NeighbourTable table(index, t.cloud.points, 25);
-  std::vector<Eigen::Vector3d> normals;
-  const SheetReport report = separateSheets(t.cloud.points, table, normals);
+  const SheetReport report = sheetsOf(t.cloud.points, 25);
   EXPECT_EQ(report.crossPairs, 0u);
   EXPECT_EQ(report.nearZones, 0u);
 }
 
 // No false alarm on one noisy shell: CGAL's sphere_20k (noise σ ≈ 1.75 input spacings, which locally gathers
-// into clusters a spacing or two apart) has no near-contact zone. Counting layers with points between them in
-// the band gave 7,467 near points (a third of the scan); so did the branch's layer test, whose own layer was a
-// window around the point.
+// into clusters a spacing or two apart) has no near-contact zone: a layer test that admits points in the band
+// between two layers, or measures a point's own layer as a window around it, reads such a scan as two sheets.
 TEST(Sheets, NoisyScanOfOneShellHasNoNearZone) {
   const PointCloud scan = readPointCloud(test::dataPath("points_3/sphere_20k.xyz"));
-  const KnnIndex index(scan.points);
-  NeighbourTable table(index, scan.points, 33);
-  std::vector<Eigen::Vector3d> normals;
-  const SheetReport report = separateSheets(scan.points, table, normals);
+  const SheetReport report = sheetsOf(scan.points, 33);
   std::printf("  %s\n", report.toJson().c_str());
   EXPECT_LE(report.nearPoints, scan.size() / 1000);
 }
@@ -118,17 +119,13 @@ TEST(Sheets, NoisyScanOfOneShellHasNoNearZone) {
 // The same with Gaussian noise of 1.75 input spacings along the normal on a synthetic sphere.
 TEST(Sheets, NoisySphereHasNoNearZone) {
   ThinCase t = test::twoSpheres(40000, 1000.0, 1.75, 14);  // the second sphere far away
-  const KnnIndex index(t.cloud.points);
-  NeighbourTable table(index, t.cloud.points, 33);
-  std::vector<Eigen::Vector3d> normals;
-  const SheetReport report = separateSheets(t.cloud.points, table, normals);
+  const SheetReport report = sheetsOf(t.cloud.points, 33);
   std::printf("  %s\n", report.toJson().c_str());
   EXPECT_LE(report.nearPoints, t.cloud.size() / 1000);
 }
 
 // Acceptance (issue 19), small: two sheets joined by a fold, 2.5 input spacings apart, positions only, default
-// parameters. Before the sheet rule 527 of 580 points lay between the sheets (the denoising pulled them
-// together), shares 274 / 306.
+// parameters: denoising must not pull the two sheets together, nor the resampler put points between them.
 TEST(Sheets, FoldedSheetsResampledApart) {
   const Outcome o = resampleCase(test::foldedSheets(40000, 2.5, 0.0, 7), 600);
   EXPECT_EQ(o.points, 600u);
