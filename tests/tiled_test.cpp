@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <random>
 
 #include "iires/io.hpp"
@@ -213,6 +214,14 @@ TEST(Tiled, ToolWritesExactlyNOrNothing) {
     EXPECT_NE(output.find("error"), std::string::npos) << output;
     EXPECT_FALSE(iires::test::fileExists(dir + "/out.ply")) << bad;
   }
+  // A file the stream reader rejects: the message names it once.
+  const std::string broken = dir + "/broken.ply";
+  std::ofstream(broken) << "ply\nformat nonsense\n";
+  EXPECT_EQ(iires::test::run(iires::test::tool("iires-resample") + " " + broken + " " + dir + "/out.ply -n 500 --tiles 1",
+                             &output), 2) << output;
+  const std::size_t first = output.find(broken);
+  ASSERT_NE(first, std::string::npos) << output;
+  EXPECT_EQ(output.find(broken, first + 1), std::string::npos) << output;
 }
 
 /// `mpiexec -n R` as the MPI test runs it: as root too, and with more ranks than cores (OpenMPI's switches,

@@ -110,13 +110,18 @@ int runTiled(const ResampleOptions& options, Progress& progress, TileExecutor& e
   if (options.params.mode != ResampleMode::kIsotropic || options.params.sharpEdges)
     throw InputError("--tiles supports the isotropic mode without --sharp-edges");
   const TileParams tp = options.tiling.params(options.output);
+  // Errors name the input once: the stream reader's already start with its path.
+  const auto named = [&](const char* what) {
+    const std::string message = what, prefix = options.input + ": ";
+    return message.rfind(prefix, 0) == 0 ? message : prefix + message;
+  };
   TiledResult result;
   try {
     result = resampleTiled(options.input, options.params, tp, options.exec, executor);
   } catch (const InputError& e) {
-    throw InputError(options.input + ": " + e.what());
+    throw InputError(named(e.what()));
   } catch (const std::runtime_error& e) {
-    throw std::runtime_error(options.input + ": " + e.what());
+    throw std::runtime_error(named(e.what()));
   }
   std::exception_ptr failure;
   if (executor.rank() == 0) {
