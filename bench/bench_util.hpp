@@ -6,11 +6,13 @@
 #include <cstdlib>
 #include <functional>
 #include <iostream>
+#include <random>
 #include <sstream>
 #include <string>
 #include <vector>
 
 #include "iires/io.hpp"
+#include "iires/metrics.hpp"
 #include "iires/sampling.hpp"
 #include "iires/types.hpp"
 
@@ -25,13 +27,21 @@ inline std::vector<std::string> split(const std::string& s) {
 }
 
 /// @brief The benchmarks' input: @p count points sampled on @p mesh with density ratio @p ratio along the
-/// longest axis (seed 1), positions only, like a raw scan — every method gets the same points.
-inline PointCloud scanLikeSampling(const TriangleMesh& mesh, std::size_t count, double ratio) {
+/// longest axis (seed 1), positions only, like a raw scan — every method gets the same points. @p noiseSpacings > 0
+/// moves each point along the mesh normal by Gaussian noise of σ = noiseSpacings mean input spacings (seed 2).
+inline PointCloud scanLikeSampling(const TriangleMesh& mesh, std::size_t count, double ratio,
+                                   double noiseSpacings = 0.0) {
   MeshSamplingParams sp;
   sp.count = count;
   sp.densityRatio = ratio;
   sp.seed = 1;
   PointCloud cloud = sampleMesh(mesh, sp);
+  if (noiseSpacings > 0) {
+    const double sigma = noiseSpacings * spacingStats(cloud.points).mean;
+    std::mt19937_64 rng(2);
+    std::normal_distribution<double> gauss(0.0, sigma);
+    for (std::size_t i = 0; i < cloud.points.size(); ++i) cloud.points[i] += gauss(rng) * cloud.normals[i];
+  }
   cloud.normals.clear();
   return cloud;
 }

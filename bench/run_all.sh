@@ -133,6 +133,7 @@ run_benchmarks() {
     for r in 1 5; do
       "$bin/sharp_edge_bench" "$data/$m.off" 100000 10000 20000 --density-ratio "$r" >> "$out/sharp_edges.txt"
     done
+    "$bin/sharp_edge_bench" "$data/$m.off" 100000 10000 --noise 0.2 --methods iires,iires_sharp >> "$out/sharp_edges.txt"
   done
 
   echo "geodesic coordinates ..."
@@ -283,12 +284,14 @@ EOF
 
 ## Sharp edges: iires isotropic and --sharp-edges vs CGAL WLOP and an EAR-style pipeline
 
-\`$bin/sharp_edge_bench MESH 100000 10000 20000 --density-ratio R\` on $cad: edge_max / edge_mean = distance from
-the mesh's sharp edges (dihedral > 45°) to the nearest output point, in output spacings.
+\`$bin/sharp_edge_bench MESH 100000 10000 20000 --density-ratio R\` on $cad, and \`MESH 100000 10000 --noise 0.2
+--methods iires,iires_sharp\` (Gaussian noise of 0.2 input spacings along the normal): edge_max / edge_mean = distance
+from the mesh's sharp edges (dihedral > 30°) to the nearest output point, in output spacings; free_cv = spacing cv of
+the samples not held on a feature line.
 
 EOF
-  ratio "$out/sharp_edges.txt" "model density_ratio N" > "$tmp/sharp_ratio.txt"
-  table "model density_ratio N method time_s time_vs_iires cv err_mean_pct err_max_pct edge_max_per_spacing:edge_max edge_mean_per_spacing:edge_mean" \
+  ratio "$out/sharp_edges.txt" "model density_ratio noise N" > "$tmp/sharp_ratio.txt"
+  table "model density_ratio noise N method time_s time_vs_iires cv free_cv err_mean_pct err_max_pct edge_max_per_spacing:edge_max edge_mean_per_spacing:edge_mean" \
     "$tmp/sharp_ratio.txt"
   cat <<EOF
 

@@ -2,11 +2,14 @@
 // Sharp-edge benchmark (issue 5; the paper's Table 4 protocol): iires isotropic and --sharp-edges against CGAL
 // WLOP and an EAR-style CGAL pipeline (WLOP → bilateral smoothing → edge-aware upsampling) on the same dense
 // sampling of a CAD mesh, N = 10k and 20k. Prints one key=value line per (model, input, N, method):
-//   edge_max_per_spacing: max distance from the reference sharp edges (mesh edges with dihedral angle > 45°,
-//     sampled every 0.01 mean spacings) to the nearest output point, over the output's mean NN spacing;
-//   err_mean_pct / err_max_pct: distance of the output to the mesh, % of the bounding-box diagonal.
-// Usage: sharp_edge_bench MESH INPUT_COUNT N [N ...] [--density-ratio R] [--threads T]
-//        [--methods iires,iires_sharp,cgal_wlop,cgal_ear]   (default: all four) [--dump K]
+//   edge_max_per_spacing: max distance from the reference sharp edges (mesh edges with dihedral angle above
+//     --dihedral, default 30°, sampled every 0.01 mean spacings) to the nearest output point, over the output's
+//     mean NN spacing;
+//   err_mean_pct / err_max_pct: distance of the output to the mesh, % of the bounding-box diagonal;
+//   free_cv (iires_sharp): NN-spacing cv of the free samples (the held feature samples excluded).
+// --noise S moves the input points along the mesh normal by Gaussian noise of σ = S mean input spacings.
+// Usage: sharp_edge_bench MESH INPUT_COUNT N [N ...] [--density-ratio R] [--threads T] [--dihedral DEG]
+//        [--noise S] [--methods iires,iires_sharp,cgal_wlop,cgal_ear]   (default: all four) [--dump K]
 // --dump K: for the iires methods, print to stderr the K worst spots of the edge coverage (reference-edge points
 //   farthest from the output, at least 2 spacings apart), each with its distance to the nearest sharp-edge
 //   corner (a vertex of the sharp-edge graph with degree ≠ 2) and the nearest output points (F = a held
@@ -26,6 +29,7 @@
 #include <cstdio>
 #include <map>
 #include <iterator>
+#include <limits>
 #include <string>
 #include <utility>
 #include <vector>
@@ -94,6 +98,31 @@ void report(const std::string& prefix, const std::string& method, const std::vec
   std::fflush(stdout);
 }
 
+/// " feature_samples=K free_cv=C": the held samples' count and the NN-spacing cv of the others (their nearest
+/// neighbour among all output points).
+std::string freeSpacing(const std::vector<Eigen::Vector3d>& pts, const std::vector<std::uint32_t>& fixedIndices) {
+  std::vector<char> held(pts.size(), 0);
+  for (std::uint32_t i : fixedIndices) held[i] = 1;
+  const iires::KnnIndex index(pts);
+  std::vector<std::uint32_t> idx;
+  std::vector<double> d2;
+  double sum = 0, sum2 = 0;
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    if (held[i]) continue;
+    index.knn(pts[i], 2, idx, d2);
+    const double d = std::sqrt(d2.back());
+    sum += d;
+    sum2 += d * d;
+    ++n;
+  }
+  const double mean = n ? sum / n : 0, var = n ? std::max(0.0, sum2 / n - mean * mean) : 0;
+  char buf[96];
+  std::snprintf(buf, sizeof buf, " feature_samples=%zu free_cv=%.4f", fixedIndices.size(),
+                mean > 0 ? std::sqrt(var) / mean : 0.0);
+  return buf;
+}
+
 /// The --dump report (see the header): the @p k worst spots of the edge coverage of @p pts;
 /// @p fixedIndices are the held samples.
 void dumpWorst(const std::vector<Eigen::Vector3d>& pts, const std::vector<std::uint32_t>& fixedIndices,
@@ -126,7 +155,7 @@ void dumpWorst(const std::vector<Eigen::Vector3d>& pts, const std::vector<std::u
       if (d > worstD) worstD = d, worst = i;
     }
     const Eigen::Vector3d& p = pts[worst];
-    double corner = 1e300;
+    double corner = std::numeric_limits<double>::infinity();  // "inf": a closed edge without corners
     for (const auto& c : corners) corner = std::min(corner, (c - p).norm());
     std::fprintf(stderr, "  err max %.4f %% of the diagonal (%.3f sp) at (%.5f %.5f %.5f): %s, %.2f sp from the edges, %.2f sp from a corner\n",
                  100 * worstD / ref.mesh->diagonal(), worstD / sp, p.x(), p.y(), p.z(), held[worst] ? "held" : "free",
@@ -140,7 +169,7 @@ void dumpWorst(const std::vector<Eigen::Vector3d>& pts, const std::vector<std::u
     for (const auto& s : shown) near = near || (s - q).norm() < 2 * sp;
     if (near) continue;
     shown.push_back(q);
-    double corner = 1e300;
+    double corner = std::numeric_limits<double>::infinity();  // "inf": a closed edge without corners
     Eigen::Vector3d cp = q;
     for (const auto& c : corners)
       if ((c - q).norm() < corner) corner = (c - q).norm(), cp = c;
@@ -204,27 +233,27 @@ std::vector<Point> wlop(const std::vector<Point>& input, std::size_t n) {
 int main(int argc, char** argv) {
   std::string methods = "iires,iires_sharp,cgal_wlop,cgal_ear";
   int dump = 0;
+  double dihedral = 30.0, noise = 0.0;
   const iires::bench::GridArgs args = iires::bench::parseGridArgs(
       argc, argv, 1.0,
-      "sharp_edge_bench MESH INPUT_COUNT N [N ...] [--density-ratio R] [--threads T] "
-      "[--methods iires,iires_sharp,cgal_wlop,cgal_ear] [--dump K]",
+      "sharp_edge_bench MESH INPUT_COUNT N [N ...] [--density-ratio R] [--threads T] [--dihedral DEG] "
+      "[--noise S] [--methods iires,iires_sharp,cgal_wlop,cgal_ear] [--dump K]",
       [&](const std::string& arg, int& a) {
         if (a + 1 >= argc) return false;
-        if (arg == "--dump") {
-          dump = std::stoi(argv[++a]);
-          return true;
-        }
-        if (arg != "--methods") return false;
-        methods = argv[++a];
+        if (arg == "--dump") dump = std::stoi(argv[++a]);
+        else if (arg == "--dihedral") dihedral = std::stod(argv[++a]);
+        else if (arg == "--noise") noise = std::stod(argv[++a]);
+        else if (arg == "--methods") methods = argv[++a];
+        else return false;
         return true;
       });
   const std::size_t inputCount = args.inputCount;
   const double ratio = args.ratio;
   const int threads = args.threads;
   const iires::TriangleMesh mesh = iires::readMesh(args.meshPath);
-  const iires::PointCloud cloud = iires::bench::scanLikeSampling(mesh, inputCount, ratio);
+  const iires::PointCloud cloud = iires::bench::scanLikeSampling(mesh, inputCount, ratio, noise);
   const iires::MeshDistance distance(mesh);
-  Reference ref{&distance, iires::sharpMeshEdges(mesh, 45.0), {}};
+  Reference ref{&distance, iires::sharpMeshEdges(mesh, dihedral), {}};
   if (dump > 0) ref.angles = edgeAngles(mesh, ref.edges);
   const std::string name = args.name();
   auto run = [&](const std::string& method) { return ("," + methods + ",").find("," + method + ",") != std::string::npos; };
@@ -232,7 +261,8 @@ int main(int argc, char** argv) {
 
   for (std::size_t n : args.counts) {
     char buf[160];
-    std::snprintf(buf, sizeof buf, "model=%s input=%zu density_ratio=%g N=%zu", name.c_str(), inputCount, ratio, n);
+    std::snprintf(buf, sizeof buf, "model=%s input=%zu density_ratio=%g noise=%g dihedral=%g N=%zu", name.c_str(),
+                  inputCount, ratio, noise, dihedral, n);
     const std::string prefix = buf;
     for (const bool sharp : {false, true}) {
       if (!run(sharp ? "iires_sharp" : "iires")) continue;
@@ -241,8 +271,9 @@ int main(int argc, char** argv) {
       p.sharpEdges = sharp;
       const double t = now();
       const auto r = iires::resample(cloud, p, iires::Execution{threads});
-      report(prefix, sharp ? "iires_sharp" : "iires", r.cloud.points, now() - t, ref,
-             sharp ? " feature_samples=" + std::to_string(r.featureSamples) : "");
+      const double seconds = now() - t;
+      report(prefix, sharp ? "iires_sharp" : "iires", r.cloud.points, seconds, ref,
+             sharp ? freeSpacing(r.cloud.points, r.fixedIndices) : "");
       if (dump > 0) dumpWorst(r.cloud.points, r.fixedIndices, ref, dump);
     }
     double t = now();
