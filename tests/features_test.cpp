@@ -342,6 +342,26 @@ TEST(Features, StrayLoneSampleBesideAChainIsDropped) {
   }
 }
 
+// One cube edge given as two chains (the second shifted a third of a step along it and 0.2 h into the top face):
+// both snap onto the one crease. The held samples keep at least half the chains' step between them, whichever
+// chain they came from (before: pairs a third of a step apart all along the edge).
+TEST(Features, ACreaseGivenTwiceIsHeldOnce) {
+  const auto& [mesh, cloud, edges, h] = sampledCube();
+  FeatureParams p;
+  const double step = 0.02;
+  std::vector<Eigen::Vector3d> samples;
+  std::vector<std::uint32_t> chain;
+  for (int t = 0; t <= 30; ++t) samples.emplace_back(1.0, 0.2 + step * t, 1.0), chain.push_back(0);
+  for (int t = 0; t <= 30; ++t) samples.emplace_back(1.0 - 0.2 * h, 0.2 + step * (t + 0.33), 1.0), chain.push_back(1);
+  const auto out = iires::snapToCreases(cloud, samples, chain, h, p);
+  ASSERT_GE(out.size(), 30u);
+  for (std::size_t i = 0; i < out.size(); ++i) {
+    EXPECT_LE(iires::distanceToSegments(out[i], edges), 0.25 * h) << out[i].transpose();
+    for (std::size_t j = i + 1; j < out.size(); ++j)
+      EXPECT_GE((out[i] - out[j]).norm(), 0.5 * step - 1e-9) << out[i].transpose() << " / " << out[j].transpose();
+  }
+}
+
 /// A plate (z = 0, about [0, 1]², open) with a cylinder of radius @p r and height @p height standing on it at
 /// (0.5, 0.5) as a prism of @p segments facets, closed by a cap: its foot is a 90° plate/cylinder crease.
 iires::TriangleMesh plateWithCylinder(double r, double height, int segments) {

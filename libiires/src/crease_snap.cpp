@@ -441,6 +441,38 @@ void addCorners(const KnnIndex& index, double h, const FeatureParams& params, st
   out.insert(out.end(), corners.begin(), corners.end());
 }
 
+/// Step 5a/7 of snapToCreases(): the held samples closer than half the chains' median step to an earlier one are
+/// dropped (in sample order: the chains' samples before the traced ones, tips and corners). Several samples may
+/// land on one spot — jumps onto the same crease, chain ends meeting at a corner, a chain doubling back under
+/// noise — and a pile of held samples leaves its stretch of crease short of samples that the gap filling
+/// restores only once the pile is gone.
+void separateSamples(double h, std::vector<Eigen::Vector3d>& out, std::vector<std::uint32_t>& owner) {
+  std::vector<double> steps;
+  for (std::size_t t = 1; t < out.size(); ++t)
+    if (owner[t] == owner[t - 1]) steps.push_back((out[t] - out[t - 1]).norm());
+  if (steps.empty()) return;
+  std::nth_element(steps.begin(), steps.begin() + static_cast<long>(steps.size() / 2), steps.end());
+  const double reach = 0.5 * steps[steps.size() / 2];
+  if (!(reach > 1e-9 * h)) return;
+  const KnnIndex index(out);
+  std::vector<char> keep(out.size(), 1);
+  std::vector<std::uint32_t> idx;
+  std::vector<double> d2;
+  for (std::size_t i = 0; i < out.size(); ++i) {
+    index.radius(out[i], reach, idx, d2);
+    for (std::uint32_t j : idx)
+      if (j < i && keep[j]) {
+        keep[i] = 0;
+        break;
+      }
+  }
+  std::size_t m = 0;
+  for (std::size_t i = 0; i < out.size(); ++i)
+    if (keep[i]) out[m] = out[i], owner[m] = owner[i], ++m;
+  out.resize(m);
+  owner.resize(m);
+}
+
 }  // namespace
 
 // The steps of snapToCreases():
@@ -577,9 +609,11 @@ std::vector<Eigen::Vector3d> snapToCreases(const PointCloud& cloud, const std::v
     if (keep[i]) out.push_back(moved[i]), owner.push_back(chainOfSample[i]);
   traceChainEnds(cloud, index, h, params, out, owner);
   placeCreaseTips(cloud, index, h, params, out, owner);
-  addCorners(index, h, params, out, owner);  // 3.
+  addCorners(index, h, params, out, owner);  // 4.
+  separateSamples(h, out, owner);
   fillCreaseGaps(cloud, index, h, params, out, owner);
   refineOnCurvedSheets(cloud, index, h, params, out, exec.threads);
+  separateSamples(h, out, owner);
   if (chainOut) *chainOut = std::move(owner);
   return out;
 }
