@@ -441,7 +441,7 @@ void addCorners(const KnnIndex& index, double h, const FeatureParams& params, st
   out.insert(out.end(), corners.begin(), corners.end());
 }
 
-/// Step 5a/7 of snapToCreases(): the held samples closer than half the chains' median step to an earlier one are
+/// Steps 4b and 7 of snapToCreases(): the held samples closer than half the chains' median step to an earlier one are
 /// dropped (in sample order: the chains' samples before the traced ones, tips and corners). Several samples may
 /// land on one spot — jumps onto the same crease, chain ends meeting at a corner, a chain doubling back under
 /// noise — and a pile of held samples leaves its stretch of crease short of samples that the gap filling
@@ -508,6 +508,7 @@ void separateSamples(double h, std::vector<Eigen::Vector3d>& out, std::vector<st
 //     params.maxOffCrease spacings of an input point, and no sample is within half a spacing of it (tracing
 //     placed most corners already), a corner sample is added there, and the gap from each of those chain ends
 //     to the corner gets samples at the chain's spacing on the straight line.
+//  4b. Separation: a sample closer than half the chains' median step to an earlier one is dropped (separateSamples).
 //  5. Gaps: two samples 1.5–6 × the chains' median spacing apart with no sample between them (within 0.45 × their
 //     distance of the midpoint and half a spacing of their line) get samples at ≤ that spacing between them: on
 //     the snap fit's crease where it runs along them and near their chord, else on the fitted crease line of
@@ -520,6 +521,7 @@ void separateSamples(double h, std::vector<Eigen::Vector3d>& out, std::vector<st
 //     on the 40 nearest input points (each to the nearer sheet; points over 3·maxResidual off both left out,
 //     the others weighted down by their distance), if both fit within maxResidual, under 10 % of the points
 //     are left out (more: a third sheet, as at a corner) and the move is at most maxLineDistance local spacings.
+//  7. Separation once more (step 6 moved samples).
 std::vector<Eigen::Vector3d> snapToCreases(const PointCloud& cloud, const std::vector<Eigen::Vector3d>& samples,
                                            const std::vector<std::uint32_t>& chainOfSample, double spacing,
                                            const FeatureParams& params, const Execution& exec,
