@@ -752,6 +752,24 @@ TEST_F(ReconstructCli, UncoveredInputIsReportedAndWritten) {
             2);  // a point cloud format is needed
 }
 
+// Samples the mesh leaves out (far points no triangle reaches) are counted in the text report, as in the JSON.
+TEST_F(ReconstructCli, SamplesLeftOutAreReported) {
+  PointCloud c = test::sphereCloud(2000);
+  for (int i = 0; i < 7; ++i) c.points.emplace_back(3.0 + 0.01 * i, 0, 0), c.normals.emplace_back(1, 0, 0);
+  const std::string in = dir_ + "/far_row.ply", report = dir_ + "/far_row.json";
+  writePointCloud(in, c);
+  std::string out;
+  ASSERT_EQ(test::run(test::tool("iires-reconstruct") + " " + in + " " + dir_ + "/m.off --no-resample --report " +
+                          report, &out), 0) << out;
+  const std::string json = test::readText(report);
+  const auto at = json.find("\"unused_samples\": ");
+  ASSERT_NE(at, std::string::npos) << json;
+  const long unused = std::stol(json.substr(at + 17));
+  EXPECT_GE(unused, 7);
+  EXPECT_NE(out.find("left out of the mesh          " + std::to_string(unused) + " samples in no triangle"),
+            std::string::npos) << out;
+}
+
 TEST_F(ReconstructCli, ExitCodes) {
   const std::string t = test::tool("iires-reconstruct");
   EXPECT_EQ(test::run(t + " " + dir_ + "/missing.ply " + dir_ + "/m.ply"), 2);

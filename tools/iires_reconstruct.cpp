@@ -135,6 +135,8 @@ int main(int argc, char** argv) {
       std::cout << "mesh " << output << " (" << result.method << ", " << result.mesh.vertices.size()
                 << " vertices from " << result.inputPoints << " input points)\n"
                 << result.quality.toTable();
+      std::cout << "  " << std::left << std::setw(30) << "left out of the mesh" << result.unusedVertices
+                << " samples in no triangle, " << result.smallComponentFaces << " faces of small parts removed\n";
       std::cout << "  " << std::left << std::setw(30) << "small holes closed / kept" << result.holes.filled << " / "
                 << result.holes.kept << "\n";
       std::cout << "  " << std::left << std::setw(30) << "large holes closed / kept" << result.largeHoles.filled
