@@ -24,6 +24,9 @@ BUILD=${BUILD:-build-bench}
 WORK=${WORK:-/tmp/iires_tiled_bench}
 THREADS=${THREADS:-2}
 mkdir -p "$WORK"
+# The corpus models scene_generator scatters over the scene (its default --models).
+bash datasets/fetch.sh meshes/bunny00.off meshes/fandisk.off meshes/armadillo.off meshes/eight.off meshes/anchor.off \
+  meshes/knot1.off > /dev/null
 
 run() {  # points N mode memory_gb extra-args...
   local POINTS=$1 N=$2 mode=$3 gb=$4

@@ -69,7 +69,7 @@ void addModels(std::vector<Triangle>& t, const std::vector<std::string>& names, 
 
 }  // namespace
 
-int main(int argc, char** argv) {
+int generate(int argc, char** argv) {
   std::size_t points = 1000000;
   std::string out = "scene.ply", models = "bunny00,fandisk,armadillo,eight,anchor,knot1";
   int copies = 60, buildings = 25;
@@ -113,4 +113,13 @@ int main(int argc, char** argv) {
   writer.finish();
   std::printf("points=%zu triangles=%zu area=%.6g out=%s\n", points, tris.size(), total, out.c_str());
   return 0;
+}
+
+int main(int argc, char** argv) {
+  try {
+    return generate(argc, argv);
+  } catch (const std::exception& e) {  // a corpus model not fetched, an unwritable output, a bad number
+    std::fprintf(stderr, "scene_generator: error: %s\n", e.what());
+    return 2;
+  }
 }
