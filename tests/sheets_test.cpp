@@ -159,6 +159,24 @@ TEST_P(FoldedSheets, ResampledApart) {
 INSTANTIATE_TEST_SUITE_P(Sheets, FoldedSheets,
                          ::testing::Combine(::testing::Values(2.5, 3.0, 4.0, 6.0), ::testing::Values(0.0, 0.2)));
 
+// Inputs large enough that voxel thinning engages (over 60k points): the cells near two sheets keep their points,
+// found around each cell (its 26 neighbours), not within it alone — a cell about as wide as the gap seldom holds
+// both sheets, and thinning the rest left noisy sheets 2.5 input spacings apart closer than the rule resolves
+// (half the output points between them).
+TEST(Sheets, NoisyFoldedSheetsThinnedStayApart) {
+  const ThinCase t = test::foldedSheets(80000, 2.5, 0.2, 16);
+  ResampleParams params;
+  params.targetCount = 500;
+  const ResampleResult r = resample(positionsOnly(t), params);
+  std::size_t near = 0, off = 0;
+  for (const auto& p : r.cloud.points)
+    if (t.side(p) >= 0) ++near, off += t.distance(p) > 0.1 * t.gap;
+  std::printf("  working %zu of %zu points, %zu of %zu output points off by > 0.1 gap\n", r.thinnedPoints,
+              t.cloud.size(), off, near);
+  EXPECT_LT(r.thinnedPoints, t.cloud.size());  // thinning engaged (the fold's cells are thinned)
+  EXPECT_LE(off, near / 40);
+}
+
 // A thin closed plate (a box 3 spacings thick, every face sampled): before, 457 of 540 points between the faces.
 TEST(Sheets, ThinPlateResampledApart) {
   const Outcome o = resampleCase(test::thinPlate(40000, 3.0, 0.0, 8), 600);
