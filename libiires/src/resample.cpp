@@ -303,6 +303,7 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params, const Ex
     auto t = clock.begin("surface");
     MlsParams mp = params.mls;
     if (!params.intrinsic) mp.sheetGap = 0;  // straight-line neighbourhoods
+    result.nearSheets = nearSheets;
     surface.emplace(cloud.points, cloud.normals, mp, Execution{threads}, index ? &*index : pointIndex,
                     neighbours ? &*neighbours : nullptr, std::move(nearSheets));
     neighbours.reset();  // read by nothing after the surface and the geodesic graph (memory at 5M)
