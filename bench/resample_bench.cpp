@@ -72,7 +72,7 @@ int main(int argc, char** argv) {
     double t = now();
     const auto r = iires::resample(cloud, p, iires::Execution{threads});
     const double seconds = now() - t;
-    std::string stages;  // time per stage, from the result
+    std::string stages = " working=" + std::to_string(r.thinnedPoints);  // then the time per stage
     for (const auto& s : r.timings)
       if (s.name != "total") stages += " t_" + s.name + "=" + std::to_string(s.seconds).substr(0, 6);
     report(prefix, "iires", r.cloud.points, seconds, distance, reference, stages);

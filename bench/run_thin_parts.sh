@@ -18,6 +18,8 @@
 #   cv              nearest-neighbour spacing cv, each near surface among its own points
 #   components      connected components found;  clean, sweeps: the clean-input probe and denoising sweeps
 #   out_spacing_per_gap  mean output spacing over the gap
+#   sheets_near, sheets_zones, sheets_s  the sheet rule on the working cloud: points with another sheet near,
+#                   near-contact zones, seconds
 #   (denoise-only)  mean_dist_per_gap of the cleaned input, input_mean_dist_per_gap of the raw one
 cd "$(dirname "$0")/.."
 B=${BUILD:-build-bench}/bin/thin_parts_bench

@@ -114,11 +114,11 @@ int main(int argc, char** argv) {
     spacing.mean = r.spacing.mean;
     std::printf("%s N=%zu points=%zu time_s=%.3f working=%zu off_sheet=%zu of=%zu max_dist_per_gap=%.4f "
                 "mean_dist_per_gap=%.4f side0=%zu side1=%zu share_err_pct=%.2f cv=%.4f components=%zu "
-                "clean=%d sweeps=%d out_spacing_per_gap=%.2f\n",
+                "clean=%d sweeps=%d out_spacing_per_gap=%.2f sheets_near=%zu sheets_zones=%zu sheets_s=%.3f\n",
                 prefix.c_str(), n, r.cloud.size(), seconds, r.thinnedPoints, off, near, worst / t.gap,
                 mean / r.cloud.size() / t.gap, sides[0], sides[1], 100 * (share - expectedShare(t)) / expectedShare(t),
                 spacing.cv, r.components, r.preprocessing.cleanInput ? 1 : 0, r.preprocessing.denoiseIterations,
-                spacing.mean / t.gap);
+                spacing.mean / t.gap, r.sheets.nearPoints, r.sheets.nearZones, r.sheets.seconds);
     std::fflush(stdout);
   }
   return 0;

@@ -159,6 +159,24 @@ TEST_P(FoldedSheets, ResampledApart) {
 INSTANTIATE_TEST_SUITE_P(Sheets, FoldedSheets,
                          ::testing::Combine(::testing::Values(2.5, 3.0, 4.0, 6.0), ::testing::Values(0.0, 0.2)));
 
+// Inputs large enough that voxel thinning engages (over 60k points): the cells near two sheets keep their points,
+// found around each cell (its 26 neighbours), not within it alone — a cell about as wide as the gap seldom holds
+// both sheets, and thinning the rest left noisy sheets 2.5 input spacings apart closer than the rule resolves
+// (half the output points between them).
+TEST(Sheets, NoisyFoldedSheetsThinnedStayApart) {
+  const ThinCase t = test::foldedSheets(80000, 2.5, 0.2, 16);
+  ResampleParams params;
+  params.targetCount = 500;
+  const ResampleResult r = resample(positionsOnly(t), params);
+  std::size_t near = 0, off = 0;
+  for (const auto& p : r.cloud.points)
+    if (t.side(p) >= 0) ++near, off += t.distance(p) > 0.1 * t.gap;
+  std::printf("  working %zu of %zu points, %zu of %zu output points off by > 0.1 gap\n", r.thinnedPoints,
+              t.cloud.size(), off, near);
+  EXPECT_LT(r.thinnedPoints, t.cloud.size());  // thinning engaged (the fold's cells are thinned)
+  EXPECT_LE(off, near / 40);
+}
+
 // A thin closed plate (a box 3 spacings thick, every face sampled): before, 457 of 540 points between the faces.
 TEST(Sheets, ThinPlateResampledApart) {
   const Outcome o = resampleCase(test::thinPlate(40000, 3.0, 0.0, 8), 600);
@@ -224,6 +242,31 @@ TEST(Sheets, ReconstructKeepsNearSurfacesApart) {
     EXPECT_TRUE(r.quality.closed) << t.name;
     EXPECT_EQ(joining, 0u) << t.name;
   }
+}
+
+// iires-reconstruct on a thin closed plate (a box 3 input spacings thick, every face sampled) whose two big faces
+// lie a third of an output spacing apart: no face joins them. The geodesic coordinates cannot
+// part them (the satellites sit at the corners, as far from one face as from the other), and where the normals'
+// orientation carried across the rim leaves both faces facing the same way the normals cannot either: the
+// 1-rings drop the candidates the sheet rule's pair test puts across the gap (before: 3,092 of 3,845 faces
+// joined the two faces).
+TEST(Sheets, ReconstructedPlateFacesStayApart) {
+  const ThinCase t = test::thinPlate(100000, 3.0, 0.0, 19);
+  ReconstructParams params;
+  params.targetCount = 2000;
+  const ReconstructResult r = reconstruct(positionsOnly(t), params);
+  std::size_t joining = 0;  // faces with corners on both big faces (the rim excepted)
+  for (const auto& f : r.mesh.triangles) {
+    bool side[2] = {false, false};
+    for (int c = 0; c < 3; ++c)
+      if (const int s = t.side(r.mesh.vertices[f[c]]); s >= 0) side[s] = true;
+    joining += side[0] && side[1];
+  }
+  std::printf("  %zu faces, components %zu, genus %lld, closed %d, boundary edges %zu, faces joining the faces %zu\n",
+              r.mesh.triangles.size(), r.quality.components, r.quality.genus, r.quality.closed ? 1 : 0,
+              r.quality.boundaryEdges, joining);
+  EXPECT_EQ(joining, 0u);
+  EXPECT_GT(r.mesh.triangles.size(), 3500u);  // both faces meshed (a closed mesh of 2,000 vertices has 3,996)
 }
 
 }  // namespace

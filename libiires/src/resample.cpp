@@ -97,11 +97,12 @@ PointCloud workingCloud(PointCloud cloud, const ResampleParams& params, const Ex
   if (params.maxInputPerSample > 0 && cloud.size() > workingTarget) {
     const auto t = clock.begin("thin");
     const std::size_t target = workingTarget;
-    // Intrinsic control: cells holding two sheets (a gap the input resolves, narrower than a cell) keep all
-    // their points, so that no later stage sees the sheets merged.
+    // Intrinsic control: cells near two sheets (layers as far apart as the sheet rule's gap) keep all their
+    // points, so that no later stage sees the sheets merged.
     cloud = select(cloud, voxelThin(cloud.points, cloud.normals, target,
                                     bboxDiagonal(cloud.points) / std::sqrt(static_cast<double>(target)), 0,
-                                    exec.threads, 0.0, params.intrinsic));
+                                    exec.threads, 0.0,
+                                    params.intrinsic ? params.preprocessing.sheet.gapSpacings : 0.0));
     clock.end("thin", t);
   }
   return select(cloud, mortonOrder(cloud.points, exec.threads));
@@ -302,6 +303,7 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params, const Ex
     auto t = clock.begin("surface");
     MlsParams mp = params.mls;
     if (!params.intrinsic) mp.sheetGap = 0;  // straight-line neighbourhoods
+    result.nearSheets = nearSheets;
     surface.emplace(cloud.points, cloud.normals, mp, Execution{threads}, index ? &*index : pointIndex,
                     neighbours ? &*neighbours : nullptr, std::move(nearSheets));
     neighbours.reset();  // read by nothing after the surface and the geodesic graph (memory at 5M)

@@ -13,6 +13,7 @@
 #include "iires/normals.hpp"
 #include "iires/detail/json.hpp"
 #include "iires/detail/parallel.hpp"
+#include "layers.hpp"
 
 namespace iires {
 namespace {
@@ -21,9 +22,6 @@ constexpr std::size_t kSpacingRow = 16;       // local spacing: mean nearest-nei
 constexpr int kConsensusPasses = 2;           // normal averaging passes over the same-sheet neighbours
 constexpr std::size_t kOrientNeighbours = 8;  // neighbours per point in the orientation's spanning tree
 constexpr std::size_t kPlainNormalRow = 13;   // the point and NormalParams' default 12 neighbours
-constexpr std::size_t kLayerPoints = 3;       // a second sheet: at least this many row entries across the gap
-constexpr double kLayerSpread = 0.5;          // a layer: heights' standard deviation under this × the spacing
-constexpr double kBandPerNoise = 2.0;         // the empty band between two layers: wider than this × their spread
 
 /// Unit PCA normal of @p p and the points @p idx (fewer than 2 neighbours: @p fallback).
 Eigen::Vector3d pcaNormal(const std::vector<Eigen::Vector3d>& points, std::size_t p,
@@ -294,48 +292,29 @@ void estimateSheetNormals(SheetState& st, int threads) {
     });
 }
 
-/// Which points see a second sheet in their row. The heights of the row's entries off the point's plane,
-/// sorted, are cut at their widest empty band (at least kLayerPoints entries on either side) into two layers;
-/// the row holds two sheets when the layers' mean heights lie at least the gap apart, each layer is thin (its
-/// heights' standard deviation within kLayerSpread local spacings: a sheet's own noise) and the band is empty
-/// over more than kBandPerNoise × that spread. One sheet has no such band: noise fills the heights
-/// continuously, and noise thick enough to leave a band between its tail and its bulk makes the bulk too thick
-/// to be a layer. Where one surface turns at a crease whose normals the fits blended, the other face's points
-/// rise steadily off the plane.
+/// Which points see a second sheet in their row: the heights of the row's entries off the point's plane form
+/// two layers at least the gap apart (layers.hpp). Where one surface turns at a crease whose normals the fits
+/// blended, the other face's points rise steadily off the plane.
 void findLayers(SheetState& st, int threads) {
   st.layer.assign(st.n, 0);
   std::vector<std::uint8_t> seen(st.n, 0);
   parallelFor(st.n, threads, [&](std::size_t i) {
     if (st.plain[i]) return;
     const std::size_t m = st.found[i];
-    if (m < 2 * kLayerPoints) return;
-    const double gap = st.params.gapSpacings * st.spacing[i], thin = kLayerSpread * st.spacing[i];
+    if (m < 2 * detail::kLayerPoints) return;
     std::array<double, 256> h;
     for (std::size_t a = 0; a < m; ++a) h[a] = st.normals[i].dot(st.points[st.row(i)[a]] - st.points[i]);
     std::sort(h.begin(), h.begin() + static_cast<long>(m));
-    std::size_t cut = kLayerPoints;  // the upper layer starts at h[cut]
-    for (std::size_t x = kLayerPoints + 1; x + kLayerPoints <= m; ++x)
-      if (h[x] - h[x - 1] > h[cut] - h[cut - 1]) cut = x;
-    auto moments = [&](std::size_t begin, std::size_t end) {  // mean and standard deviation of h[begin, end)
-      double sum = 0, sum2 = 0;
-      for (std::size_t a = begin; a < end; ++a) sum += h[a], sum2 += h[a] * h[a];
-      const double count = static_cast<double>(end - begin), mean = sum / count;
-      return std::pair{mean, std::sqrt(std::max(0.0, sum2 / count - mean * mean))};
-    };
-    const auto [lowMean, lowSpread] = moments(0, cut);
-    const auto [highMean, highSpread] = moments(cut, m);
-    const double spread = std::max(lowSpread, highSpread);
-    seen[i] = highMean - lowMean >= gap && spread <= thin && h[cut] - h[cut - 1] > kBandPerNoise * spread;
+    seen[i] = detail::twoLayers(h.data(), m, st.params.gapSpacings * st.spacing[i], st.spacing[i]);
   });
   // A second sheet within a few spacings is seen from the points around it too (a near-contact zone is a
-  // region, not a point): a layer that fewer than kLayerPoints of the row's other points see is one sheet's
-  // noise.
+  // region, not a point): a layer that fewer than kLayerPoints of the row's other points see is one sheet's noise.
   parallelFor(st.n, threads, [&](std::size_t i) {
     if (!seen[i]) return;
     std::size_t seeing = 0;
     for (std::size_t a = 0; a < st.found[i]; ++a)
       if (const std::uint32_t j = st.row(i)[a]; j != i) seeing += seen[j];
-    st.layer[i] = seeing >= kLayerPoints;
+    st.layer[i] = seeing >= detail::kLayerPoints;
   });
 }
 

@@ -8,15 +8,13 @@
 
 #include "iires/detail/parallel.hpp"
 #include "iires/detail/radix_sort.hpp"
+#include "cell_layers.hpp"
 
 namespace iires::detail {
-namespace {
-constexpr double kLayerGapSpacings = 1.5;  // an empty band this many input spacings wide splits a cell in two layers
-}  // namespace
 
 std::vector<std::uint32_t> voxelThin(const std::vector<Eigen::Vector3d>& pts, const std::vector<Eigen::Vector3d>& normals,
                                      std::size_t target, double cell, std::uint64_t seed, int threads,
-                                     double sheetHeight, bool keepLayers) {
+                                     double sheetHeight, double layerGap) {
   Eigen::Vector3d lo = pts[0], hi = pts[0];
   for (const auto& p : pts) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
   // A seed shifts the grid by a fraction of a cell in each axis (seed 0: no shift).
@@ -74,37 +72,15 @@ std::vector<std::uint32_t> voxelThin(const std::vector<Eigen::Vector3d>& pts, co
   for (std::size_t r = 0; r < n; ++r)
     if (r == 0 || byCell[r].first != byCell[r - 1].first) runs.push_back(r);
   runs.push_back(n);
-  // A cell whose points form two layers (a gap wider than layerGap between their heights along the cell's
-  // thinnest direction, with at least two points on each side) holds two sheets closer than the cell is wide.
-  // The input spacing (mean nearest-neighbour distance ≈ half the grid spacing of a random sampling) comes from
-  // the occupied cells: each holds about cell² of surface.
+  // Cells near two sheets keep all their points (twoSheetCells), so that the thinned cloud resolves every gap
+  // the input does. The input spacing (mean nearest-neighbour distance ≈ half the grid spacing of a random
+  // sampling) comes from the occupied cells: each holds about cell² of surface.
   const std::size_t cells = runs.size() - 1;
-  const double layerGap = keepLayers ? kLayerGapSpacings * 0.5 * cell /
-                                           std::sqrt(static_cast<double>(n) / static_cast<double>(cells))
-                                     : 0.0;
-  std::vector<char> twoLayers(keepLayers ? cells : 0, 0);
-  if (keepLayers)
-    parallelFor(cells, threads, [&](std::size_t c) {
-      const std::size_t begin = runs[c], end = runs[c + 1];
-      if (end - begin < 4) return;
-      Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-      for (std::size_t x = begin; x < end; ++x) mean += pts[byCell[x].second];
-      mean /= static_cast<double>(end - begin);
-      Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-      for (std::size_t x = begin; x < end; ++x) {
-        const Eigen::Vector3d d = pts[byCell[x].second] - mean;
-        cov.noalias() += d * d.transpose();
-      }
-      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
-      eig.computeDirect(cov);
-      const Eigen::Vector3d axis = eig.eigenvectors().col(0);
-      thread_local std::vector<double> heights;
-      heights.clear();
-      for (std::size_t x = begin; x < end; ++x) heights.push_back(axis.dot(pts[byCell[x].second] - mean));
-      std::sort(heights.begin(), heights.end());
-      for (std::size_t x = 2; x + 1 < heights.size(); ++x)
-        if (heights[x] - heights[x - 1] > layerGap) twoLayers[c] = 1;
-    });
+  std::vector<char> twoLayers;
+  if (layerGap > 0) {
+    const double spacing = 0.5 * cell / std::sqrt(static_cast<double>(n) / static_cast<double>(cells));
+    twoLayers = twoSheetCells(pts, byCell, runs, lo, shift, cell, layerGap * spacing, spacing, threads);
+  }
   // Per cell the point nearest its centre (ties: the lowest index, the first of its run), returned in index
   // order. With a sheet height, per cell one point per sheet: the points off the planes of the cell's points
   // picked so far by more than it are picked too, nearest the centre first.
@@ -116,7 +92,7 @@ std::vector<std::uint32_t> voxelThin(const std::vector<Eigen::Vector3d>& pts, co
     for (std::size_t r = first + 1; r <= last; ++r)
       if (toCentre[byCell[r].second] < toCentre[best]) best = byCell[r].second;
     picked[best] = 1;
-    if (keepLayers && twoLayers[c]) {
+    if (!twoLayers.empty() && twoLayers[c]) {
       for (std::size_t x = first; x <= last; ++x) picked[byCell[x].second] = 1;  // two sheets: not thinned
       continue;
     }

@@ -15,11 +15,10 @@ namespace iires::detail {
 /// @param sheetHeight > 0 (with normals): per cell one point per sheet — the cell's points off the planes of
 /// the points picked so far by more than this (another sheet a gap away, e.g. facing the same way) are picked
 /// too, nearest the centre first
-/// @param keepLayers a cell whose points form two layers (an empty band wider than the input resolves between
-/// their heights along the cell's thinnest direction) holds two sheets closer than the cell is wide: all of
-/// its points are kept
+/// @param layerGap > 0: a cell in a block of cells whose points form two layers at least this many input
+/// spacings apart (the sheet rule's layer test; cell_layers.hpp) lies near two sheets: all of its points are kept
 std::vector<std::uint32_t> voxelThin(const std::vector<Eigen::Vector3d>& pts, const std::vector<Eigen::Vector3d>& normals,
                                      std::size_t target, double cell, std::uint64_t seed, int threads,
-                                     double sheetHeight = 0, bool keepLayers = false);
+                                     double sheetHeight = 0, double layerGap = 0);
 
 }  // namespace iires::detail

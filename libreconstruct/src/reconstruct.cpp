@@ -9,10 +9,12 @@
 
 #include "iires/attributes.hpp"
 #include "iires/detail/json.hpp"
+#include "iires/detail/parallel.hpp"
 #include "iires/detail/stage_clock.hpp"
 #include "iires/intrinsic.hpp"
 #include "iires/normals.hpp"
 #include "iires/reconstruct/mesh_validity.hpp"
+#include "iires/sheets.hpp"
 #include "iires/validate.hpp"
 
 namespace iires {
@@ -147,6 +149,22 @@ void triangulateSamples(const ReconstructParams& params, const Execution& exec, 
       // The resampler's intrinsic rule (DESIGN §5.2): 1-rings never link across a thin gap or between objects.
       tp.neighbourRule =
           std::make_shared<IntrinsicRule>(result.resampling.geodesic, params.resampling.intrinsicRule, exec);
+    }
+    // The sheet rule's pair test (sheets.hpp) on the samples where the rule found another sheet near on the
+    // dense cloud: two sheets closer than the samples' spacing, which the dense cloud resolves (its spacing sets
+    // the gap), are not linked — geodesic coordinates from satellites equidistant from both (a thin plate's
+    // corners) do not tell them apart.
+    const GeodesicCoordinates* geo = result.resampling.geodesic.get();
+    const std::vector<std::uint8_t>& near = result.resampling.nearSheets;
+    if (tp.sheetGap == 0 && geo && near.size() == geo->size() && result.resampling.sheets.nearPoints > 0) {
+      const SheetParams& sheet = params.resampling.preprocessing.sheet;
+      tp.sheetGap = sheet.gapSpacings * geo->spacing();
+      tp.sheetGapAngleDeg = sheet.gapAngleDeg;
+      tp.sheetNear.assign(result.samples.size(), 0);
+      parallelFor(result.samples.size(), exec.threads, [&](std::size_t i) {  // each sample's nearest dense point
+        const std::int64_t d = geo->nearest(result.samples.points[i]);
+        tp.sheetNear[i] = d >= 0 && near[static_cast<std::size_t>(d)];
+      });
     }
     result.triangulation = triangulateLocal(result.samples, tp, exec);
     result.mesh = std::move(result.triangulation.mesh);

@@ -10,6 +10,7 @@
 #include <unordered_set>
 
 #include "iires/knn.hpp"
+#include "iires/sheets.hpp"
 #include "iires/detail/tangent_cell.hpp"
 #include "iires/detail/parallel.hpp"
 #include "iires/reconstruct/mesh_quality.hpp"
@@ -63,6 +64,8 @@ void TriangulateParams::validate() const {
   if (!(flipMaxDihedral >= 0.0 && flipMaxDihedral < 180.0))
     throw std::invalid_argument("flipMaxDihedral must be in [0, 180)");
   if (maxFlipSweeps < 0) throw std::invalid_argument("maxFlipSweeps must be non-negative");
+  if (!(sheetGap >= 0) || !std::isfinite(sheetGap)) throw std::invalid_argument("sheetGap must be finite and >= 0");
+  if (!(sheetGapAngleDeg > 0 && sheetGapAngleDeg < 90)) throw std::invalid_argument("sheetGapAngleDeg must be in (0, 90)");
 }
 
 TriangulateResult triangulateLocal(const PointCloud& cloud, const TriangulateParams& params,
@@ -83,14 +86,32 @@ TriangulateResult triangulateLocal(const PointCloud& cloud, const TriangulatePar
   rule->update(cloud.points, normals);
 
   const KnnIndex index(cloud.points);
+  const double gapCos = std::cos(params.sheetGapAngleDeg * M_PI / 180.0);
+  if (!params.sheetNear.empty() && params.sheetNear.size() != n)
+    throw std::invalid_argument("sheetNear must hold one flag per point");
+  const bool gateAll = params.sheetNear.empty();
   const std::size_t k = std::min<std::size_t>(static_cast<std::size_t>(params.neighbours) + 1, n);
   // Per point: the triangles its 1-ring proposes (at most k + kDiscSides).
   std::vector<std::vector<Proposal>> proposals(n);
   parallelFor(n, exec.threads, [&](std::size_t i) {
     std::vector<std::uint32_t> idx;
     std::vector<double> d2;
-    index.knn(cloud.points[i], k, idx, d2);
     const Eigen::Vector3d& nrm = normals[i];
+    // The k nearest on the point's own sheet: candidates across a gap (sheetGap) are dropped and the query
+    // widened, so that the spacing below and the ring are measured on the point's sheet.
+    for (std::size_t want = k;; want = std::min(n, 2 * want)) {
+      index.knn(cloud.points[i], want, idx, d2);
+      std::size_t kept = 0;
+      for (std::size_t c = 0; c < idx.size(); ++c) {
+        const std::uint32_t j = idx[c];
+        if (params.sheetGap > 0 && j != i && (gateAll || params.sheetNear[i] || params.sheetNear[j]) &&
+            acrossGap(cloud.points[i], nrm, cloud.points[j], normals[j], params.sheetGap, gapCos))
+          continue;
+        idx[kept] = j, d2[kept] = d2[c], ++kept;
+      }
+      idx.resize(std::min(kept, k)), d2.resize(std::min(kept, k));
+      if (kept >= k || want >= n) break;
+    }
     const Eigen::Vector3d u = nrm.unitOrthogonal(), v = nrm.cross(u);
     // Local spacing: mean distance to the (up to) 6 nearest other points.
     double spacing = 0;

@@ -113,6 +113,9 @@ struct ResampleResult {
   /// The sheet rule on the working cloud (intrinsic control): neighbour pairs found across a gap, near-contact
   /// zones and the pairs of sheets kept apart; all zero without intrinsic control.
   SheetReport sheets;
+  /// Per point of the geodesic coordinates' cloud (the working cloud), 1 where the sheet rule found another
+  /// sheet near (intrinsic control); else empty.
+  std::vector<std::uint8_t> nearSheets;
   std::size_t satellites = 0;        ///< geodesic satellites in all (3 per component)
   /// The geodesic coordinates of the input (intrinsic control), e.g. for writeGeodesicPly; else null.
   std::shared_ptr<const GeodesicCoordinates> geodesic;

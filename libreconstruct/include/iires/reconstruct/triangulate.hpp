@@ -5,7 +5,9 @@
 /// tangent-plane Delaunay 1-ring, keeping the triangles its vertices agree on.
 
 #include <cstddef>
+#include <cstdint>
 #include <memory>
+#include <vector>
 
 #include "iires/execution.hpp"
 #include "iires/neighbourhood.hpp"
@@ -27,6 +29,15 @@ struct TriangulateParams {
   double flipMaxDihedral = 25.0; ///< Delaunay edge flips only where the two faces' normals differ by less than
                                  ///< this (degrees), so creases are kept; 0 = no flips
   int maxFlipSweeps = 10;        ///< cap on the flip sweeps
+  /// > 0: candidates across a gap at least this wide (sheets.hpp's acrossGap: near-parallel tangent planes,
+  /// each point beyond the other's) are ignored — two sheets closer than the points' spacing, which the normals'
+  /// angle does not tell apart when both sheets face the same way; 0 = off
+  double sheetGap = 0;
+  double sheetGapAngleDeg = 25.0;  ///< "near parallel" for sheetGap: normals within this angle, in (0, 90)
+  /// With sheetGap: per point, 1 where another sheet is near (the sheet rule's finding on the dense cloud); the
+  /// pair test applies where either point has one (elsewhere noise could offset two points of one sheet);
+  /// empty: everywhere
+  std::vector<std::uint8_t> sheetNear;
   /// Neighbour rule for the 1-rings (nullptr = Euclidean); an intrinsic rule keeps rings off thin gaps.
   std::shared_ptr<NeighbourRule> neighbourRule;
 
