@@ -8,6 +8,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <random>
 
 #include "iires/knn.hpp"
 #include "iires/preprocess.hpp"
@@ -122,6 +123,71 @@ TEST(Sheets, NoisySphereHasNoNearZone) {
   const SheetReport report = sheetsOf(t.cloud.points, 33);
   std::printf("  %s\n", report.toJson().c_str());
   EXPECT_LE(report.nearPoints, t.cloud.size() / 1000);
+}
+
+/// Share of @p normals that agree with the case's true outward normals (1 or 0 when consistently oriented).
+double outwardShare(const std::vector<Eigen::Vector3d>& normals, const std::vector<Eigen::Vector3d>& truth) {
+  std::size_t agree = 0;
+  for (std::size_t i = 0; i < normals.size(); ++i) agree += normals[i].dot(truth[i]) > 0;
+  return static_cast<double>(agree) / static_cast<double>(normals.size());
+}
+
+/// The case's cloud with a third of its normals turned over (seeded): what a tool that estimates normals without
+/// orienting them writes.
+PointCloud withUnorientedNormals(const ThinCase& t, std::uint64_t seed) {
+  PointCloud c = t.cloud;
+  std::mt19937_64 rng(seed);
+  for (auto& n : c.normals)
+    if (rng() % 3 == 0) n = -n;
+  return c;
+}
+
+// Given normals whose signs are not consistent (a third turned over) are read as directions and oriented: the
+// rule then finds the thin plate's gap as with oriented normals, and the normals it returns are consistent. Read
+// as oriented, each turned-over normal parted its point from its neighbours on the same face.
+TEST(Sheets, UnorientedGivenNormalsAreOriented) {
+  const ThinCase t = test::thinPlate(30000, 3.0, 0.0, 21);
+  const PointCloud flipped = withUnorientedNormals(t, 22);
+  const KnnIndex index(t.cloud.points);
+  NeighbourTable oriented(index, t.cloud.points, 25), unoriented(index, t.cloud.points, 25);
+  std::vector<Eigen::Vector3d> keptNormals, repairedNormals;
+  const SheetReport kept = separateSheets(t.cloud.points, oriented, keptNormals, {}, {}, &t.cloud.normals);
+  const SheetReport repaired = separateSheets(t.cloud.points, unoriented, repairedNormals, {}, {}, &flipped.normals);
+  std::printf("  oriented %s\n  a third turned over %s\n", kept.toJson().c_str(), repaired.toJson().c_str());
+  EXPECT_LE(kept.orientationConflicts, kMaxOrientationConflicts);
+  EXPECT_EQ(kept.reorientedNormals, 0u);
+  EXPECT_DOUBLE_EQ(outwardShare(keptNormals, t.cloud.normals), 1.0);
+  EXPECT_GT(repaired.orientationConflicts, 0.1);
+  const double share = outwardShare(repairedNormals, t.cloud.normals);
+  EXPECT_TRUE(share >= 0.995 || share <= 0.005) << share;  // one orientation, whichever sign
+  EXPECT_LE(repaired.crossPairs, kept.crossPairs + kept.crossPairs / 10);
+  EXPECT_GT(repaired.nearZones, 0u);
+}
+
+// The same through the resampler: the plate with unoriented given normals is resampled as with oriented ones.
+TEST(Sheets, UnorientedGivenNormalsResampledLikeOrientedOnes) {
+  const ThinCase t = test::thinPlate(30000, 6.0, 0.0, 23);
+  ResampleParams params;
+  params.targetCount = 600;
+  const ResampleResult oriented = resample(t.cloud, params);
+  const ResampleResult unoriented = resample(withUnorientedNormals(t, 24), params);
+  const double cvOriented = test::sideSpacingCv(t, oriented.cloud.points);
+  const double cvUnoriented = test::sideSpacingCv(t, unoriented.cloud.points);
+  std::size_t off = 0;
+  for (const auto& p : unoriented.cloud.points) off += t.side(p) >= 0 && t.distance(p) > 0.1 * t.gap;
+  std::printf("  cv oriented %.4f, unoriented %.4f; %zu points off by > 0.1 gap\n", cvOriented, cvUnoriented, off);
+  EXPECT_EQ(unoriented.cloud.size(), 600u);
+  EXPECT_EQ(off, 0u);
+  EXPECT_LE(cvUnoriented, 1.1 * cvOriented);
+  auto outward = [&](const ResampleResult& r) {  // a convex box: its outward normal n has n·(p − centre) > 0
+    std::vector<Eigen::Vector3d> truth;
+    for (const auto& p : r.cloud.points) truth.push_back(p - Eigen::Vector3d(0.5, 0.5, 0.5 * t.gap));
+    const double share = outwardShare(r.cloud.normals, truth);
+    return std::max(share, 1 - share);
+  };
+  std::printf("  output normals of one orientation: oriented %.4f, unoriented %.4f\n", outward(oriented),
+              outward(unoriented));
+  EXPECT_GE(outward(unoriented), outward(oriented) - 0.01);
 }
 
 // Acceptance (issue 19), small: two sheets joined by a fold, 2.5 input spacings apart, positions only, default

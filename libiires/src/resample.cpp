@@ -157,10 +157,10 @@ std::vector<std::uint8_t> sheetRule(PointCloud& cloud, NeighbourTable& neighbour
   std::vector<std::uint8_t> near;
   std::vector<Eigen::Vector3d> normals;
   SheetParams sp = params;
-  sp.orient = !preprocessing;  // pre-processing's normals replace these
-  result.sheets = separateSheets(cloud.points, neighbours, normals, sp, exec,
-                                 cloud.hasNormals() ? &cloud.normals : nullptr, &near);
-  if (!preprocessing) cloud.normals = std::move(normals);
+  sp.orient = !preprocessing;  // pre-processing's normals replace estimated ones
+  const bool given = cloud.hasNormals();  // kept, or oriented where they were not consistently
+  result.sheets = separateSheets(cloud.points, neighbours, normals, sp, exec, given ? &cloud.normals : nullptr, &near);
+  if (!preprocessing || given) cloud.normals = std::move(normals);
   clock.end("sheets", t);
   return near;
 }

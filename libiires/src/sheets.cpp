@@ -143,6 +143,7 @@ std::string SheetReport::toJson() const {
   detail::JsonWriter j(6);
   j.beginObject().member("points", points).member("cross_pairs", crossPairs).member("near_points", nearPoints);
   j.member("near_zones", nearZones).member("sheet_pairs", sheetPairs).member("spacing", spacing);
+  j.member("orientation_conflicts", orientationConflicts).member("reoriented_normals", reorientedNormals);
   j.member("time_s", seconds);
   return j.endObject().str();
 }
@@ -318,6 +319,26 @@ void findLayers(SheetState& st, int threads) {
   });
 }
 
+/// The share of neighbour pairs on one plane (each within the loose tolerance of the other's plane, the normals
+/// within gapAngleDeg of parallel either way) whose normals point opposite ways. Oriented normals turn gradually
+/// along a sheet, so such pairs are rare (a sheet thinner than the tolerance, folded onto itself); normals whose
+/// signs were never made consistent give up to half.
+double orientationConflicts(const SheetState& st, int threads) {
+  std::vector<std::array<std::uint32_t, 2>> counts(st.n, {0, 0});  // {pairs, conflicts} per point
+  parallelFor(st.n, threads, [&](std::size_t i) {
+    for (std::size_t a = 0; a < std::min<std::size_t>(st.found[i], st.pcaK); ++a) {
+      const std::uint32_t j = st.row(i)[a];
+      const double c = st.normals[i].dot(st.normals[j]);
+      if (j == i || std::abs(c) < st.gapCos || !st.loose(i, j)) continue;
+      ++counts[i][0];
+      counts[i][1] += c < 0;
+    }
+  });
+  double pairs = 0, conflicts = 0;
+  for (const auto& [p, c] : counts) pairs += p, conflicts += c;
+  return pairs > 0 ? conflicts / pairs : 0.0;
+}
+
 /// Near-contact zones (points with a Euclidean neighbour on another sheet, connected through same-sheet
 /// edges) and the distinct pairs of zones that face each other across a gap; returns which points are near.
 std::vector<std::uint8_t> countZones(const SheetState& st, SheetReport& report, int threads) {
@@ -369,8 +390,9 @@ void plainNormalsAwayFromGaps(SheetState& st, const std::vector<std::uint8_t>& n
 /// sheet's orientation to the other at no cost, the pair being parallel), on each point's kOrientNeighbours
 /// nearest. The spanning tree carries the signs of PCA normals over the filtered rows, which turn gradually
 /// over a crease or a tight fold where the sheet fits turn at once (and a sign carried across a right angle is
-/// a guess); each normal then takes its PCA normal's side.
-void orientSheets(SheetState& st, const NeighbourTable& table, int threads) {
+/// a guess); each normal then takes its PCA normal's side. With @p given normals each connected part of the graph
+/// then takes the side most of them had (the tree's root convention, facing +x, is a guess).
+void orientSheets(SheetState& st, const NeighbourTable& table, bool given, int threads) {
   const std::size_t orientK = std::min<std::size_t>(table.k(), kOrientNeighbours + 1);
   std::vector<std::uint32_t> graph(st.n * orientK);
   std::vector<Eigen::Vector3d> guide(st.n);
@@ -382,6 +404,16 @@ void orientSheets(SheetState& st, const NeighbourTable& table, int threads) {
     for (std::size_t a = 0; a < orientK; ++a) graph[i * orientK + a] = a < f ? idx[a] : static_cast<std::uint32_t>(i);
   });
   orientNormals(st.points, guide, graph, orientK, orientK, threads, true);
+  if (given) {
+    DisjointSets parts(st.n);
+    for (std::size_t i = 0; i < st.n; ++i)
+      for (std::size_t a = 0; a < orientK; ++a) parts.unite(static_cast<std::uint32_t>(i), graph[i * orientK + a]);
+    std::vector<long long> vote(st.n, 0);  // per part: given normals on the tree's side minus those against it
+    auto part = [&](std::size_t i) { return parts.find(static_cast<std::uint32_t>(i)); };
+    for (std::size_t i = 0; i < st.n; ++i) vote[part(i)] += guide[i].dot(st.normals[i]) < 0 ? -1 : 1;
+    for (std::size_t i = 0; i < st.n; ++i)
+      if (vote[part(i)] < 0) guide[i] = -guide[i];
+  }
   parallelFor(st.n, threads, [&](std::size_t i) {
     if (st.normals[i].dot(guide[i]) < 0) st.normals[i] = -st.normals[i];
   });
@@ -412,22 +444,28 @@ SheetReport separateSheets(const std::vector<Eigen::Vector3d>& points, Neighbour
     report.spacing = sorted[st.n / 2];
   }
   const bool given = givenNormals && givenNormals->size() == st.n;
+  bool orient = params.orient;
   if (given) {
-    st.minDot = std::cos(params.maxNormalAngleDeg * M_PI / 180.0);
     normals.resize(st.n);
     parallelFor(st.n, threads, [&](std::size_t i) {
       const double len = (*givenNormals)[i].norm();
       normals[i] = len > 0 ? Eigen::Vector3d((*givenNormals)[i] / len) : Eigen::Vector3d::UnitZ();
       st.plain[i] = rowOnPlane(st, i, normals[i]);
     });
-    findLayers(st, threads);
+    // Oriented normals part pairs that face opposite ways; unoriented ones are read as directions only, and
+    // oriented here (the stages after the rule read them), whatever params.orient.
+    report.orientationConflicts = orientationConflicts(st, threads);
+    orient = report.orientationConflicts > kMaxOrientationConflicts;
+    if (!orient) st.minDot = std::cos(params.maxNormalAngleDeg * M_PI / 180.0);
   } else {
     estimateSheetNormals(st, threads);
-    findLayers(st, threads);
   }
+  findLayers(st, threads);
   report.crossPairs = table.filter([&](std::size_t i, std::size_t j) { return st.final(i, j); },
                                    params.minNeighbours, threads);
-  if (!given && params.orient) orientSheets(st, table, threads);
+  if (orient) orientSheets(st, table, given, threads);
+  if (given && orient)
+    for (std::size_t i = 0; i < st.n; ++i) report.reorientedNormals += normals[i].dot((*givenNormals)[i]) < 0;
   std::vector<std::uint8_t> nearPoints = countZones(st, report, threads);
   if (!given && params.orient) plainNormalsAwayFromGaps(st, nearPoints, threads);
   if (near) *near = std::move(nearPoints);

@@ -57,6 +57,11 @@ struct SheetReport {
   std::size_t nearPoints = 0;    ///< points with a Euclidean neighbour on another sheet
   std::size_t nearZones = 0;     ///< near-contact zones: connected groups (same-sheet graph) of such points
   std::size_t sheetPairs = 0;    ///< zones grouped by the pair of sheets (components of the graph) they face
+  /// Given normals only: the share of near-parallel neighbours on one plane whose normals point opposite ways
+  /// (next to none when the normals are consistently oriented), and how many given normals were turned over
+  /// because that share was above kMaxOrientationConflicts (0 when they were kept as given).
+  double orientationConflicts = 0;
+  std::size_t reorientedNormals = 0;
   double spacing = 0;            ///< median local spacing
   double seconds = 0;
 
@@ -64,12 +69,19 @@ struct SheetReport {
   std::string toJson() const;
 };
 
-/// @brief Unit normals (oriented unless @p givenNormals were given, which are kept) and the sheet rule
-/// applied to @p table, whose rows are filtered in place (NeighbourTable::filter).
+/// Given normals are trusted to be oriented when at most this share of their near-parallel same-plane neighbour
+/// pairs point opposite ways; above it (normals estimated by a tool that does not orient them) only their
+/// directions are used, and they are oriented like estimated ones.
+constexpr double kMaxOrientationConflicts = 0.01;
+
+/// @brief Unit normals (oriented unless @p givenNormals were given, which are kept, turned over where they were
+/// not consistently oriented) and the sheet rule applied to @p table, whose rows are filtered in place
+/// (NeighbourTable::filter).
 /// @param table neighbour lists of exactly @p points, the point itself included (k ≥ pcaNeighbours + 1)
 /// @param normals out: estimated (PCA over same-sheet neighbours, refined once, then, with params.orient,
 /// oriented by a minimum spanning tree over the same-sheet graph) unless @p givenNormals holds one normal per
-/// point (then a copy)
+/// point (then a unit copy, oriented over the same-sheet graph whatever params.orient when the given ones were
+/// not consistently oriented: see kMaxOrientationConflicts)
 /// @param near (optional) out: per point, 1 where a neighbour was found on another sheet
 /// @param exec threads (the result does not depend on them)
 /// @note O(n k). Deterministic for any thread count.
