@@ -57,4 +57,27 @@ TEST(Normals, DeterministicAcrossThreadCounts) {
             iires::estimateNormals(cloud.points, {}, iires::Execution{2}));
 }
 
+// Given normals with a third turned over (seeded) are repaired: each component takes the side most of them had —
+// here inward for the first sphere (its given normals mostly inward), outward for the second; consistent ones
+// are left as they are.
+TEST(Normals, RepairOrientationKeepsTheSideMostGivenNormalsHad) {
+  auto a = iires::test::sphereCloud(3000, 1.0, 7);
+  const auto b = iires::test::sphereCloud(3000, 1.0, 8, Eigen::Vector3d(5, 0, 0));
+  a.points.insert(a.points.end(), b.points.begin(), b.points.end());
+  auto truth = [&](std::size_t i) {  // inward on the first sphere, outward on the second
+    return i < 3000 ? Eigen::Vector3d(-a.points[i].normalized()) : Eigen::Vector3d((a.points[i] - Eigen::Vector3d(5, 0, 0)).normalized());
+  };
+  std::vector<Eigen::Vector3d> consistent(a.size()), normals(a.size());
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    consistent[i] = truth(i);
+    normals[i] = (i * 7919 % 3 == 0 ? -1.0 : 1.0) * truth(i);
+  }
+  std::vector<Eigen::Vector3d> kept = consistent;
+  EXPECT_EQ(iires::repairOrientation(a.points, kept), 0u);
+  EXPECT_EQ(kept, consistent);
+  const std::size_t turned = iires::repairOrientation(a.points, normals);
+  EXPECT_NEAR(static_cast<double>(turned), a.size() / 3.0, 2.0);
+  for (std::size_t i = 0; i < a.size(); ++i) EXPECT_GT(normals[i].dot(truth(i)), 0.99) << "point " << i;
+}
+
 }  // namespace

@@ -11,6 +11,7 @@
 #include <random>
 
 #include "iires/knn.hpp"
+#include "iires/normals.hpp"
 #include "iires/preprocess.hpp"
 #include "iires/reconstruct/reconstruct.hpp"
 #include "iires/resample.hpp"
@@ -164,7 +165,8 @@ TEST(Sheets, UnorientedGivenNormalsAreOriented) {
   EXPECT_GT(repaired.nearZones, 0u);
 }
 
-// The same through the resampler: the plate with unoriented given normals is resampled as with oriented ones.
+// The same through the resampler: the plate with unoriented given normals is resampled as with oriented ones,
+// with the sheet rule (the default) and without it.
 TEST(Sheets, UnorientedGivenNormalsResampledLikeOrientedOnes) {
   const ThinCase t = test::thinPlate(30000, 6.0, 0.0, 23);
   ResampleParams params;
@@ -185,9 +187,12 @@ TEST(Sheets, UnorientedGivenNormalsResampledLikeOrientedOnes) {
     const double share = outwardShare(r.cloud.normals, truth);
     return std::max(share, 1 - share);
   };
-  std::printf("  output normals of one orientation: oriented %.4f, unoriented %.4f\n", outward(oriented),
-              outward(unoriented));
+  params.intrinsic = false;  // straight-line neighbourhoods: the normals are checked before the MLS instead
+  const ResampleResult straight = resample(withUnorientedNormals(t, 24), params);
+  std::printf("  output normals of one orientation: oriented %.4f, unoriented %.4f (--no-intrinsic %.4f)\n",
+              outward(oriented), outward(unoriented), outward(straight));
   EXPECT_GE(outward(unoriented), outward(oriented) - 0.01);
+  EXPECT_GE(outward(straight), outward(oriented) - 0.01);
 }
 
 // Acceptance (issue 19), small: two sheets joined by a fold, 2.5 input spacings apart, positions only, default

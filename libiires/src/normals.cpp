@@ -4,6 +4,7 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <tuple>
@@ -35,9 +36,10 @@ std::vector<std::uint32_t> knnLists(const std::vector<Eigen::Vector3d>& points, 
 /// nbr[i·stride, i·stride + k), or i among j's; entries equal to i — itself, padding — skipped) on the weights
 /// 1 − |nᵢ·nⱼ|, each normal flipped to agree with its tree parent. Kruskal: the edges (each once) sorted by
 /// weight, ties by their order in the lists, so the tree is unique; then per component a walk from its root.
+/// With @p sides, each component then takes the side most of those vectors are on.
 void orientOverGraph(const std::vector<Eigen::Vector3d>& points, std::vector<Eigen::Vector3d>& normals,
                      const std::vector<std::uint32_t>& nbr, std::size_t stride, std::size_t k, int threads,
-                     bool acrossEdge = false) {
+                     bool acrossEdge = false, const std::vector<Eigen::Vector3d>* sides = nullptr) {
   const std::size_t n = points.size();
   if (n == 0) return;
   auto listed = [&](std::uint32_t i, std::uint32_t j) {  // j among i's first k
@@ -111,6 +113,11 @@ void orientOverGraph(const std::vector<Eigen::Vector3d>& points, std::vector<Eig
         queue.push_back(t);
       }
     }
+    if (!sides) return;
+    long long vote = 0;  // the component's normals on the side of @p sides minus those against it
+    for (std::uint32_t v : queue) vote += normals[v].dot((*sides)[v]) < 0 ? -1 : 1;
+    if (vote < 0)
+      for (std::uint32_t v : queue) normals[v] = -normals[v];
   };
   // Roots in decreasing x, so each component starts at its extreme point: the largest x first; the points its
   // tree leaves (other components) are sorted only when there are any.
@@ -161,8 +168,42 @@ void orientNormals(const std::vector<Eigen::Vector3d>& points, std::vector<Eigen
 
 void orientNormals(const std::vector<Eigen::Vector3d>& points, std::vector<Eigen::Vector3d>& normals,
                    const std::vector<std::uint32_t>& neighbours, std::size_t stride, std::size_t k, int threads,
-                   bool acrossEdge) {
-  orientOverGraph(points, normals, neighbours, stride, std::min(k, stride), threads, acrossEdge);
+                   bool acrossEdge, const std::vector<Eigen::Vector3d>* sides) {
+  orientOverGraph(points, normals, neighbours, stride, std::min(k, stride), threads, acrossEdge, sides);
+}
+
+double orientationConflicts(const std::vector<Eigen::Vector3d>& points, const std::vector<Eigen::Vector3d>& normals,
+                            const std::vector<std::uint32_t>& neighbours, std::size_t stride, std::size_t k,
+                            int threads) {
+  const double onPlane = std::sin(15.0 * M_PI / 180.0), parallel = std::cos(25.0 * M_PI / 180.0);
+  std::vector<std::array<std::uint32_t, 2>> counts(points.size(), {0, 0});  // {pairs, conflicts} per point
+  parallelFor(points.size(), threads, [&](std::size_t i) {
+    for (std::size_t a = 0; a < std::min(k, stride); ++a) {
+      const std::uint32_t j = neighbours[i * stride + a];
+      const Eigen::Vector3d d = (points[j] - points[i]).normalized();
+      const double c = normals[i].dot(normals[j]);
+      if (j == i || std::abs(c) < parallel || std::abs(normals[i].dot(d)) > onPlane ||
+          std::abs(normals[j].dot(d)) > onPlane)
+        continue;
+      ++counts[i][0];
+      counts[i][1] += c < 0;
+    }
+  });
+  double pairs = 0, conflicts = 0;
+  for (const auto& [p, c] : counts) pairs += p, conflicts += c;
+  return pairs > 0 ? conflicts / pairs : 0.0;
+}
+
+std::size_t repairOrientation(const std::vector<Eigen::Vector3d>& points, std::vector<Eigen::Vector3d>& normals,
+                              int k, int threads) {
+  const std::size_t stride = static_cast<std::size_t>(k) + 1;
+  const auto lists = knnLists(points, stride - 1, threads);
+  if (orientationConflicts(points, normals, lists, stride, stride, threads) <= kMaxOrientationConflicts) return 0;
+  const std::vector<Eigen::Vector3d> given = normals;
+  orientOverGraph(points, normals, lists, stride, stride, threads, true, &given);
+  std::size_t turned = 0;
+  for (std::size_t i = 0; i < normals.size(); ++i) turned += normals[i].dot(given[i]) < 0;
+  return turned;
 }
 
 }  // namespace iires

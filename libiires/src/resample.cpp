@@ -15,6 +15,7 @@
 
 #include "iires/detail/json.hpp"
 #include "iires/knn.hpp"
+#include "iires/normals.hpp"
 #include "iires/detail/parallel.hpp"
 #include "iires/detail/stage_clock.hpp"
 #include "iires/validate.hpp"
@@ -291,6 +292,7 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params, const Ex
     cloud.normals = estimateNormals(cloud.points, params.normals, exec);
   } else {
     for (auto& nrm : cloud.normals) nrm.normalize();
+    if (!sheets) repairOrientation(cloud.points, cloud.normals, params.normals.k, exec.threads);  // else the rule did
   }
   clock.end("normals", t);
 

@@ -319,26 +319,6 @@ void findLayers(SheetState& st, int threads) {
   });
 }
 
-/// The share of neighbour pairs on one plane (each within the loose tolerance of the other's plane, the normals
-/// within gapAngleDeg of parallel either way) whose normals point opposite ways. Oriented normals turn gradually
-/// along a sheet, so such pairs are rare (a sheet thinner than the tolerance, folded onto itself); normals whose
-/// signs were never made consistent give up to half.
-double orientationConflicts(const SheetState& st, int threads) {
-  std::vector<std::array<std::uint32_t, 2>> counts(st.n, {0, 0});  // {pairs, conflicts} per point
-  parallelFor(st.n, threads, [&](std::size_t i) {
-    for (std::size_t a = 0; a < std::min<std::size_t>(st.found[i], st.pcaK); ++a) {
-      const std::uint32_t j = st.row(i)[a];
-      const double c = st.normals[i].dot(st.normals[j]);
-      if (j == i || std::abs(c) < st.gapCos || !st.loose(i, j)) continue;
-      ++counts[i][0];
-      counts[i][1] += c < 0;
-    }
-  });
-  double pairs = 0, conflicts = 0;
-  for (const auto& [p, c] : counts) pairs += p, conflicts += c;
-  return pairs > 0 ? conflicts / pairs : 0.0;
-}
-
 /// Near-contact zones (points with a Euclidean neighbour on another sheet, connected through same-sheet
 /// edges) and the distinct pairs of zones that face each other across a gap; returns which points are near.
 std::vector<std::uint8_t> countZones(const SheetState& st, SheetReport& report, int threads) {
@@ -403,17 +383,7 @@ void orientSheets(SheetState& st, const NeighbourTable& table, bool given, int t
     guide[i] = pcaNormal(st.points, i, idx.data(), f, st.normals[i]);
     for (std::size_t a = 0; a < orientK; ++a) graph[i * orientK + a] = a < f ? idx[a] : static_cast<std::uint32_t>(i);
   });
-  orientNormals(st.points, guide, graph, orientK, orientK, threads, true);
-  if (given) {
-    DisjointSets parts(st.n);
-    for (std::size_t i = 0; i < st.n; ++i)
-      for (std::size_t a = 0; a < orientK; ++a) parts.unite(static_cast<std::uint32_t>(i), graph[i * orientK + a]);
-    std::vector<long long> vote(st.n, 0);  // per part: given normals on the tree's side minus those against it
-    auto part = [&](std::size_t i) { return parts.find(static_cast<std::uint32_t>(i)); };
-    for (std::size_t i = 0; i < st.n; ++i) vote[part(i)] += guide[i].dot(st.normals[i]) < 0 ? -1 : 1;
-    for (std::size_t i = 0; i < st.n; ++i)
-      if (vote[part(i)] < 0) guide[i] = -guide[i];
-  }
+  orientNormals(st.points, guide, graph, orientK, orientK, threads, true, given ? &st.normals : nullptr);
   parallelFor(st.n, threads, [&](std::size_t i) {
     if (st.normals[i].dot(guide[i]) < 0) st.normals[i] = -st.normals[i];
   });
@@ -454,7 +424,7 @@ SheetReport separateSheets(const std::vector<Eigen::Vector3d>& points, Neighbour
     });
     // Oriented normals part pairs that face opposite ways; unoriented ones are read as directions only, and
     // oriented here (the stages after the rule read them), whatever params.orient.
-    report.orientationConflicts = orientationConflicts(st, threads);
+    report.orientationConflicts = orientationConflicts(points, normals, st.rows, st.K, st.pcaK, threads);
     orient = report.orientationConflicts > kMaxOrientationConflicts;
     if (!orient) st.minDot = std::cos(params.maxNormalAngleDeg * M_PI / 180.0);
   } else {

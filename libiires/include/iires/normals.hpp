@@ -36,10 +36,33 @@ void orientNormals(const std::vector<Eigen::Vector3d>& points, std::vector<Eigen
 /// instead of the normals: consistent normals keep a positive value over a crease or a tight fold, and a pair
 /// across a thin gap (d along both normals) has none, so the tree neither guesses a sign across a right angle
 /// nor carries one sheet's orientation to the other
+/// @param sides (optional, one per point) each connected component takes the side most of these vectors are on
+/// (e.g. given normals whose signs are mostly right) instead of facing +x at its root
 /// @note O(n k) (Kruskal's minimum spanning tree on 1 − |nᵢ·nⱼ| after a radix sort of the weights, roots as
 /// estimateNormals). Deterministic.
 void orientNormals(const std::vector<Eigen::Vector3d>& points, std::vector<Eigen::Vector3d>& normals,
                    const std::vector<std::uint32_t>& neighbours, std::size_t stride, std::size_t k,
-                   int threads = 0, bool acrossEdge = false);
+                   int threads = 0, bool acrossEdge = false, const std::vector<Eigen::Vector3d>* sides = nullptr);
+
+/// Given normals are trusted to be oriented when at most this share of their neighbour pairs on one plane point
+/// opposite ways (orientationConflicts); above it (normals from a tool that does not orient them) only their
+/// directions are used.
+constexpr double kMaxOrientationConflicts = 0.01;
+
+/// @brief The share of neighbour pairs on one plane — each point within 15° of the other's tangent plane, the
+/// normals within 25° of parallel either way — whose normals point opposite ways. Consistently oriented normals
+/// turn gradually along a surface and have next to none (a pair across a gap is not on one plane); normals whose
+/// signs were never made consistent have up to half.
+/// @param neighbours as orientNormals' (entries equal to the point itself skipped)
+/// @note O(n k). Deterministic for any thread count.
+double orientationConflicts(const std::vector<Eigen::Vector3d>& points, const std::vector<Eigen::Vector3d>& normals,
+                            const std::vector<std::uint32_t>& neighbours, std::size_t stride, std::size_t k,
+                            int threads = 0);
+
+/// @brief Given unit normals whose signs disagree (orientationConflicts above kMaxOrientationConflicts over the
+/// @p k nearest) oriented over the k-NN graph (orientNormals with acrossEdge), each connected component on the side
+/// most of them had; consistent ones are left as they are. Returns how many were turned over.
+std::size_t repairOrientation(const std::vector<Eigen::Vector3d>& points, std::vector<Eigen::Vector3d>& normals,
+                              int k = 12, int threads = 0);
 
 }  // namespace iires

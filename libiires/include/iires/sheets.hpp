@@ -59,7 +59,7 @@ struct SheetReport {
   std::size_t sheetPairs = 0;    ///< zones grouped by the pair of sheets (components of the graph) they face
   /// Given normals only: the share of near-parallel neighbours on one plane whose normals point opposite ways
   /// (next to none when the normals are consistently oriented), and how many given normals were turned over
-  /// because that share was above kMaxOrientationConflicts (0 when they were kept as given).
+  /// because that share was above kMaxOrientationConflicts (normals.hpp; 0 when they were kept as given).
   double orientationConflicts = 0;
   std::size_t reorientedNormals = 0;
   double spacing = 0;            ///< median local spacing
@@ -69,11 +69,6 @@ struct SheetReport {
   std::string toJson() const;
 };
 
-/// Given normals are trusted to be oriented when at most this share of their near-parallel same-plane neighbour
-/// pairs point opposite ways; above it (normals estimated by a tool that does not orient them) only their
-/// directions are used, and they are oriented like estimated ones.
-constexpr double kMaxOrientationConflicts = 0.01;
-
 /// @brief Unit normals (oriented unless @p givenNormals were given, which are kept, turned over where they were
 /// not consistently oriented) and the sheet rule applied to @p table, whose rows are filtered in place
 /// (NeighbourTable::filter).
@@ -81,7 +76,7 @@ constexpr double kMaxOrientationConflicts = 0.01;
 /// @param normals out: estimated (PCA over same-sheet neighbours, refined once, then, with params.orient,
 /// oriented by a minimum spanning tree over the same-sheet graph) unless @p givenNormals holds one normal per
 /// point (then a unit copy, oriented over the same-sheet graph whatever params.orient when the given ones were
-/// not consistently oriented: see kMaxOrientationConflicts)
+/// not consistently oriented: see kMaxOrientationConflicts in normals.hpp)
 /// @param near (optional) out: per point, 1 where a neighbour was found on another sheet
 /// @param exec threads (the result does not depend on them)
 /// @note O(n k). Deterministic for any thread count.
