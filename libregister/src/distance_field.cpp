@@ -31,6 +31,7 @@ DistanceField::DistanceField(const std::vector<Eigen::Vector3d>& points, const D
     throw std::invalid_argument(
         "distance field: the points must be finite and not all equal when margin is 0");
   cell_ = longest / static_cast<double>(params.cells);
+  inverseCell_ = 1.0 / cell_;
   origin_ = lo;
   for (int a = 0; a < 3; ++a) {
     const auto cells = static_cast<std::size_t>(std::ceil((hi[a] - lo[a]) / cell_ - 1e-9));
@@ -53,14 +54,14 @@ DistanceField::DistanceField(const std::vector<Eigen::Vector3d>& points, const D
 double DistanceField::distance(const Eigen::Vector3d& query) const {
   // Outside the box: the distance to the box plus the field at the nearest point of the box (the exact
   // distance is at most that, by the triangle inequality).
-  const Eigen::Vector3d q = query.cwiseMax(origin_).cwiseMin(far_);
-  const double outside = (query - q).norm();
+  double outside2 = 0;
   std::size_t cell[3];
   double f[3];
   for (int a = 0; a < 3; ++a) {
-    const double u = (q[a] - origin_[a]) / cell_;
-    const double i = std::min(std::floor(u), static_cast<double>(nodes_[a] - 2));
-    cell[a] = static_cast<std::size_t>(std::max(0.0, i));
+    const double q = std::clamp(query[a], origin_[a], far_[a]);
+    outside2 += (query[a] - q) * (query[a] - q);
+    const double u = (q - origin_[a]) * inverseCell_;  // ≥ 0: truncation is the floor
+    cell[a] = std::min(static_cast<std::size_t>(u), nodes_[a] - 2);
     f[a] = u - static_cast<double>(cell[a]);
   }
   const std::size_t sx = 1, sy = nodes_[0], sz = nodes_[0] * nodes_[1];
@@ -72,7 +73,8 @@ double DistanceField::distance(const Eigen::Vector3d& query) const {
   const double x11 = v[sz + sy] + f[0] * (v[sz + sy + sx] - v[sz + sy]);
   const double y0 = x00 + f[1] * (x10 - x00);
   const double y1 = x01 + f[1] * (x11 - x01);
-  return outside + y0 + f[2] * (y1 - y0);
+  const double inside = y0 + f[2] * (y1 - y0);
+  return outside2 > 0 ? inside + std::sqrt(outside2) : inside;
 }
 
 }  // namespace iires::reg

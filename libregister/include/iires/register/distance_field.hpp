@@ -52,7 +52,7 @@ class DistanceField {
 
  private:
   Eigen::Vector3d origin_ = Eigen::Vector3d::Zero(), far_ = Eigen::Vector3d::Zero();  // the grid's box
-  double cell_ = 1;
+  double cell_ = 1, inverseCell_ = 1;
   std::array<std::size_t, 3> nodes_{2, 2, 2};
   std::vector<float> values_;  // node distances, x fastest
 };
