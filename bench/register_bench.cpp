@@ -25,7 +25,8 @@
 //                  [--search coarsePoints=96,coarseKeep=48,fullKeep=48,keep=12,minSeparationDeg=25,refineLevels=0,
 //                            screenIterations=8,searchOverlaps=1:0.8:0.6,searchOverlapExponent=2,fitOverlapExponent=2.5,
 //                            translationRadius=0.8,translationStep=0.4,translationPoints=48,translationRefineLevels=2,
-//                            translationScales=1]
+//                            translationScales=1,fieldCells=32,fieldMargin=1,coarseOffsetRadius=0.4,
+//                            coarseOffsetStep=0.4,coarseOffsetRefineLevels=1]
 //                  [--verbose]
 #include <Eigen/Geometry>
 #include <algorithm>
@@ -366,6 +367,11 @@ void parseSearchKeys(const std::string& list, iires::reg::RegistrationParams& p)
     else if (key == "translationStep") sp.translationStep = v;
     else if (key == "translationPoints") sp.translationPoints = static_cast<std::size_t>(v);
     else if (key == "translationRefineLevels") sp.translationRefineLevels = static_cast<int>(v);
+    else if (key == "fieldCells") sp.fieldCells = static_cast<std::size_t>(v);
+    else if (key == "fieldMargin") sp.fieldMargin = v;
+    else if (key == "coarseOffsetRadius") sp.coarseOffsetRadius = v;
+    else if (key == "coarseOffsetStep") sp.coarseOffsetStep = v;
+    else if (key == "coarseOffsetRefineLevels") sp.coarseOffsetRefineLevels = static_cast<int>(v);
     else throw std::invalid_argument("unknown search key " + key);
   }
 }

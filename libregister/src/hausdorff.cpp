@@ -11,6 +11,60 @@
 
 namespace iires::reg {
 
+namespace {
+
+double squaredDistanceTo(const KnnIndex& to, const Eigen::Vector3d& p) {
+  double d2 = 0;
+  to.nearest(p, &d2);
+  return d2;
+}
+
+double squaredDistanceTo(const DistanceField& to, const Eigen::Vector3d& p) { return to.squaredDistance(p); }
+
+/// The partial Hausdorff energy with squared distances from @p to (a KnnIndex or a DistanceField).
+template <typename Distances>
+double boundedPartial(const std::vector<Eigen::Vector3d>& from, const Eigen::Matrix3d& linear,
+                      const Eigen::Vector3d& translation, const Distances& to,
+                      const std::vector<TrimLevel>& levels, double bound, std::vector<double>& scratch,
+                      std::size_t* visited, std::size_t* level) {
+  constexpr std::size_t kMaxLevels = 16;
+  if (levels.empty() || levels.size() > kMaxLevels)
+    throw std::invalid_argument("boundedPartialHausdorff: between 1 and 16 levels");
+  // Level j is beaten once more than its outliers lie farther than bound / penalty_j.
+  double limit2[kMaxLevels];
+  std::size_t over[kMaxLevels] = {};
+  for (std::size_t j = 0; j < levels.size(); ++j) {
+    const double t = bound / levels[j].penalty;
+    limit2[j] = std::isfinite(t) ? t * t : std::numeric_limits<double>::infinity();
+  }
+  const bool plainMax = levels.size() == 1 && levels[0].outliers == 0;
+  std::size_t alive = levels.size();  // levels not beaten yet
+  scratch.clear();
+  double worst = 0;  // running maximum, enough for a single untrimmed level
+  std::size_t i = 0;
+  for (; i < from.size(); ++i) {
+    const double d2 = squaredDistanceTo(to, linear * from[i] + translation);
+    for (std::size_t j = 0; j < levels.size(); ++j)
+      if (d2 > limit2[j] && over[j]++ == levels[j].outliers) --alive;
+    if (alive == 0) {
+      if (visited) *visited = i + 1;
+      return std::numeric_limits<double>::infinity();
+    }
+    if (plainMax)
+      worst = std::max(worst, d2);
+    else
+      scratch.push_back(d2);
+  }
+  if (visited) *visited = i;
+  if (plainMax) {
+    if (level) *level = 0;
+    return std::sqrt(worst);
+  }
+  return penalisedQuantile(scratch, levels, level);
+}
+
+}  // namespace
+
 std::size_t allowedOutliers(std::size_t n, double overlap) {
   if (!(overlap > 0.0 && overlap <= 1.0))
     throw std::invalid_argument("overlap must be in (0, 1], got " + std::to_string(overlap));
@@ -84,41 +138,14 @@ double boundedPartialHausdorff(const std::vector<Eigen::Vector3d>& from, const E
                                const Eigen::Vector3d& translation, const KnnIndex& to,
                                const std::vector<TrimLevel>& levels, double bound, std::vector<double>& scratch,
                                std::size_t* visited, std::size_t* level) {
-  constexpr std::size_t kMaxLevels = 16;
-  if (levels.empty() || levels.size() > kMaxLevels)
-    throw std::invalid_argument("boundedPartialHausdorff: between 1 and 16 levels");
-  // Level j is beaten once more than its outliers lie farther than bound / penalty_j.
-  double limit2[kMaxLevels];
-  std::size_t over[kMaxLevels] = {};
-  for (std::size_t j = 0; j < levels.size(); ++j) {
-    const double t = bound / levels[j].penalty;
-    limit2[j] = std::isfinite(t) ? t * t : std::numeric_limits<double>::infinity();
-  }
-  const bool plainMax = levels.size() == 1 && levels[0].outliers == 0;
-  std::size_t alive = levels.size();  // levels not beaten yet
-  scratch.clear();
-  double worst = 0;  // running maximum, enough for a single untrimmed level
-  std::size_t i = 0;
-  for (; i < from.size(); ++i) {
-    double d2 = 0;
-    to.nearest(linear * from[i] + translation, &d2);
-    for (std::size_t j = 0; j < levels.size(); ++j)
-      if (d2 > limit2[j] && over[j]++ == levels[j].outliers) --alive;
-    if (alive == 0) {
-      if (visited) *visited = i + 1;
-      return std::numeric_limits<double>::infinity();
-    }
-    if (plainMax)
-      worst = std::max(worst, d2);
-    else
-      scratch.push_back(d2);
-  }
-  if (visited) *visited = i;
-  if (plainMax) {
-    if (level) *level = 0;
-    return std::sqrt(worst);
-  }
-  return penalisedQuantile(scratch, levels, level);
+  return boundedPartial(from, linear, translation, to, levels, bound, scratch, visited, level);
+}
+
+double boundedPartialHausdorff(const std::vector<Eigen::Vector3d>& from, const Eigen::Matrix3d& linear,
+                               const Eigen::Vector3d& translation, const DistanceField& to,
+                               const std::vector<TrimLevel>& levels, double bound, std::vector<double>& scratch,
+                               std::size_t* visited, std::size_t* level) {
+  return boundedPartial(from, linear, translation, to, levels, bound, scratch, visited, level);
 }
 
 }  // namespace iires::reg

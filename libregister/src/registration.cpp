@@ -443,6 +443,7 @@ RegistrationResult registerClouds(const PointCloud& sourceIn, const PointCloud& 
   r.gridSize = grid.size();
   r.exactEvaluations = found.exactEvaluations;
   r.pointQueries = found.pointQueries;
+  r.fieldQueries = found.fieldQueries;
   stage("search", t);
   if (found.candidates.empty()) throw std::runtime_error("rotation search found no candidate");
 
@@ -511,6 +512,7 @@ std::string RegistrationResult::toJson() const {
   j.member("grid_size", gridSize).member("best_candidate", bestCandidate).member("candidate_rank", candidateRank);
   j.member("icp_iterations", icpIterations).member("icp_converged", icpConverged);
   j.member("exact_evaluations", exactEvaluations).member("point_queries", pointQueries);
+  j.member("field_queries", fieldQueries);
   j.member("ambiguous", ambiguous).member("planar", planar).member("ambiguity_reason", ambiguityReason);
   j.member("second_best_score_ratio", secondBestScoreRatio);
   j.member("source_points", sourcePoints).member("target_points", targetPoints);

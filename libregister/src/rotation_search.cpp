@@ -8,9 +8,11 @@
 #include <cmath>
 #include <random>
 #include <stdexcept>
+#include <type_traits>
 #include <utility>
 
 #include "iires/detail/parallel.hpp"
+#include "iires/register/distance_field.hpp"
 #include "iires/register/hausdorff.hpp"
 #include "iires/register/rotation_grid.hpp"
 
@@ -52,6 +54,21 @@ struct Scored {
   bool operator<(const Scored& o) const { return energy < o.energy || (energy == o.energy && index < o.index); }
 };
 
+/// The points k·step of the cubic lattice with 0 < |k·step| ≤ radius, nearest first (ties in lattice order).
+std::vector<Eigen::Vector3d> latticeWithin(double radius, double step) {
+  std::vector<Eigen::Vector3d> lattice;
+  const int reach = static_cast<int>(std::floor(radius / step + 1e-9));
+  for (int x = -reach; x <= reach; ++x)
+    for (int y = -reach; y <= reach; ++y)
+      for (int z = -reach; z <= reach; ++z) {
+        const Eigen::Vector3d t = step * Eigen::Vector3d(x, y, z);
+        if ((x || y || z) && t.norm() <= radius + 1e-9) lattice.push_back(t);
+      }
+  std::stable_sort(lattice.begin(), lattice.end(),
+                   [](const Eigen::Vector3d& a, const Eigen::Vector3d& b) { return a.norm() < b.norm() - 1e-12; });
+  return lattice;
+}
+
 Eigen::Matrix3d expMap(const Eigen::Vector3d& w) {
   const double a = w.norm();
   if (a == 0.0) return Eigen::Matrix3d::Identity();
@@ -67,6 +84,15 @@ void RotationSearchParams::validate() const {
     if (!(f > 0.0 && f <= 1.0)) throw std::invalid_argument("rotation search: overlap must be in (0, 1]");
   if (!(overlapExponent >= 0.0)) throw std::invalid_argument("rotation search: overlapExponent must be >= 0");
   if (coarsePoints < 8) throw std::invalid_argument("rotation search: coarsePoints must be at least 8");
+  if (fieldCells == 1) throw std::invalid_argument("rotation search: fieldCells must be 0 (off) or at least 2");
+  if (!(fieldMargin >= 0.0) || !std::isfinite(fieldMargin))
+    throw std::invalid_argument("rotation search: fieldMargin must be finite and >= 0");
+  if (!(coarseOffsetRadius >= 0.0) || !std::isfinite(coarseOffsetRadius))
+    throw std::invalid_argument("rotation search: coarseOffsetRadius must be finite and >= 0");
+  if (!(coarseOffsetStep > 0.0) || !std::isfinite(coarseOffsetStep))
+    throw std::invalid_argument("rotation search: coarseOffsetStep must be finite and positive");
+  if (coarseOffsetRefineLevels < 0)
+    throw std::invalid_argument("rotation search: coarseOffsetRefineLevels must be >= 0");
   if (coarseKeep < 1 || fullKeep < 1 || keep < 1)
     throw std::invalid_argument("rotation search: coarseKeep, fullKeep and keep must be at least 1");
   if (!(minSeparationDeg >= 0.0)) throw std::invalid_argument("rotation search: minSeparationDeg must be >= 0");
@@ -89,61 +115,103 @@ struct RotationSearch::Impl {
   std::vector<Eigen::Vector3d> sourceCoarse, targetCoarse;  // their first coarsePoints
   std::vector<Eigen::Vector3d> sourceShift, targetShift;    // their first translationPoints
   std::unique_ptr<KnnIndex> sourceTree, targetTree;
+  std::unique_ptr<DistanceField> sourceField, targetField;  // of the whole clouds; null when fieldCells = 0
   std::vector<TrimLevel> sourceLevels, targetLevels, sourceCoarseLevels, targetCoarseLevels, sourceShiftLevels,
       targetShiftLevels;
   std::vector<Eigen::Vector3d> lattice;  // translation lattice, nearest to the origin first (origin excluded)
-  mutable std::atomic<std::size_t> queries{0};
+  std::vector<Eigen::Vector3d> coarseLattice;  // the coarse pass's offsets, likewise
+  mutable std::atomic<std::size_t> queries{0}, fieldQueries{0};
 
   // E(R, t, s) = max(h(s·R·S + t → T), s·h(Rᵀ(T − t)/s → S)), eq. (11) with a translation and a scale;
   // the second term has the same distances as T → s·R·S + t. fs, ft (optional) receive the overlap level
-  // each direction chose.
+  // each direction chose. Distances from sd (of the source) and td (of the target): k-d trees or fields.
+  template <typename Distances>
   double eval(const std::vector<Eigen::Vector3d>& s, const std::vector<TrimLevel>& sl,
-              const std::vector<Eigen::Vector3d>& t, const std::vector<TrimLevel>& tl, const Eigen::Matrix3d& r,
-              const Offset& o, double bound, double* fs = nullptr, double* ft = nullptr) const {
+              const std::vector<Eigen::Vector3d>& t, const std::vector<TrimLevel>& tl, const Distances& sd,
+              const Distances& td, const Eigen::Matrix3d& r, const Offset& o, double bound, double* fs = nullptr,
+              double* ft = nullptr) const {
     thread_local std::vector<double> scratch;
     std::size_t visited = 0, visited2 = 0, ls = 0, lt = 0;
-    const double a =
-        boundedPartialHausdorff(s, o.scale * r, o.translation, *targetTree, sl, bound, scratch, &visited, &ls);
+    auto& counter = std::is_same_v<Distances, DistanceField> ? fieldQueries : queries;
+    const double a = boundedPartialHausdorff(s, o.scale * r, o.translation, td, sl, bound, scratch, &visited, &ls);
     if (!std::isfinite(a)) {
-      queries.fetch_add(visited, std::memory_order_relaxed);
+      counter.fetch_add(visited, std::memory_order_relaxed);
       return kInf;
     }
     const Eigen::Matrix3d inverse = r.transpose() / o.scale;
-    const double b = o.scale * boundedPartialHausdorff(t, inverse, -(inverse * o.translation), *sourceTree, tl,
+    const double b = o.scale * boundedPartialHausdorff(t, inverse, -(inverse * o.translation), sd, tl,
                                                        bound / o.scale, scratch, &visited2, &lt);
-    queries.fetch_add(visited + visited2, std::memory_order_relaxed);
+    counter.fetch_add(visited + visited2, std::memory_order_relaxed);
     if (fs && std::isfinite(b)) *fs = sl[ls].overlap;
     if (ft && std::isfinite(b)) *ft = tl[lt].overlap;
     return std::max(a, b);
   }
   double full(const Eigen::Matrix3d& r, const Offset& o, double bound, double* fs = nullptr,
               double* ft = nullptr) const {
-    return eval(source, sourceLevels, target, targetLevels, r, o, bound, fs, ft);
+    return eval(source, sourceLevels, target, targetLevels, *sourceTree, *targetTree, r, o, bound, fs, ft);
   }
   double coarse(const Eigen::Matrix3d& r, const Offset& o, double bound) const {
-    return eval(sourceCoarse, sourceCoarseLevels, targetCoarse, targetCoarseLevels, r, o, bound);
+    if (!sourceField)
+      return eval(sourceCoarse, sourceCoarseLevels, targetCoarse, targetCoarseLevels, *sourceTree, *targetTree, r,
+                  o, bound);
+    return eval(sourceCoarse, sourceCoarseLevels, targetCoarse, targetCoarseLevels, *sourceField, *targetField, r,
+                o, bound);
   }
   double offsetEnergy(const Eigen::Matrix3d& r, const Offset& o, double bound) const {
-    return eval(sourceShift, sourceShiftLevels, targetShift, targetShiftLevels, r, o, bound);
+    return eval(sourceShift, sourceShiftLevels, targetShift, targetShiftLevels, *sourceTree, *targetTree, r, o,
+                bound);
   }
 
-  /// The translation and scale minimising E(R, t, s) on the translationPoints subsets: for each scale of
-  /// translationScales the lattice (early exit against the best so far), then at the best scale a pattern
-  /// search of ±h along each axis, h halved translationRefineLevels times. Serial.
-  Offset bestOffset(const Eigen::Matrix3d& r, double* energy) const {
+  /// The coarse energy of R minimised over the translation (scale 1): t = 0 and the coarse lattice, then
+  /// coarseOffsetRefineLevels pattern moves of ±h along each axis around the best, h halved each time.
+  /// Early exit against min(@p bound, the best so far); +∞ when every offset exceeds @p bound (then no
+  /// pattern move is tried). @p chosen receives the minimising offset (t = 0 when none is finite). Serial.
+  double bestCoarse(const Eigen::Matrix3d& r, double bound, Offset* chosen) const {
     Offset best;
+    double e = coarse(r, best, bound);
+    auto consider = [&](const Offset& o, Offset& into, double& energy) {
+      const double v = coarse(r, o, std::min(energy, bound));
+      if (v < energy) {
+        energy = v;
+        into = o;
+      }
+    };
+    for (const auto& t : coarseLattice) consider(Offset{t, 1.0}, best, e);
+    double h = params.coarseOffsetStep;
+    for (int level = 0; level < params.coarseOffsetRefineLevels && !coarseLattice.empty() && std::isfinite(e);
+         ++level) {
+      h *= 0.5;
+      Offset next = best;
+      double en = e;
+      for (int axis = 0; axis < 3; ++axis)
+        for (double sign : {-1.0, 1.0})
+          consider(Offset{best.translation + sign * h * Eigen::Vector3d::Unit(axis), 1.0}, next, en);
+      best = next;
+      e = en;
+    }
+    *chosen = best;
+    return e;
+  }
+
+  /// The translation and scale minimising E(R, t, s) on the translationPoints subsets: from @p start (the
+  /// coarse pass's offset), for each scale of translationScales t = 0 and the lattice (early exit against the
+  /// best so far), then at the best scale a pattern search of ±h along each axis, h halved
+  /// translationRefineLevels times. Serial.
+  Offset bestOffset(const Eigen::Matrix3d& r, const Offset& start, double* energy) const {
+    Offset best = start;
     double e = offsetEnergy(r, best, kInf);
     for (double scale : params.translationScales) {
       Offset o;
       o.scale = scale;
       auto consider = [&](const Offset& candidate) {
+        if (candidate.scale == start.scale && candidate.translation == start.translation) return;
         const double v = offsetEnergy(r, candidate, e);
         if (v < e) {
           e = v;
           best = candidate;
         }
       };
-      if (scale != 1.0) consider(o);  // the origin at scale 1 is the starting point
+      consider(o);
       for (const auto& t : lattice) {
         o.translation = t;
         consider(o);
@@ -228,22 +296,22 @@ RotationSearch::RotationSearch(const std::vector<Eigen::Vector3d>& source, const
   outerFirst(m.target);
   m.sourceTree = std::make_unique<KnnIndex>(m.source);
   m.targetTree = std::make_unique<KnnIndex>(m.target);
+  if (params.fieldCells > 0) {
+    DistanceFieldParams fp;
+    fp.cells = params.fieldCells;
+    fp.margin = params.fieldMargin;
+    fp.threads = exec.threads;
+    m.sourceField = std::make_unique<DistanceField>(m.source, fp);
+    m.targetField = std::make_unique<DistanceField>(m.target, fp);
+  }
   m.sourceLevels = trimLevels(m.source.size(), params.overlaps, params.overlapExponent);
   m.targetLevels = trimLevels(m.target.size(), params.overlaps, params.overlapExponent);
   m.sourceCoarseLevels = trimLevels(m.sourceCoarse.size(), params.overlaps, params.overlapExponent);
   m.targetCoarseLevels = trimLevels(m.targetCoarse.size(), params.overlaps, params.overlapExponent);
   m.sourceShiftLevels = trimLevels(m.sourceShift.size(), params.overlaps, params.overlapExponent);
   m.targetShiftLevels = trimLevels(m.targetShift.size(), params.overlaps, params.overlapExponent);
-  // Lattice points k·step with 0 < |k·step| ≤ radius, nearest first (ties in lattice order: deterministic).
-  const int reach = static_cast<int>(std::floor(params.translationRadius / params.translationStep + 1e-9));
-  for (int x = -reach; x <= reach; ++x)
-    for (int y = -reach; y <= reach; ++y)
-      for (int z = -reach; z <= reach; ++z) {
-        const Eigen::Vector3d t = params.translationStep * Eigen::Vector3d(x, y, z);
-        if ((x || y || z) && t.norm() <= params.translationRadius + 1e-9) m.lattice.push_back(t);
-      }
-  std::stable_sort(m.lattice.begin(), m.lattice.end(),
-                   [](const Eigen::Vector3d& a, const Eigen::Vector3d& b) { return a.norm() < b.norm() - 1e-12; });
+  m.lattice = latticeWithin(params.translationRadius, params.translationStep);
+  m.coarseLattice = latticeWithin(params.coarseOffsetRadius, params.coarseOffsetStep);
 }
 
 RotationSearch::~RotationSearch() = default;
@@ -268,6 +336,7 @@ RotationSearchResult RotationSearch::search(const std::vector<Eigen::Matrix3d>& 
   const Impl& m = *impl_;
   const RotationSearchParams& p = m.params;
   m.queries = 0;
+  m.fieldQueries = 0;
   RotationSearchResult result;
   result.gridSize = grid.size();
   if (grid.empty()) throw std::invalid_argument("rotation search: empty grid");
@@ -278,17 +347,19 @@ RotationSearchResult RotationSearch::search(const std::vector<Eigen::Matrix3d>& 
   // Progress: the coarse pass is most of the work (≈ 90 %), the exact pass and the refinement the rest.
   auto report = [&](double fraction) { m.exec.report("search", fraction); };
   report(0.0);
+  std::vector<Offset> offsetOf(grid.size());  // each candidate's coarse offset, then its searched offset
   const auto coarse = m.bestOf(
-      all, p.coarseKeep, [&](std::size_t i, double b) { return m.coarse(grid[i], Offset{}, b); }, nullptr,
+      all, p.coarseKeep, [&](std::size_t i, double b) { return m.bestCoarse(grid[i], b, &offsetOf[i]); },
+      nullptr,
       [&](std::size_t done) { report(0.9 * static_cast<double>(done) / static_cast<double>(grid.size())); });
 
   // Translation (and scale) search around each survivor (one survivor per task: deterministic), then the
   // survivors ordered by that energy so that the exact pass's bound tightens early.
   std::vector<Scored> shifted(coarse.size());
-  std::vector<Offset> offsetOf(grid.size());
   parallelEach(coarse.size(), m.exec.threads, [&](std::size_t j) {
     double e = kInf;
-    offsetOf[coarse[j].index] = m.bestOffset(grid[coarse[j].index], &e);
+    const std::size_t i = coarse[j].index;
+    offsetOf[i] = m.bestOffset(grid[i], p.translationRadius > 0 ? offsetOf[i] : Offset{}, &e);
     shifted[j] = {e, coarse[j].index};
   });
   std::sort(shifted.begin(), shifted.end());
@@ -354,6 +425,7 @@ RotationSearchResult RotationSearch::search(const std::vector<Eigen::Matrix3d>& 
                    [](const RotationCandidate& a, const RotationCandidate& b) { return a.energy < b.energy; });
   report(1.0);
   result.pointQueries = m.queries.load();
+  result.fieldQueries = m.fieldQueries.load();
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return result;
 }

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "iires/knn.hpp"
+#include "iires/register/distance_field.hpp"
 
 namespace iires::reg {
 
@@ -85,6 +86,14 @@ double boundedPartialHausdorff(const std::vector<Eigen::Vector3d>& from, const E
 /// rotation times a scale): the search's energy at a pose with a translation.
 double boundedPartialHausdorff(const std::vector<Eigen::Vector3d>& from, const Eigen::Matrix3d& linear,
                                const Eigen::Vector3d& translation, const KnnIndex& to,
+                               const std::vector<TrimLevel>& levels, double bound, std::vector<double>& scratch,
+                               std::size_t* visited = nullptr, std::size_t* level = nullptr);
+
+/// @brief The same energy with the distances to B read from a DistanceField of B instead of a k-d tree: an
+/// approximation (within the field's cell diagonal inside its grid) at O(1) per point. The early exit and
+/// the levels work as in the k-d tree version; @p visited counts field queries.
+double boundedPartialHausdorff(const std::vector<Eigen::Vector3d>& from, const Eigen::Matrix3d& linear,
+                               const Eigen::Vector3d& translation, const DistanceField& to,
                                const std::vector<TrimLevel>& levels, double bound, std::vector<double>& scratch,
                                std::size_t* visited = nullptr, std::size_t* level = nullptr);
 

@@ -99,6 +99,7 @@ struct RegistrationResult {
   int icpIterations = 0;        ///< ICP iterations of the chosen candidate
   bool icpConverged = false;    ///< whether that ICP met its tolerance
   std::size_t exactEvaluations = 0, pointQueries = 0;  ///< search cost
+  std::size_t fieldQueries = 0;  ///< search cost: distance-field queries of the coarse pass
   bool ambiguous = false;       ///< another clearly different pose fits about as well (symmetry or a plane)
   bool planar = false;          ///< a cloud is (nearly) planar: mirror poses fit equally well
   std::string ambiguityReason;  ///< why ambiguous is set ("" otherwise)

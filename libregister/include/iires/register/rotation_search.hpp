@@ -28,7 +28,20 @@ struct RotationSearchParams {
   /// overlap f, several = the overlap is estimated among them per direction and candidate (at most 16)
   std::vector<double> overlaps{1.0};
   double overlapExponent = 2.0;   ///< λ of the penalty (f_max / f)^λ of a smaller overlap (≥ 0)
-  std::size_t coarsePoints = 96;  ///< points of each cloud used by the coarse pass (≥ 8; a lower bound of E)
+  std::size_t coarsePoints = 96;  ///< points of each cloud used by the coarse pass (≥ 8)
+  /// The coarse pass reads distances from a distance field of each cloud (distance_field.hpp) instead of its
+  /// k-d tree: fieldCells cells along the longest side of the cloud's box grown by fieldMargin (normalised
+  /// units) on each side. An approximation within one cell diagonal, O(1) per point. 0 = query the k-d trees
+  std::size_t fieldCells = 32;
+  double fieldMargin = 1.0;       ///< margin of the fields' grids, normalised units (≥ 0)
+  /// The coarse pass scores each grid rotation at several translations and keeps the best (a partial cloud's
+  /// centroid is biased, so at the true rotation the normalised clouds are offset): t = 0 and the lattice
+  /// points of step coarseOffsetStep within coarseOffsetRadius (normalised units; 0.4 and 0.4 = the 6 axis
+  /// offsets), then coarseOffsetRefineLevels pattern moves of ±step/2, ±step/4, … along each axis. The offset
+  /// found is where the translation search of a survivor starts. Radius 0 = t = 0 only
+  double coarseOffsetRadius = 0.4;
+  double coarseOffsetStep = 0.4;     ///< lattice step of the coarse offsets (> 0)
+  int coarseOffsetRefineLevels = 1;  ///< pattern moves around the best coarse offset, step halved each (≥ 0)
   std::size_t coarseKeep = 48;    ///< best coarse candidates passed on to the exact energy (≥ 1)
   std::size_t fullKeep = 48;      ///< best exact candidates kept for the selection of distinct ones (≥ 1)
   std::size_t keep = 5;           ///< distinct candidates returned, best first (≥ 1)
@@ -40,7 +53,7 @@ struct RotationSearchParams {
   /// rotation their normalised frames are offset (by up to ≈ 0.7 RMS radii for a 20 % cut on each side).
   /// Offsets on a cubic lattice of this step within this radius (normalised units) are scored by the energy
   /// on translationPoints of each cloud, the best refined by halving the step translationRefineLevels times.
-  /// Radius 0 = rotation only.
+  /// Radius 0 = rotation only (t = 0, s = 1; the coarse offsets then only rank the rotations).
   double translationRadius = 0.8;
   std::size_t translationPoints = 48;  ///< points of each cloud used by the translation search (≥ 8)
   /// Scales s of the source (s·R·S + t) tried by the translation search, each > 0: a cut shrinks a cloud's
@@ -71,7 +84,8 @@ struct RotationSearchResult {
   std::vector<RotationCandidate> candidates;  ///< up to keep distinct candidates, lowest energy first
   std::size_t gridSize = 0;                   ///< candidates in the grid
   std::size_t exactEvaluations = 0;           ///< full-energy evaluations (incl. refinement), early exits incl.
-  std::size_t pointQueries = 0;               ///< nearest-neighbour queries in total
+  std::size_t pointQueries = 0;               ///< nearest-neighbour (k-d tree) queries in total
+  std::size_t fieldQueries = 0;               ///< distance-field queries in total (the coarse pass)
   double seconds = 0;                         ///< wall time
 };
 
@@ -102,12 +116,14 @@ class RotationSearch {
                 double bound = std::numeric_limits<double>::infinity(), double* sourceOverlap = nullptr,
                 double* targetOverlap = nullptr) const;
 
-  /// @brief E(R) on the coarse subsets only: a lower bound of energy().
+  /// @brief E(R) on the coarse subsets only, the distances read from the distance fields (the k-d trees when
+  /// fieldCells = 0): the coarse pass's energy at t = 0, s = 1.
   double coarseEnergy(const Eigen::Matrix3d& rotation,
                       double bound = std::numeric_limits<double>::infinity()) const;
 
-  /// @brief Eq. (12): the best grid rotations. Coarse pass (subset energy with early exit, all candidates, in
-  /// parallel) → translation search around each of the best coarseKeep (subset energy) → exact energy of
+  /// @brief Eq. (12): the best grid rotations. Coarse pass (subset energy on the distance fields, min over the
+  /// coarse offsets, early exit, all candidates, in parallel) → translation search around each of the best
+  /// coarseKeep (subset energy, from its coarse offset) → exact energy of
   /// those at their best translation (early exit against the fullKeep-th best so far) →
   /// distinct candidates (minSeparationDeg apart) → local refinement of each by a shrinking pattern of
   /// axis-angle steps (±h about each axis).
