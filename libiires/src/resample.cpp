@@ -166,6 +166,17 @@ std::vector<std::uint8_t> sheetRule(PointCloud& cloud, NeighbourTable& neighbour
   return near;
 }
 
+/// The working cloud's unit normals: estimated and oriented where none were given; given ones normalised and,
+/// where their signs disagree, oriented (the sheet rule, when it ran, did that already).
+void workingNormals(PointCloud& cloud, const NormalParams& params, bool sheetRuleRan, const Execution& exec) {
+  if (!cloud.hasNormals()) {
+    cloud.normals = estimateNormals(cloud.points, params, exec);
+    return;
+  }
+  for (auto& nrm : cloud.normals) nrm.normalize();
+  if (!sheetRuleRan) repairOrientation(cloud.points, cloud.normals, params.k, exec.threads);
+}
+
 /// After pre-processing moved or dropped points: the later stages' table (@p laterK columns) on the final
 /// positions, through the sheet rule again (on rows as long as the first time, @p tableK: shorter ones would not
 /// reach a sheet as far off); returns which points have another sheet near.
@@ -288,12 +299,7 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params, const Ex
   if (geodesicRule) index.reset();
 
   t = clock.begin("normals");
-  if (!cloud.hasNormals()) {
-    cloud.normals = estimateNormals(cloud.points, params.normals, exec);
-  } else {
-    for (auto& nrm : cloud.normals) nrm.normalize();
-    if (!sheets) repairOrientation(cloud.points, cloud.normals, params.normals.k, exec.threads);  // else the rule did
-  }
+  workingNormals(cloud, params.normals, sheets, exec);
   clock.end("normals", t);
 
   // What does not need the geodesic coordinates: the MLS surface (on the geodesic graph's k-d tree with the
