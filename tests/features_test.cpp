@@ -306,6 +306,18 @@ TEST(Features, GapBeforeACornerIsFilledFromTheChainSide) {
   EXPECT_GE(ys.back(), 1.0 - 0.25 * h);  // the corner
 }
 
+constexpr double kEdgeChainStep = 0.02;
+
+/// Chain @p id: 31 samples kEdgeChainStep apart along the cube's edge x = z = 1 from y = 0.2 + @p shift steps,
+/// moved @p inset into the top face.
+void addEdgeChain(std::vector<Eigen::Vector3d>& samples, std::vector<std::uint32_t>& chain, std::uint32_t id,
+                  double shift = 0, double inset = 0) {
+  for (int t = 0; t <= 30; ++t) {
+    samples.emplace_back(1.0 - inset, 0.2 + kEdgeChainStep * (t + shift), 1.0);
+    chain.push_back(id);
+  }
+}
+
 // A stray: chain 1 is one sample beside the middle of chain 0 (the cube edge x = z = 1), 0.3 h off the edge
 // in the top face and a quarter step along (as a short chain piece beside a crease another chain holds, on
 // fandisk near a corner). Its trace leads at once into chain 0's samples: nothing is traced from it, and it
@@ -314,10 +326,10 @@ TEST(Features, GapBeforeACornerIsFilledFromTheChainSide) {
 TEST(Features, StrayLoneSampleBesideAChainIsDropped) {
   const auto& [mesh, cloud, edges, h] = sampledCube();
   FeatureParams p;
-  const double step = 0.02;
+  const double step = kEdgeChainStep;
   std::vector<Eigen::Vector3d> samples;
   std::vector<std::uint32_t> chain;
-  for (int t = 0; t <= 30; ++t) samples.emplace_back(1.0, 0.2 + step * t, 1.0), chain.push_back(0);
+  addEdgeChain(samples, chain, 0);
   const Eigen::Vector3d stray(1.0 - 0.3 * h, 0.5 + 0.25 * step, 1.0);
   samples.push_back(stray), chain.push_back(1);
   const Eigen::Vector3d alone(0.0, 0.5, 1.0);
@@ -348,11 +360,11 @@ TEST(Features, StrayLoneSampleBesideAChainIsDropped) {
 TEST(Features, ACreaseGivenTwiceIsHeldOnce) {
   const auto& [mesh, cloud, edges, h] = sampledCube();
   FeatureParams p;
-  const double step = 0.02;
+  const double step = kEdgeChainStep;
   std::vector<Eigen::Vector3d> samples;
   std::vector<std::uint32_t> chain;
-  for (int t = 0; t <= 30; ++t) samples.emplace_back(1.0, 0.2 + step * t, 1.0), chain.push_back(0);
-  for (int t = 0; t <= 30; ++t) samples.emplace_back(1.0 - 0.2 * h, 0.2 + step * (t + 0.33), 1.0), chain.push_back(1);
+  addEdgeChain(samples, chain, 0);
+  addEdgeChain(samples, chain, 1, 0.33, 0.2 * h);
   const auto out = iires::snapToCreases(cloud, samples, chain, h, p);
   ASSERT_GE(out.size(), 30u);
   for (std::size_t i = 0; i < out.size(); ++i) {
