@@ -165,6 +165,20 @@ TEST(Sheets, UnorientedGivenNormalsAreOriented) {
   EXPECT_GT(repaired.nearZones, 0u);
 }
 
+// No false alarm: the two faces of a plate one input spacing thick carry opposite (correct) normals at a height a
+// pair on one noisy sheet would not have; they are kept as given, not re-oriented (before: one face turned over).
+TEST(Sheets, OrientedNormalsOfAPlateOneSpacingThickAreKept) {
+  const ThinCase t = test::thinPlate(30000, 1.0, 0.0, 25);
+  const KnnIndex index(t.cloud.points);
+  NeighbourTable table(index, t.cloud.points, 25);
+  std::vector<Eigen::Vector3d> normals;
+  const SheetReport report = separateSheets(t.cloud.points, table, normals, {}, {}, &t.cloud.normals);
+  std::printf("  %s\n", report.toJson().c_str());
+  EXPECT_LE(report.orientationConflicts, kMaxOrientationConflicts);
+  EXPECT_EQ(report.reorientedNormals, 0u);
+  EXPECT_DOUBLE_EQ(outwardShare(normals, t.cloud.normals), 1.0);
+}
+
 // The same through the resampler: the plate with unoriented given normals is resampled as with oriented ones,
 // with the sheet rule (the default) and without it.
 TEST(Sheets, UnorientedGivenNormalsResampledLikeOrientedOnes) {

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <limits>
 #include <tuple>
 
 #include "iires/detail/disjoint_sets.hpp"
@@ -175,15 +176,32 @@ void orientNormals(const std::vector<Eigen::Vector3d>& points, std::vector<Eigen
 double orientationConflicts(const std::vector<Eigen::Vector3d>& points, const std::vector<Eigen::Vector3d>& normals,
                             const std::vector<std::uint32_t>& neighbours, std::size_t stride, std::size_t k,
                             int threads) {
+  constexpr double kNoiseSpacings = 0.5;  // a sheet's own noise: heights up to this many local spacings
   const double onPlane = std::sin(15.0 * M_PI / 180.0), parallel = std::cos(25.0 * M_PI / 180.0);
-  std::vector<std::array<std::uint32_t, 2>> counts(points.size(), {0, 0});  // {pairs, conflicts} per point
-  parallelFor(points.size(), threads, [&](std::size_t i) {
-    for (std::size_t a = 0; a < std::min(k, stride); ++a) {
+  const std::size_t n = points.size(), row = std::min(k, stride);
+  // Local spacing: the mean nearest-neighbour distance over the point's row.
+  std::vector<double> nearest(n, 0.0), spacing(n, 0.0);
+  parallelFor(n, threads, [&](std::size_t i) {
+    double d2 = std::numeric_limits<double>::infinity();
+    for (std::size_t a = 0; a < row; ++a) {
       const std::uint32_t j = neighbours[i * stride + a];
-      const Eigen::Vector3d d = (points[j] - points[i]).normalized();
+      if (j != i) d2 = std::min(d2, (points[j] - points[i]).squaredNorm());
+    }
+    nearest[i] = std::isfinite(d2) ? std::sqrt(d2) : 0.0;
+  });
+  parallelFor(n, threads, [&](std::size_t i) {
+    for (std::size_t a = 0; a < row; ++a) spacing[i] += nearest[neighbours[i * stride + a]];
+    spacing[i] /= static_cast<double>(row);
+  });
+  std::vector<std::array<std::uint32_t, 2>> counts(n, {0, 0});  // {pairs, conflicts} per point
+  parallelFor(n, threads, [&](std::size_t i) {
+    for (std::size_t a = 0; a < row; ++a) {
+      const std::uint32_t j = neighbours[i * stride + a];
+      if (j == i) continue;
+      const Eigen::Vector3d d = points[j] - points[i];
       const double c = normals[i].dot(normals[j]);
-      if (j == i || std::abs(c) < parallel || std::abs(normals[i].dot(d)) > onPlane ||
-          std::abs(normals[j].dot(d)) > onPlane)
+      const double height = std::min(onPlane * d.norm(), kNoiseSpacings * std::min(spacing[i], spacing[j]));
+      if (std::abs(c) < parallel || std::abs(normals[i].dot(d)) > height || std::abs(normals[j].dot(d)) > height)
         continue;
       ++counts[i][0];
       counts[i][1] += c < 0;

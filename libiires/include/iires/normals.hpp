@@ -49,10 +49,11 @@ void orientNormals(const std::vector<Eigen::Vector3d>& points, std::vector<Eigen
 /// directions are used.
 constexpr double kMaxOrientationConflicts = 0.01;
 
-/// @brief The share of neighbour pairs on one plane — each point within 15° of the other's tangent plane, the
-/// normals within 25° of parallel either way — whose normals point opposite ways. Consistently oriented normals
-/// turn gradually along a surface and have next to none (a pair across a gap is not on one plane); normals whose
-/// signs were never made consistent have up to half.
+/// @brief The share of neighbour pairs on one plane — each point within 15° of the other's tangent plane and
+/// within half a local spacing (a sheet's own noise) of it, the normals within 25° of parallel either way — whose
+/// normals point opposite ways. Consistently oriented normals turn gradually along a surface and have next to none
+/// (two sides of a thin part, even one a spacing thick, are farther apart than that); normals whose signs were never
+/// made consistent have up to half.
 /// @param neighbours as orientNormals' (entries equal to the point itself skipped)
 /// @note O(n k). Deterministic for any thread count.
 double orientationConflicts(const std::vector<Eigen::Vector3d>& points, const std::vector<Eigen::Vector3d>& normals,
