@@ -17,8 +17,20 @@ void DistanceFieldParams::validate() const {
 }
 
 DistanceField::DistanceField(const std::vector<Eigen::Vector3d>& points, const DistanceFieldParams& params) {
+  if (points.empty()) throw std::invalid_argument("distance field of an empty point set");
+  build(points, KnnIndex(points), params);
+}
+
+DistanceField::DistanceField(const std::vector<Eigen::Vector3d>& points, const KnnIndex& index,
+                             const DistanceFieldParams& params) {
+  build(points, index, params);
+}
+
+void DistanceField::build(const std::vector<Eigen::Vector3d>& points, const KnnIndex& index,
+                          const DistanceFieldParams& params) {
   params.validate();
   if (points.empty()) throw std::invalid_argument("distance field of an empty point set");
+  if (index.size() != points.size()) throw std::invalid_argument("distance field: the index is not of these points");
   Eigen::Vector3d lo = points.front(), hi = points.front();
   for (const auto& p : points) {
     lo = lo.cwiseMin(p);
@@ -38,7 +50,6 @@ DistanceField::DistanceField(const std::vector<Eigen::Vector3d>& points, const D
     nodes_[a] = std::max<std::size_t>(1, cells) + 1;
     far_[a] = lo[a] + static_cast<double>(nodes_[a] - 1) * cell_;
   }
-  const KnnIndex index(points);
   const std::size_t nx = nodes_[0], ny = nodes_[1];
   values_.resize(nx * ny * nodes_[2]);
   parallelFor(values_.size(), params.threads, [&](std::size_t i) {

@@ -301,8 +301,8 @@ RotationSearch::RotationSearch(const std::vector<Eigen::Vector3d>& source, const
     fp.cells = params.fieldCells;
     fp.margin = params.fieldMargin;
     fp.threads = exec.threads;
-    m.sourceField = std::make_unique<DistanceField>(m.source, fp);
-    m.targetField = std::make_unique<DistanceField>(m.target, fp);
+    m.sourceField = std::make_unique<DistanceField>(m.source, *m.sourceTree, fp);
+    m.targetField = std::make_unique<DistanceField>(m.target, *m.targetTree, fp);
   }
   m.sourceLevels = trimLevels(m.source.size(), params.overlaps, params.overlapExponent);
   m.targetLevels = trimLevels(m.target.size(), params.overlaps, params.overlapExponent);

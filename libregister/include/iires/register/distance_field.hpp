@@ -10,6 +10,8 @@
 #include <cstddef>
 #include <vector>
 
+#include "iires/knn.hpp"
+
 namespace iires::reg {
 
 /// @brief Parameters of a DistanceField.
@@ -34,6 +36,9 @@ class DistanceField {
   /// @throws std::invalid_argument for an empty set or bad parameters.
   /// @note O(nodes · log n) construction with a k-d tree; nodes ≈ cells³ at most.
   explicit DistanceField(const std::vector<Eigen::Vector3d>& points, const DistanceFieldParams& params = {});
+  /// @brief The same, reading the nearest points from @p index, a k-d tree of @p points the caller already has.
+  DistanceField(const std::vector<Eigen::Vector3d>& points, const KnnIndex& index,
+                const DistanceFieldParams& params = {});
 
   /// @brief The approximate distance from @p query to the nearest point of the set (≥ 0).
   double distance(const Eigen::Vector3d& query) const;
@@ -55,6 +60,8 @@ class DistanceField {
   double cell_ = 1, inverseCell_ = 1;
   std::array<std::size_t, 3> nodes_{2, 2, 2};
   std::vector<float> values_;  // node distances, x fastest
+
+  void build(const std::vector<Eigen::Vector3d>& points, const KnnIndex& index, const DistanceFieldParams& params);
 };
 
 }  // namespace iires::reg
