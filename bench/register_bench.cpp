@@ -26,7 +26,8 @@
 //                            screenIterations=8,searchOverlaps=1:0.8:0.6,searchOverlapExponent=2,fitOverlapExponent=2.5,
 //                            translationRadius=0.8,translationStep=0.4,translationPoints=48,translationRefineLevels=2,
 //                            translationScales=1,fieldCells=32,fieldMargin=1,coarseOffsetRadius=0.4,
-//                            coarseOffsetStep=0.4,coarseOffsetRefineLevels=1]
+//                            coarseOffsetStep=0.4,coarseOffsetRefineLevels=1,
+//                            openSideShift=0.4,openSideScaleSlope=0.3]
 //                  [--verbose]
 #include <Eigen/Geometry>
 #include <algorithm>
@@ -371,6 +372,8 @@ void parseSearchKeys(const std::string& list, iires::reg::RegistrationParams& p)
     else if (key == "fieldMargin") sp.fieldMargin = v;
     else if (key == "coarseOffsetRadius") sp.coarseOffsetRadius = v;
     else if (key == "coarseOffsetStep") sp.coarseOffsetStep = v;
+    else if (key == "openSideShift") sp.openSideShift = v;
+    else if (key == "openSideScaleSlope") sp.openSideScaleSlope = v;
     else if (key == "coarseOffsetRefineLevels") sp.coarseOffsetRefineLevels = static_cast<int>(v);
     else throw std::invalid_argument("unknown search key " + key);
   }

@@ -223,6 +223,12 @@ TEST(RotationSearch, BadCoarseParametersThrow) {
   p.coarseOffsetRefineLevels = -1;
   EXPECT_THROW(p.validate(), std::invalid_argument);
   p = {};
+  p.openSideShift = -0.1;
+  EXPECT_THROW(p.validate(), std::invalid_argument);
+  p = {};
+  p.openSideScaleSlope = 1.0 / p.openSideShift;  // the scale of a shifted pose would be 0
+  EXPECT_THROW(p.validate(), std::invalid_argument);
+  p = {};
   p.fieldCells = 1;
   EXPECT_THROW(p.validate(), std::invalid_argument);
   p = {};

@@ -17,6 +17,7 @@
 #include "iires/metrics.hpp"
 #include "iires/detail/parallel.hpp"
 #include "iires/register/hausdorff.hpp"
+#include "iires/register/open_side.hpp"
 #include "iires/validate.hpp"
 
 namespace iires::reg {
@@ -436,6 +437,11 @@ RegistrationResult registerClouds(const PointCloud& sourceIn, const PointCloud& 
   sp.overlapExponent = params.searchOverlapExponent;
   sp.seed = params.seed;
   sp.keep = std::max(sp.keep, params.icpCandidates);
+  const OpenSide sourceSide = openSide(ns, {}, exec.threads), targetSide = openSide(nt, {}, exec.threads);
+  sp.sourceOpenSide = sourceSide.direction;
+  sp.targetOpenSide = targetSide.direction;
+  r.sourceRimPoints = sourceSide.rimPoints;
+  r.targetRimPoints = targetSide.rimPoints;
   const RotationSearch search(ns, nt, sp, exec);
   const std::vector<Eigen::Matrix3d> grid = rotationGrid(params.grid, params.eulerSteps, params.so3Count);
   const RotationSearchResult found = search.search(grid);
@@ -517,6 +523,7 @@ std::string RegistrationResult::toJson() const {
   j.member("second_best_score_ratio", secondBestScoreRatio);
   j.member("source_points", sourcePoints).member("target_points", targetPoints);
   j.member("source_working_points", sourceWorkingPoints).member("target_working_points", targetWorkingPoints);
+  j.member("source_rim_points", sourceRimPoints).member("target_rim_points", targetRimPoints);
   j.member("stray_samples_dropped", strayDropped).member("outliers_found", outliersFound);
   j.member("samples", samples).member("samples_requested", samplesRequested);
   j.member("source_radius", sourceRadius).member("target_radius", targetRadius);

@@ -93,6 +93,10 @@ void RotationSearchParams::validate() const {
     throw std::invalid_argument("rotation search: coarseOffsetStep must be finite and positive");
   if (coarseOffsetRefineLevels < 0)
     throw std::invalid_argument("rotation search: coarseOffsetRefineLevels must be >= 0");
+  if (!(openSideShift >= 0.0) || !std::isfinite(openSideShift))
+    throw std::invalid_argument("rotation search: openSideShift must be finite and >= 0");
+  if (!(openSideScaleSlope >= 0.0) || !(openSideScaleSlope * openSideShift < 1.0))
+    throw std::invalid_argument("rotation search: openSideScaleSlope must be >= 0 and below 1 / openSideShift");
   if (coarseKeep < 1 || fullKeep < 1 || keep < 1)
     throw std::invalid_argument("rotation search: coarseKeep, fullKeep and keep must be at least 1");
   if (!(minSeparationDeg >= 0.0)) throw std::invalid_argument("rotation search: minSeparationDeg must be >= 0");
@@ -162,8 +166,9 @@ struct RotationSearch::Impl {
                 bound);
   }
 
-  /// The coarse energy of R minimised over the translation (scale 1): t = 0 and the coarse lattice, then
-  /// coarseOffsetRefineLevels pattern moves of ±h along each axis around the best, h halved each time.
+  /// The coarse energy of R minimised over the pose: t = 0 and the coarse lattice (scale 1), the open sides'
+  /// poses, then coarseOffsetRefineLevels pattern moves of ±h along each axis around the best (its scale kept),
+  /// h halved each time.
   /// Early exit against min(@p bound, the best so far); +∞ when every offset exceeds @p bound (then no
   /// pattern move is tried). @p chosen receives the minimising offset (t = 0 when none is finite). Serial.
   double bestCoarse(const Eigen::Matrix3d& r, double bound, Offset* chosen) const {
@@ -177,6 +182,12 @@ struct RotationSearch::Impl {
       }
     };
     for (const auto& t : coarseLattice) consider(Offset{t, 1.0}, best, e);
+    // The open sides' poses: a cut source shifted away from its rim and shrunk, a cut target likewise
+    const Eigen::Vector3d us = r * params.sourceOpenSide, ut = params.targetOpenSide;
+    const double shift = params.openSideShift, k = params.openSideScaleSlope;
+    for (double a : {0.0, us.squaredNorm() > 0 ? shift : 0.0})
+      for (double b : {0.0, ut.squaredNorm() > 0 ? shift : 0.0})
+        if (a > 0 || b > 0) consider(Offset{-a * us + b * ut, (1.0 - k * a) / (1.0 - k * b)}, best, e);
     double h = params.coarseOffsetStep;
     for (int level = 0; level < params.coarseOffsetRefineLevels && !coarseLattice.empty() && std::isfinite(e);
          ++level) {
@@ -185,7 +196,7 @@ struct RotationSearch::Impl {
       double en = e;
       for (int axis = 0; axis < 3; ++axis)
         for (double sign : {-1.0, 1.0})
-          consider(Offset{best.translation + sign * h * Eigen::Vector3d::Unit(axis), 1.0}, next, en);
+          consider(Offset{best.translation + sign * h * Eigen::Vector3d::Unit(axis), best.scale}, next, en);
       best = next;
       e = en;
     }

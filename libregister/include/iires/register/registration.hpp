@@ -3,8 +3,9 @@
 /// @file registration.hpp
 /// @brief Scale-free registration without features (paper §5, eq. 11–12; DESIGN §4): resample both clouds to
 /// M isotropic points → normalise (centroid, unit RMS radius) → rotation-grid search for the minimum
-/// (trimmed) Hausdorff energy, each surviving rotation recentred by a translation search → ICP with scale on
-/// the best few → a similarity T_target_source in original units.
+/// (trimmed) Hausdorff energy, each surviving rotation recentred by a translation search (a partial cloud is
+/// also tried at the pose its rim suggests, open_side.hpp) → ICP with scale on the best few → a similarity
+/// T_target_source in original units.
 
 #include <Eigen/Core>
 #include <cstddef>
@@ -112,6 +113,9 @@ struct RegistrationResult {
   /// projection); normally 0
   std::size_t strayDropped = 0;
   std::size_t outliersFound = 0;  ///< outliers found in the two working clouds (RegistrationParams::outliers)
+  /// Rim points of the resampled clouds (open_side.hpp: the boundary of a partial scan; 0 for a closed
+  /// surface); the search also tries the poses their directions suggest
+  std::size_t sourceRimPoints = 0, targetRimPoints = 0;
   /// Wall time per stage: validate, thin, resample_source, resample_target, normalise, search, icp, evaluate, total
   std::vector<StageTime> timings;
 
