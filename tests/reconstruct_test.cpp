@@ -369,6 +369,64 @@ TEST(MeshRepair, RemeshBadRegionsRaisesSlivers) {
   }
 }
 
+TEST(MeshRepair, RelaxNearBoundaryEvensTheRimBandAndKeepsTheRim) {
+  // A flat 12 × 12 grid of unit squares, each split in two; the vertices one edge in from the rim jittered by up
+  // to 0.3 (in the plane), as Lloyd relaxation leaves samples next to a scan's rim. The band is relaxed, the
+  // rim and the vertices farther in do not move, and no face gets worse than the worst before.
+  TriangleMesh m;
+  const int n = 12;
+  std::mt19937_64 rng(31);
+  std::uniform_real_distribution<double> u(-0.3, 0.3);
+  for (int y = 0; y <= n; ++y)
+    for (int x = 0; x <= n; ++x) {
+      const bool ring1 = std::min({x, y, n - x, n - y}) == 1;
+      m.vertices.emplace_back(x + (ring1 ? u(rng) : 0.0), y + (ring1 ? u(rng) : 0.0), 0.0);
+    }
+  for (int y = 0; y < n; ++y)
+    for (int x = 0; x < n; ++x) {
+      const int a = y * (n + 1) + x;
+      m.triangles.emplace_back(a, a + 1, a + n + 2);
+      m.triangles.emplace_back(a, a + n + 2, a + n + 1);
+    }
+  const std::vector<Eigen::Vector3d> normals(m.vertices.size(), Eigen::Vector3d::UnitZ());
+  const TriangleMesh before = m;
+  auto quality = [](const TriangleMesh& mesh) {
+    double worst = 1, sum = 0;
+    for (const auto& t : mesh.triangles) {
+      const double q = triangleQuality(mesh.vertices[t[0]], mesh.vertices[t[1]], mesh.vertices[t[2]]);
+      worst = std::min(worst, q), sum += q;
+    }
+    return std::make_pair(worst, sum / static_cast<double>(mesh.triangles.size()));
+  };
+  const std::size_t moved = relaxNearBoundary(m, normals, 2, 3, 0.25);
+  EXPECT_GT(moved, 20u);
+  for (int y = 0; y <= n; ++y)
+    for (int x = 0; x <= n; ++x) {
+      const std::size_t v = static_cast<std::size_t>(y * (n + 1) + x);
+      if (std::min({x, y, n - x, n - y}) != 1 && std::min({x, y, n - x, n - y}) != 2)
+        EXPECT_EQ(m.vertices[v], before.vertices[v]) << x << "," << y;  // the rim and the inside stay
+      EXPECT_EQ(m.vertices[v].z(), 0.0);  // moves stay in the tangent plane
+    }
+  EXPECT_GE(quality(m).first, quality(before).first);
+  EXPECT_GT(quality(m).second, quality(before).second);
+  // The jitter shrinks: the neighbours' centroid of a grid vertex is its grid position.
+  double jitterBefore = 0, jitterAfter = 0;
+  for (int y = 0; y <= n; ++y)
+    for (int x = 0; x <= n; ++x) {
+      const std::size_t v = static_cast<std::size_t>(y * (n + 1) + x);
+      jitterBefore += (before.vertices[v] - Eigen::Vector3d(x, y, 0)).norm();
+      jitterAfter += (m.vertices[v] - Eigen::Vector3d(x, y, 0)).norm();
+    }
+  EXPECT_LT(jitterAfter, 0.6 * jitterBefore);
+  // Nothing to do without a boundary, or with no rings.
+  PointCloud cloud;
+  TriangleMesh sphere = sphereMesh(cloud);
+  const TriangleMesh sphereBefore = sphere;
+  EXPECT_EQ(relaxNearBoundary(sphere, cloud.normals, 2, 3, 0.25), 0u);
+  EXPECT_EQ(sphere.vertices, sphereBefore.vertices);
+  EXPECT_EQ(relaxNearBoundary(m, normals, 0, 3, 0.25), 0u);
+}
+
 TEST(MeshRepair, OrientsFlippedFacesOutward) {
   PointCloud c;
   c.points = test::fibonacciSphere(1000);
@@ -508,6 +566,16 @@ TEST(Reconstruct, CroppedSphereKeepsItsBoundary) {
   EXPECT_EQ(r.quality.nonManifoldEdges, 0u);
   EXPECT_TRUE(r.quality.oriented);
   EXPECT_EQ(r.quality.euler, 1);  // a disc
+  // The band along the rim is relaxed: better triangles there, the rim itself where it was.
+  EXPECT_GT(r.boundaryRelaxed, 50u);
+  ReconstructParams off = p;
+  off.boundaryRelaxRings = 0;
+  const ReconstructResult o = reconstruct(cropped, off);
+  EXPECT_EQ(o.boundaryRelaxed, 0u);
+  EXPECT_GT(r.quality.qualityMean, o.quality.qualityMean);
+  EXPECT_GE(r.quality.qualityMin, o.quality.qualityMin);
+  EXPECT_EQ(r.quality.boundaryEdges, o.quality.boundaryEdges);
+  EXPECT_EQ(r.quality.selfIntersections, 0u);
 }
 
 TEST(Reconstruct, AdvancingFrontOnSphere) {

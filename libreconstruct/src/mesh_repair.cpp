@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "iires/reconstruct/mesh_repair.hpp"
 
+#include "point_triangle.hpp"
 #include "vertex_faces.hpp"
 
 #include <Eigen/Geometry>
@@ -18,6 +19,8 @@
 
 namespace iires {
 namespace {
+
+using detail::pointTriangleDistance;
 
 std::uint64_t undirectedKey(std::uint32_t a, std::uint32_t b) {
   return (static_cast<std::uint64_t>(std::min(a, b)) << 32) | std::max(a, b);
@@ -107,23 +110,6 @@ bool triangulatePolygon(const TriangleMesh& mesh, const std::vector<Eigen::Vecto
     stack.emplace_back(j, k);
   }
   return true;
-}
-
-/// Distance from @p p to triangle (a, b, c).
-double pointTriangleDistance(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
-                             const Eigen::Vector3d& c) {
-  const Eigen::Vector3d n = (b - a).cross(c - a);
-  if (n.squaredNorm() > 0) {
-    const Eigen::Vector3d q = p - n * (p - a).dot(n) / n.squaredNorm();  // projection onto the plane
-    if ((b - a).cross(q - a).dot(n) >= 0 && (c - b).cross(q - b).dot(n) >= 0 && (a - c).cross(q - c).dot(n) >= 0)
-      return (p - q).norm();
-  }
-  auto segment = [&](const Eigen::Vector3d& x, const Eigen::Vector3d& y) {
-    const Eigen::Vector3d d = y - x;
-    const double t = d.squaredNorm() > 0 ? std::clamp((p - x).dot(d) / d.squaredNorm(), 0.0, 1.0) : 0.0;
-    return (p - x - t * d).norm();
-  };
-  return std::min({segment(a, b), segment(b, c), segment(c, a)});
 }
 
 /// fillSmallHoles() in steps: the boundary's index, its loops, and each loop closed (or kept).

@@ -46,6 +46,8 @@ void ReconstructParams::validate() const {
   if (resample && targetCount < 4)
     throw std::invalid_argument("target count N must be at least 4 (got " + std::to_string(targetCount) + ")");
   if (!(repairQuality >= 0 && repairQuality < 1)) throw std::invalid_argument("repairQuality must be in [0, 1)");
+  if (boundaryRelaxRings < 0 || boundaryRelaxSweeps < 0)
+    throw std::invalid_argument("boundaryRelaxRings and boundaryRelaxSweeps must be >= 0");
   if (!(repairDeviation >= 0)) throw std::invalid_argument("repairDeviation must be non-negative");
   ResampleParams r = resampling;
   r.targetCount = std::max<std::size_t>(targetCount, 1);
@@ -80,6 +82,7 @@ std::string ReconstructResult::toJson() const {
   }
   j.key("bad_triangles").beginObject().member("vertices_moved", badTriangles.moved);
   j.member("vertices_removed", badTriangles.removed).member("remeshed_vertices", remeshedVertices).endObject();
+  j.member("boundary_vertices_relaxed", boundaryRelaxed);
   const auto holeCounts = [&](std::string_view name, const auto& h) {
     j.key(name).beginObject().member("loops", h.loops).member("filled", h.filled).member("kept", h.kept);
     j.member("faces_added", h.facesAdded).member("vertices_added", h.verticesAdded);
@@ -209,6 +212,8 @@ std::size_t closeHoles(const ReconstructParams& params, ReconstructResult& resul
       result.remeshedVertices = remeshBadRegions(result.mesh, normals, params.repairQuality);
     }
   }
+  result.boundaryRelaxed = relaxNearBoundary(result.mesh, normals, params.boundaryRelaxRings,
+                                             params.boundaryRelaxSweeps, params.repairDeviation);
   return flipped;
 }
 

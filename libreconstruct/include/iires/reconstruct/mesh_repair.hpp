@@ -110,6 +110,17 @@ std::size_t removeExtraFans(TriangleMesh& mesh);
 /// stray islands a local method leaves inside a hole. @return number of faces removed.
 std::size_t removeSmallComponents(TriangleMesh& mesh, std::size_t minFaces);
 
+/// @brief Tangential relaxation of the band of vertices within @p rings edges of an open boundary: each interior
+/// vertex of the band (a closed fan, not on the boundary) moves halfway to its neighbours' centroid within its
+/// tangent plane (@p normals, one per vertex), Gauss–Seidel in index order, @p iterations sweeps. A move is taken
+/// when no face of the fan turns over, the fan's worst Q does not drop and its mean Q rises, and the old position
+/// lies within @p maxDeviation × the mean edge length of the new fan. The boundary vertices stay: a scan's rim is
+/// where the data ends. Lloyd relaxation leaves the samples near an open boundary less regular than inside (their
+/// cells are cut by the rim), so the triangles there are worse; this evens them out.
+/// @return the vertices moved at least once. Deterministic.
+std::size_t relaxNearBoundary(TriangleMesh& mesh, const std::vector<Eigen::Vector3d>& normals, int rings,
+                              int iterations, double maxDeviation);
+
 /// @brief What repairBadTriangles() did.
 struct BadTriangleReport {
   std::size_t moved = 0;    ///< vertices moved within their tangent plane

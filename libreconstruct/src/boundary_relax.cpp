@@ -1,0 +1,109 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// relaxNearBoundary(): tangential relaxation of the vertices near an open boundary (mesh_repair.hpp).
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <limits>
+#include <unordered_map>
+#include <vector>
+
+#include "iires/reconstruct/mesh_quality.hpp"
+#include "iires/reconstruct/mesh_repair.hpp"
+#include "point_triangle.hpp"
+#include "vertex_faces.hpp"
+
+namespace iires {
+
+namespace {
+
+std::uint64_t edgeKey(std::uint32_t a, std::uint32_t b) {
+  return a < b ? (static_cast<std::uint64_t>(a) << 32) | b : (static_cast<std::uint64_t>(b) << 32) | a;
+}
+
+/// The vertices within @p rings edges of a boundary vertex that have a closed fan and lie on no boundary or
+/// non-manifold edge, ascending.
+std::vector<std::uint32_t> boundaryBand(const TriangleMesh& mesh, int rings) {
+  std::unordered_map<std::uint64_t, int> uses;
+  for (const auto& t : mesh.triangles)
+    for (int c = 0; c < 3; ++c) ++uses[edgeKey(static_cast<std::uint32_t>(t[c]), static_cast<std::uint32_t>(t[(c + 1) % 3]))];
+  std::vector<std::vector<std::uint32_t>> neighbours(mesh.vertices.size());
+  std::vector<char> fixed(mesh.vertices.size(), 0);
+  std::vector<int> depth(mesh.vertices.size(), -1);
+  std::vector<std::uint32_t> frontier;
+  for (const auto& [key, count] : uses) {
+    const auto a = static_cast<std::uint32_t>(key >> 32), b = static_cast<std::uint32_t>(key & 0xffffffffu);
+    neighbours[a].push_back(b);
+    neighbours[b].push_back(a);
+    if (count != 2) fixed[a] = fixed[b] = 1;
+    if (count == 1) {
+      for (std::uint32_t v : {a, b})
+        if (depth[v] < 0) depth[v] = 0, frontier.push_back(v);
+    }
+  }
+  for (int ring = 1; ring <= rings; ++ring) {
+    std::vector<std::uint32_t> next;
+    for (std::uint32_t v : frontier)
+      for (std::uint32_t u : neighbours[v])
+        if (depth[u] < 0) depth[u] = ring, next.push_back(u);
+    frontier.swap(next);
+  }
+  std::vector<std::uint32_t> band;
+  for (std::uint32_t v = 0; v < mesh.vertices.size(); ++v)
+    if (depth[v] > 0 && !fixed[v]) band.push_back(v);
+  return band;
+}
+
+}  // namespace
+
+std::size_t relaxNearBoundary(TriangleMesh& mesh, const std::vector<Eigen::Vector3d>& normals, int rings,
+                              int iterations, double maxDeviation) {
+  if (rings <= 0 || iterations <= 0 || mesh.triangles.empty() || normals.size() != mesh.vertices.size()) return 0;
+  const std::vector<std::uint32_t> band = boundaryBand(mesh, rings);
+  if (band.empty()) return 0;
+  auto& P = mesh.vertices;
+  const auto& T = mesh.triangles;
+  double edgeSum = 0;
+  for (const auto& t : T)
+    for (int c = 0; c < 3; ++c) edgeSum += (P[t[c]] - P[t[(c + 1) % 3]]).norm();
+  const double tolerance = maxDeviation * edgeSum / (3.0 * static_cast<double>(T.size()));
+  const detail::VertexFaces vf = detail::vertexFaces(mesh);
+  std::vector<char> moved(P.size(), 0);
+  std::vector<std::uint32_t> ring;
+  for (int sweep = 0; sweep < iterations; ++sweep) {
+    for (std::uint32_t v : band) {
+      const auto first = vf.incident.begin() + vf.start[v], last = vf.incident.begin() + vf.start[v + 1];
+      ring.clear();
+      for (auto f = first; f != last; ++f)
+        for (int c = 0; c < 3; ++c)
+          if (static_cast<std::uint32_t>(T[*f][c]) != v) ring.push_back(static_cast<std::uint32_t>(T[*f][c]));
+      std::sort(ring.begin(), ring.end());
+      ring.erase(std::unique(ring.begin(), ring.end()), ring.end());
+      if (ring.size() != static_cast<std::size_t>(last - first)) continue;  // not a closed disc
+      Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+      for (std::uint32_t r : ring) centroid += P[r];
+      centroid /= static_cast<double>(ring.size());
+      const Eigen::Vector3d& n = normals[v];
+      const Eigen::Vector3d step = 0.5 * (centroid - P[v] - n * n.dot(centroid - P[v]));
+      const Eigen::Vector3d old = P[v], target = P[v] + step;
+      double oldMin = 1, oldSum = 0, newMin = 1, newSum = 0, deviation = std::numeric_limits<double>::max();
+      bool turned = false;
+      for (auto f = first; f != last && !turned; ++f) {
+        const Eigen::Vector3d &a = P[T[*f][0]], &b = P[T[*f][1]], &c = P[T[*f][2]];
+        const Eigen::Vector3d before = (b - a).cross(c - a);
+        const double q0 = triangleQuality(a, b, c);
+        P[v] = target;
+        const Eigen::Vector3d after = (b - a).cross(c - a);
+        const double q1 = triangleQuality(a, b, c);
+        deviation = std::min(deviation, detail::pointTriangleDistance(old, a, b, c));
+        P[v] = old;
+        turned = after.dot(before) <= 0 || after.dot(n) * before.dot(n) <= 0;
+        oldMin = std::min(oldMin, q0), oldSum += q0, newMin = std::min(newMin, q1), newSum += q1;
+      }
+      if (turned || newMin < oldMin || newSum <= oldSum || deviation > tolerance) continue;
+      P[v] = target;
+      moved[v] = 1;
+    }
+  }
+  return static_cast<std::size_t>(std::count(moved.begin(), moved.end(), 1));
+}
+
+}  // namespace iires
