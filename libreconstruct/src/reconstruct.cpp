@@ -178,8 +178,8 @@ void triangulateSamples(const ReconstructParams& params, const Execution& exec, 
 }
 
 /// Small components removed, small holes closed (again after removing the fans a fill pinched together), large
-/// holes closed, edges flipped back to Delaunay, bad triangles repaired. Returns the faces flipped by the
-/// orientation passes that large holes and remeshing need first.
+/// holes closed, edges flipped back to Delaunay, bad triangles repaired, the band along open boundaries relaxed.
+/// Returns the faces flipped by the orientation passes that large holes and remeshing need first.
 std::size_t closeHoles(const ReconstructParams& params, ReconstructResult& result, std::vector<Eigen::Vector3d>& normals) {
   std::size_t flipped = 0;
   if (params.minComponentFaces > 1) result.smallComponentFaces = removeSmallComponents(result.mesh, params.minComponentFaces);
