@@ -173,7 +173,6 @@ TEST(Sheets, OrientedNormalsOfAPlateOneSpacingThickAreKept) {
   NeighbourTable table(index, t.cloud.points, 25);
   std::vector<Eigen::Vector3d> normals;
   const SheetReport report = separateSheets(t.cloud.points, table, normals, {}, {}, &t.cloud.normals);
-  std::printf("  %s\n", report.toJson().c_str());
   EXPECT_LE(report.orientationConflicts, kMaxOrientationConflicts);
   EXPECT_EQ(report.reorientedNormals, 0u);
   EXPECT_DOUBLE_EQ(outwardShare(normals, t.cloud.normals), 1.0);

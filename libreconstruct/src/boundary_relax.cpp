@@ -3,11 +3,11 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <limits>
-#include <unordered_map>
 #include <vector>
 
 #include "iires/reconstruct/mesh_quality.hpp"
 #include "iires/reconstruct/mesh_repair.hpp"
+#include "mesh_edges.hpp"
 #include "point_triangle.hpp"
 #include "vertex_faces.hpp"
 
@@ -15,22 +15,16 @@ namespace iires {
 
 namespace {
 
-std::uint64_t edgeKey(std::uint32_t a, std::uint32_t b) {
-  return a < b ? (static_cast<std::uint64_t>(a) << 32) | b : (static_cast<std::uint64_t>(b) << 32) | a;
-}
-
 /// The vertices within @p rings edges of a boundary vertex that have a closed fan and lie on no boundary or
 /// non-manifold edge, ascending.
 std::vector<std::uint32_t> boundaryBand(const TriangleMesh& mesh, int rings) {
-  std::unordered_map<std::uint64_t, int> uses;
-  for (const auto& t : mesh.triangles)
-    for (int c = 0; c < 3; ++c) ++uses[edgeKey(static_cast<std::uint32_t>(t[c]), static_cast<std::uint32_t>(t[(c + 1) % 3]))];
   std::vector<std::vector<std::uint32_t>> neighbours(mesh.vertices.size());
   std::vector<char> fixed(mesh.vertices.size(), 0);
   std::vector<int> depth(mesh.vertices.size(), -1);
   std::vector<std::uint32_t> frontier;
-  for (const auto& [key, count] : uses) {
+  for (const auto& [key, faces] : detail::edgeFaces(mesh)) {
     const auto a = static_cast<std::uint32_t>(key >> 32), b = static_cast<std::uint32_t>(key & 0xffffffffu);
+    const std::size_t count = faces.size();
     neighbours[a].push_back(b);
     neighbours[b].push_back(a);
     if (count != 2) fixed[a] = fixed[b] = 1;

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "iires/reconstruct/mesh_quality.hpp"
 
+#include "mesh_edges.hpp"
 #include "vertex_faces.hpp"
 
 #include <Eigen/Geometry>
@@ -39,9 +40,7 @@ struct HalfEdge {
   bool forward;  // a < b
 };
 
-std::uint64_t edgeKey(std::uint32_t a, std::uint32_t b) {
-  return (static_cast<std::uint64_t>(std::min(a, b)) << 32) | std::max(a, b);
-}
+using detail::undirectedKey;
 
 /// Area-uniform samples of a mesh plus its referenced vertices (the mesh side of a two-sided distance).
 std::vector<Eigen::Vector3d> meshSamplePoints(const TriangleMesh& mesh, std::size_t count, std::uint64_t seed) {
@@ -117,7 +116,7 @@ std::vector<HalfEdge> sortedHalfEdges(const TriangleMesh& mesh) {
       const auto a = static_cast<std::uint32_t>(mesh.triangles[f][c]);
       const auto b = static_cast<std::uint32_t>(mesh.triangles[f][(c + 1) % 3]);
       if (a == b) continue;  // degenerate face: no edge
-      he.push_back({edgeKey(a, b), f, a < b});
+      he.push_back({undirectedKey(a, b), f, a < b});
     }
   std::sort(he.begin(), he.end(), [](const HalfEdge& x, const HalfEdge& y) {
     return x.key != y.key ? x.key < y.key : x.face < y.face;

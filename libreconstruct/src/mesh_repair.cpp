@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "iires/reconstruct/mesh_repair.hpp"
 
+#include "mesh_edges.hpp"
 #include "point_triangle.hpp"
 #include "vertex_faces.hpp"
 
@@ -20,11 +21,10 @@
 namespace iires {
 namespace {
 
+using detail::edgeFaces;
 using detail::pointTriangleDistance;
+using detail::undirectedKey;
 
-std::uint64_t undirectedKey(std::uint32_t a, std::uint32_t b) {
-  return (static_cast<std::uint64_t>(std::min(a, b)) << 32) | std::max(a, b);
-}
 std::uint64_t directedKey(std::uint32_t a, std::uint32_t b) { return (static_cast<std::uint64_t>(a) << 32) | b; }
 
 std::uint32_t vtx(const Eigen::Vector3i& t, int c) { return static_cast<std::uint32_t>(t[c]); }
@@ -37,15 +37,6 @@ Eigen::Vector3d faceNormal(const TriangleMesh& m, std::uint32_t a, std::uint32_t
 double cornerAngle(const Eigen::Vector3d& o, const Eigen::Vector3d& x, const Eigen::Vector3d& y) {
   const Eigen::Vector3d u = x - o, v = y - o;
   return std::atan2(u.cross(v).norm(), u.dot(v));
-}
-
-/// Edge → the faces using it, built fresh from the face list.
-std::unordered_map<std::uint64_t, std::vector<std::uint32_t>> edgeFaces(const TriangleMesh& mesh) {
-  std::unordered_map<std::uint64_t, std::vector<std::uint32_t>> map;
-  map.reserve(mesh.triangles.size() * 2);
-  for (std::uint32_t f = 0; f < mesh.triangles.size(); ++f)
-    for (int c = 0; c < 3; ++c) map[undirectedKey(vtx(mesh.triangles[f], c), vtx(mesh.triangles[f], (c + 1) % 3))].push_back(f);
-  return map;
 }
 
 /// Optimal triangulation of one hole polygon (vertices in the order new faces must follow).

@@ -7,6 +7,7 @@
 #include <utility>
 
 #include "iires/reconstruct/self_intersections.hpp"
+#include "mesh_edges.hpp"
 
 namespace iires {
 namespace {
@@ -37,7 +38,7 @@ std::size_t removeNonManifoldEdgeFaces(TriangleMesh& mesh, std::size_t* edgesFou
       const auto a = static_cast<std::uint32_t>(mesh.triangles[f][c]);
       const auto b = static_cast<std::uint32_t>(mesh.triangles[f][(c + 1) % 3]);
       if (a == b) continue;
-      uses.push_back({(static_cast<std::uint64_t>(std::min(a, b)) << 32) | std::max(a, b), f, a < b});
+      uses.push_back({detail::undirectedKey(a, b), f, a < b});
     }
   std::sort(uses.begin(), uses.end(),
             [](const Use& x, const Use& y) { return x.key != y.key ? x.key < y.key : x.face < y.face; });

@@ -44,10 +44,15 @@ void OpenSideParams::validate() const {
 }
 
 OpenSide openSide(const std::vector<Eigen::Vector3d>& points, const OpenSideParams& params, int threads) {
+  return openSide(points, KnnIndex(points), params, threads);
+}
+
+OpenSide openSide(const std::vector<Eigen::Vector3d>& points, const KnnIndex& index, const OpenSideParams& params,
+                  int threads) {
   params.validate();
+  if (index.size() != points.size()) throw std::invalid_argument("open side: the index is not of these points");
   OpenSide out;
   if (points.size() < params.neighbours) return out;
-  const KnnIndex index(points);
   std::vector<char> rim(points.size(), 0);
   const double minGap = params.minGapDeg * M_PI / 180.0;
   parallelFor(points.size(), threads, [&](std::size_t i) {

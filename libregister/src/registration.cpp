@@ -188,7 +188,8 @@ struct Refined {
 /// scorePose(); the best continues to convergence. A known overlap < 1 trims the pairs in both directions; an
 /// unknown one is estimated in every iteration (fractional RMSD, both directions).
 Refined refineCandidates(const std::vector<Eigen::Vector3d>& ns, const std::vector<Eigen::Vector3d>& nt,
-                         const RotationSearchResult& found, const RegistrationParams& params, const Execution& exec) {
+                         const KnnIndex& targetTree, const RotationSearchResult& found,
+                         const RegistrationParams& params, const Execution& exec) {
   IcpParams ip = params.icp;
   const bool estimate = params.overlap == 0.0;
   ip.overlap = estimate ? 1.0 : params.overlap;
@@ -197,7 +198,6 @@ Refined refineCandidates(const std::vector<Eigen::Vector3d>& ns, const std::vect
   ip.overlapExponent = params.fitOverlapExponent;
   ip.estimateScale = params.estimateScale;
   ip.bidirectional = ip.bidirectional || params.overlap < 1.0;  // partial scans: both directions
-  const KnnIndex targetTree(nt);
   const std::size_t nc = std::min(params.icpCandidates, found.candidates.size());
   Refined out;
   out.icp.resize(nc);
@@ -437,7 +437,9 @@ RegistrationResult registerClouds(const PointCloud& sourceIn, const PointCloud& 
   sp.overlapExponent = params.searchOverlapExponent;
   sp.seed = params.seed;
   sp.keep = std::max(sp.keep, params.icpCandidates);
-  const OpenSide sourceSide = openSide(ns, {}, exec.threads), targetSide = openSide(nt, {}, exec.threads);
+  const KnnIndex sourceTree(ns), targetTree(nt);
+  const OpenSide sourceSide = openSide(ns, sourceTree, {}, exec.threads);
+  const OpenSide targetSide = openSide(nt, targetTree, {}, exec.threads);
   sp.sourceOpenSide = sourceSide.direction;
   sp.targetOpenSide = targetSide.direction;
   r.sourceRimPoints = sourceSide.rimPoints;
@@ -455,7 +457,7 @@ RegistrationResult registerClouds(const PointCloud& sourceIn, const PointCloud& 
 
   // 5. ICP from each of the best few candidates, ranked by the symmetric score.
   t = Clock::now();
-  const Refined refined = refineCandidates(ns, nt, found, params, exec);
+  const Refined refined = refineCandidates(ns, nt, targetTree, found, params, exec);
   stage("icp", t);
 
   // 6. The result, the runner-up and the ambiguity flags; back to original units.

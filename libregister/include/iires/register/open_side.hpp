@@ -10,6 +10,8 @@
 #include <cstddef>
 #include <vector>
 
+#include "iires/knn.hpp"
+
 namespace iires::reg {
 
 /// @brief Parameters of openSide().
@@ -35,5 +37,8 @@ struct OpenSide {
 /// @throws std::invalid_argument for bad parameters.
 /// @note Deterministic for any thread count.
 OpenSide openSide(const std::vector<Eigen::Vector3d>& points, const OpenSideParams& params = {}, int threads = 0);
+/// @brief The same, reading the neighbours from @p index, a k-d tree of @p points the caller already has.
+OpenSide openSide(const std::vector<Eigen::Vector3d>& points, const KnnIndex& index, const OpenSideParams& params = {},
+                  int threads = 0);
 
 }  // namespace iires::reg

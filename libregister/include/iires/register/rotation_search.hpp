@@ -41,6 +41,7 @@ struct RotationSearchParams {
   /// found is where the translation search of a survivor starts. Radius 0 = t = 0 only
   double coarseOffsetRadius = 0.4;
   double coarseOffsetStep = 0.4;     ///< lattice step of the coarse offsets (> 0)
+  int coarseOffsetRefineLevels = 1;  ///< pattern moves around the best coarse offset, step halved each (≥ 0)
   /// Open sides (open_side.hpp) of the normalised clouds: unit vectors towards their rims, zero for a closed
   /// cloud. A partial cloud's normalised frame is offset from the whole's towards the part, i.e. away from its
   /// rim, and shrunk: the coarse pass also scores each rotation R at the offsets t = −a·R·u_S + b·u_T,
@@ -51,7 +52,6 @@ struct RotationSearchParams {
   Eigen::Vector3d targetOpenSide = Eigen::Vector3d::Zero();  ///< see sourceOpenSide
   double openSideShift = 0.4;       ///< a and b above, normalised units (≥ 0; 0 = the open sides are not used)
   double openSideScaleSlope = 0.3;  ///< κ above (≥ 0, κ·openSideShift < 1) [40 % cuts: σ ≈ 1 − 0.3·|τ|]
-  int coarseOffsetRefineLevels = 1;  ///< pattern moves around the best coarse offset, step halved each (≥ 0)
   std::size_t coarseKeep = 48;    ///< best coarse candidates passed on to the exact energy (≥ 1)
   std::size_t fullKeep = 48;      ///< best exact candidates kept for the selection of distinct ones (≥ 1)
   std::size_t keep = 5;           ///< distinct candidates returned, best first (≥ 1)
@@ -132,8 +132,8 @@ class RotationSearch {
                       double bound = std::numeric_limits<double>::infinity()) const;
 
   /// @brief Eq. (12): the best grid rotations. Coarse pass (subset energy on the distance fields, min over the
-  /// coarse offsets and the open sides' poses, early exit, all candidates, in parallel) → translation search around each of the best
-  /// coarseKeep (subset energy, from its coarse offset) → exact energy of
+  /// coarse offsets and the open sides' poses, early exit, all candidates, in parallel) → translation search
+  /// around each of the best coarseKeep (subset energy, from its coarse offset) → exact energy of
   /// those at their best translation (early exit against the fullKeep-th best so far) →
   /// distinct candidates (minSeparationDeg apart) → local refinement of each by a shrinking pattern of
   /// axis-angle steps (±h about each axis).
