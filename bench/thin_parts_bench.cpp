@@ -3,7 +3,7 @@
 // spheres nearly touching, a sphere inside a sphere — generated with fixed seeds (tests/shapes.hpp),
 // positions only (like a raw .xyz scan), resampled with the default parameters (the CLI's defaults).
 // Prints one key=value line per (case, input, gap, noise, N) and per --denoise-only run.
-// Usage: thin_parts_bench CASE INPUT_COUNT GAP_SPACINGS NOISE_SPACINGS [N ...] [--threads T] [--no-intrinsic] [--input-per-sample X] [--write-input FILE.xyz]
+// Usage: thin_parts_bench CASE INPUT_COUNT GAP_SPACINGS NOISE_SPACINGS [N ...] [--threads T] [--no-intrinsic] [--input-per-sample X] [--write-input FILE.xyz] [--seed S]
 //   CASE: sheets | plate | spheres | nested
 #include <chrono>
 #include <cmath>
@@ -23,11 +23,12 @@ namespace {
 
 double now() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
 
-iires::test::ThinCase makeCase(const std::string& name, std::size_t count, double gap, double noise) {
-  if (name == "sheets") return iires::test::foldedSheets(count, gap, noise, 19);
-  if (name == "plate") return iires::test::thinPlate(count, gap, noise, 19);
-  if (name == "spheres") return iires::test::twoSpheres(count, gap, noise, 19);
-  if (name == "nested") return iires::test::nestedSpheres(count, gap, noise, 19);
+iires::test::ThinCase makeCase(const std::string& name, std::size_t count, double gap, double noise,
+                               std::uint64_t seed) {
+  if (name == "sheets") return iires::test::foldedSheets(count, gap, noise, seed);
+  if (name == "plate") return iires::test::thinPlate(count, gap, noise, seed);
+  if (name == "spheres") return iires::test::twoSpheres(count, gap, noise, seed);
+  if (name == "nested") return iires::test::nestedSpheres(count, gap, noise, seed);
   std::fprintf(stderr, "thin_parts_bench: error: unknown case '%s'\n", name.c_str());
   std::exit(2);
 }
@@ -44,7 +45,7 @@ int main(int argc, char** argv) {
   if (argc < 5) {
     std::fprintf(stderr,
                  "usage: thin_parts_bench CASE INPUT_COUNT GAP_SPACINGS NOISE_SPACINGS [N ...] [--threads T] "
-                 "[--no-intrinsic]\n");
+                 "[--no-intrinsic] [--input-per-sample X] [--write-input FILE.xyz] [--seed S]\n");
     return 2;
   }
   const std::string name = argv[1];
@@ -55,12 +56,15 @@ int main(int argc, char** argv) {
   bool intrinsic = true;
   long inputPerSample = -1;
   std::string writeInput;
+  std::uint64_t seed = 19;
   for (int a = 5; a < argc; ++a) {
     const std::string arg = argv[a];
     if (arg == "--threads" && a + 1 < argc) {
       threads = std::stoi(argv[++a]);
     } else if (arg == "--input-per-sample" && a + 1 < argc) {
       inputPerSample = std::stol(argv[++a]);
+    } else if (arg == "--seed" && a + 1 < argc) {
+      seed = std::stoull(argv[++a]);
     } else if (arg == "--write-input" && a + 1 < argc) {
       writeInput = argv[++a];
     } else if (arg == "--no-intrinsic") {
@@ -69,7 +73,7 @@ int main(int argc, char** argv) {
       ns.push_back(std::stoul(arg));
     }
   }
-  iires::test::ThinCase t = makeCase(name, count, gapSpacings, noise);
+  iires::test::ThinCase t = makeCase(name, count, gapSpacings, noise, seed);
   t.cloud.normals.clear();  // a raw scan: positions only
   if (!writeInput.empty()) iires::writePointCloud(writeInput, t.cloud);
   const std::string prefix = "case=" + t.name + " input=" + std::to_string(count) +
