@@ -325,8 +325,10 @@ TEST(Hardening, ExtremelyAnisotropicCloudStaysInItsBoundsOrFails) {
 // rim by about 0.6 input spacings on some samplings (seeds 22 and 27 here), which is the surface's resolution, not
 // a projection that left it. Exit 0 with exactly N points, all within one input spacing of the box (before: these
 // runs failed with "left the input's bounding box", the allowance being a tenth of the 3-spacing thickness).
+// Seeds 27–29 failed the check while a collapsed edge's sample took its midpoint's projection even where that left
+// the cloud (a quadric extrapolating past the rim's corner); it keeps its place now, as a refused move does.
 TEST(Hardening, ThinClosedBoxIsResampledNotRejected) {
-  for (const std::uint64_t seed : {22u, 27u}) {
+  for (const std::uint64_t seed : {22u, 27u, 28u, 29u}) {
     test::ThinCase box3 = thinPlate(40000, 3.0, 0.0, seed);
     box3.cloud.normals.clear();  // positions only
     const double spacing = box3.spacing, thickness = box3.gap;

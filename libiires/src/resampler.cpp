@@ -27,6 +27,10 @@ constexpr double kOffSurfaceLimit = 0.6;  // MlsSurface::project's offSurface be
 // lets a sample sit 0.6 kernel widths (≈ 2 input spacings) from the nearest input point, which at an open
 // boundary of a sparse input is several output spacings past the data (upsampling).
 constexpr double kBeyondLimit = 0.05;
+// A collapsed edge's midpoint projected farther than this (offSurface, kernel widths) from every input point left
+// the cloud: at the rim corner of a plate a few spacings thick a quadric fit extrapolates 1–3 input spacings
+// out. Looser than kOffSurfaceLimit, which a clean 5× density gradient's sparse side reaches (h capped there).
+constexpr double kCollapseOffLimit = 1.0;
 constexpr double kCarryShare = 0.05;     // edits touching more than this share of samples restart the relaxation
 constexpr std::size_t kWiderQuery = 3;   // candidates queried for a sample the rule refuses some of
 constexpr double kCellSheetHeight = 1.25;  // voxel cells: another sheet lies this × the sheet height off a plane
@@ -390,8 +394,12 @@ EditMap Resampler::splitAndCollapse(Samples& s, const std::vector<Edge>& sorted,
     touched[e.a] = touched[e.b] = 1;
     std::uint32_t keep = e.a, drop = e.b;
     if (s.fixed[drop]) std::swap(keep, drop);
-    if (!s.fixed[keep])
-      s.pos[keep] = surface_.project(0.5 * (s.pos[e.a] + s.pos[e.b]), &s.nrm[keep], nullptr, &s.nrm[keep]);
+    if (!s.fixed[keep]) {  // to the edge's midpoint, unless its projection left the cloud (then it stays)
+      Eigen::Vector3d nrm;
+      double off = 0;
+      const Eigen::Vector3d p = surface_.project(0.5 * (s.pos[e.a] + s.pos[e.b]), &nrm, &off, &s.nrm[keep]);
+      if (off <= kCollapseOffLimit) s.pos[keep] = p, s.nrm[keep] = nrm;
+    }
     removed[drop] = 1;
     map.touched.push_back(keep), map.touched.push_back(drop);
     ++collapsed;

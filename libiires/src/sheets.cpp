@@ -414,7 +414,7 @@ SheetReport separateSheets(const std::vector<Eigen::Vector3d>& points, Neighbour
     report.spacing = sorted[st.n / 2];
   }
   const bool given = givenNormals && givenNormals->size() == st.n;
-  bool orient = params.orient;
+  bool orient = true;
   if (given) {
     normals.resize(st.n);
     parallelFor(st.n, threads, [&](std::size_t i) {
@@ -423,7 +423,7 @@ SheetReport separateSheets(const std::vector<Eigen::Vector3d>& points, Neighbour
       st.plain[i] = rowOnPlane(st, i, normals[i]);
     });
     // Oriented normals part pairs that face opposite ways; unoriented ones are read as directions only, and
-    // oriented here (the stages after the rule read them), whatever params.orient.
+    // oriented here (the stages after the rule read them).
     report.orientationConflicts = orientationConflicts(points, normals, st.rows, st.K, st.pcaK, threads);
     orient = report.orientationConflicts > kMaxOrientationConflicts;
     if (!orient) st.minDot = std::cos(params.maxNormalAngleDeg * M_PI / 180.0);
@@ -437,7 +437,7 @@ SheetReport separateSheets(const std::vector<Eigen::Vector3d>& points, Neighbour
   if (given && orient)
     for (std::size_t i = 0; i < st.n; ++i) report.reorientedNormals += normals[i].dot((*givenNormals)[i]) < 0;
   std::vector<std::uint8_t> nearPoints = countZones(st, report, threads);
-  if (!given && params.orient) plainNormalsAwayFromGaps(st, nearPoints, threads);
+  if (!given) plainNormalsAwayFromGaps(st, nearPoints, threads);
   if (near) *near = std::move(nearPoints);
   report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return report;

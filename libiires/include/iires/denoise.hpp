@@ -73,6 +73,12 @@ struct DenoiseParams {
   /// the input is already clean; its positions are kept (the fitted normals are still returned) and no
   /// further sweep runs, since smoothing a clean cloud only erodes tight curvature. 0 = off.
   double cleanDisplacement = 0.0;
+  /// Normals given with the input are data: a clean input (see cleanDisplacement) keeps them as given. false:
+  /// they were estimates (the sheet rule's PCA over 16 neighbours): a probe sweep without the bilateral term
+  /// decides whether to trust their sign. Below 0.3 spacings moved the sweeps read them as given ones (and a
+  /// clean input returns the fits oriented like them); above, where noise flips an estimate's sign in places,
+  /// the sweeps go on from the probe as without normals.
+  bool keepGivenNormals = true;
   bool orientNormals = true;  ///< input without normals: orient the fitted normals (MST over the k-NN graph)
   int orientNeighbours = 8;   ///< k of the k-NN graph the orientation propagates over (≤ neighbours)
 

@@ -42,9 +42,6 @@ struct SheetParams {
   double gapAngleDeg = 25.0;
   double maxNormalAngleDeg = 120.0;  ///< oriented normals: pairs whose normals differ by more are apart
   std::size_t minNeighbours = 3;  ///< a row left with fewer same-sheet neighbours keeps its Euclidean row
-  /// Estimated normals (no normals given) are oriented over the same-sheet graph; false leaves them unoriented
-  /// and as the sheet fits gave them, for a caller that only needs the filtered rows (and fits its own normals).
-  bool orient = true;
 
   /// @throws std::invalid_argument with a readable message when a field is out of range.
   void validate() const;
@@ -73,10 +70,10 @@ struct SheetReport {
 /// not consistently oriented) and the sheet rule applied to @p table, whose rows are filtered in place
 /// (NeighbourTable::filter).
 /// @param table neighbour lists of exactly @p points, the point itself included (k ≥ pcaNeighbours + 1)
-/// @param normals out: estimated (PCA over same-sheet neighbours, refined once, then, with params.orient,
-/// oriented by a minimum spanning tree over the same-sheet graph) unless @p givenNormals holds one normal per
-/// point (then a unit copy, oriented over the same-sheet graph whatever params.orient when the given ones were
-/// not consistently oriented: see kMaxOrientationConflicts in normals.hpp)
+/// @param normals out: estimated (PCA over same-sheet neighbours, refined once, then oriented by a minimum
+/// spanning tree over the same-sheet graph) unless @p givenNormals holds one normal per point (then a unit
+/// copy, oriented over the same-sheet graph when the given ones were not consistently oriented: see
+/// kMaxOrientationConflicts in normals.hpp)
 /// @param near (optional) out: per point, 1 where a neighbour was found on another sheet
 /// @param exec threads (the result does not depend on them)
 /// @note O(n k). Deterministic for any thread count.
