@@ -7,6 +7,7 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <queue>
 #include <random>
 #include <set>
@@ -15,6 +16,7 @@
 #include "iires/knn.hpp"
 #include "iires/resample.hpp"
 #include "iires/sampling.hpp"
+#include "iires/sheets.hpp"
 #include "shapes.hpp"
 #include "test_util.hpp"
 
@@ -69,6 +71,9 @@ TEST(IntrinsicRule, ValidatesParams) {
   EXPECT_THROW(p.validate(), std::invalid_argument);
   p = {};
   p.maxDistanceSpacings = std::nan("");
+  EXPECT_THROW(p.validate(), std::invalid_argument);
+  p = {};
+  p.gapSpacings = -1;
   EXPECT_THROW(p.validate(), std::invalid_argument);
   EXPECT_THROW(IntrinsicRule(nullptr), std::invalid_argument);
 }
@@ -150,6 +155,61 @@ TEST(IntrinsicRule, TwoSpheresNeverLinked) {
     }
   EXPECT_GT(across, 100u);
   EXPECT_GT(within, 100u);
+}
+
+// A closed plate 3 dense spacings thick: its two faces are about as far from every satellite, so the geodesic
+// coordinates alone accept pairs straight across it; the gap test on the samples' tangent planes, where the sheet
+// rule found the other face near, parts them all and keeps every pair on one face (and, applied everywhere,
+// every neighbour pair on a sphere, whose planes curve the same way).
+TEST(IntrinsicRule, PlateFacesPartedByTheGapTest) {
+  const test::ThinCase plate = test::thinPlate(40000, 3.0, 0.0, 19);
+  const auto geo = geodesicOf(plate.cloud);
+  const KnnIndex plateIndex(plate.cloud.points);
+  NeighbourTable table(plateIndex, plate.cloud.points, 24);
+  std::vector<Eigen::Vector3d> ruleNormals;
+  std::vector<std::uint8_t> near;  // the dense points with another sheet near: the gap test's domain
+  separateSheets(plate.cloud.points, table, ruleNormals, {}, {}, nullptr, &near);
+  std::vector<Eigen::Vector3d> samples, normals;
+  for (std::size_t i = 0; i < plate.cloud.size(); i += 7)
+    if (plate.side(plate.cloud.points[i]) >= 0)
+      samples.push_back(plate.cloud.points[i]), normals.push_back(plate.cloud.normals[i]);
+  auto count = [&](const IntrinsicParams& params, bool acrossFaces) {
+    IntrinsicRule rule(geo, params, {}, near);
+    rule.update(samples, normals);
+    std::size_t accepted = 0, pairs = 0;
+    for (std::size_t i = 0; i < samples.size(); ++i)
+      for (std::size_t j = i + 1; j < samples.size(); ++j) {
+        if ((samples[i] - samples[j]).norm() > 4 * plate.gap) continue;
+        if ((plate.side(samples[i]) != plate.side(samples[j])) != acrossFaces) continue;
+        ++pairs;
+        accepted += rule.accept(i, j);
+      }
+    return std::make_pair(accepted, pairs);
+  };
+  IntrinsicParams without;
+  without.gapSpacings = 0;
+  const auto [acrossWithout, acrossPairs] = count(without, true);
+  const auto [acrossWith, acrossPairs2] = count({}, true);
+  const auto [withinWithout, withinPairs] = count(without, false);
+  const auto [withinWith, withinPairs2] = count({}, false);
+  std::printf("  pairs across the faces accepted: %zu of %zu without the gap test, %zu with it; on one face %zu "
+              "and %zu of %zu\n", acrossWithout, acrossPairs, acrossWith, withinWithout, withinWith, withinPairs);
+  ASSERT_GT(acrossPairs, 1000u);
+  EXPECT_GT(acrossWithout, acrossPairs / 2);  // what the coordinates alone let through
+  EXPECT_EQ(acrossWith, 0u);
+  EXPECT_EQ(withinWith, withinWithout);
+
+  const PointCloud sphere = test::sphereCloud(20000, 1.0, 8);
+  IntrinsicRule rule(geodesicOf(sphere), {}, {}, std::vector<std::uint8_t>(sphere.size(), 1));
+  const std::vector<Eigen::Vector3d> onSphere = test::fibonacciSphere(1000);
+  rule.update(onSphere, onSphere);  // unit sphere: the normal is the position
+  const KnnIndex index(onSphere);
+  std::vector<std::uint32_t> idx;
+  std::vector<double> d2;
+  for (std::size_t i = 0; i < onSphere.size(); ++i) {
+    index.knn(onSphere[i], 15, idx, d2);
+    for (std::uint32_t j : idx) ASSERT_TRUE(rule.accept(i, j)) << i << " " << j;
+  }
 }
 
 // The U-strip, rule level: pairs straight across the gap are rejected away from the fold; neighbours on one

@@ -219,26 +219,23 @@ TEST(Sheets, FoldedSheetsResampledApart) {
 }
 
 // Acceptance (issue 19): folded sheets at every gap of the issue (2.5, 3, 4 and 6 input spacings), without noise
-// and with Gaussian noise of 0.2 input spacings along the normal, positions only, the CLI's defaults. Without
-// noise the issue's bounds hold (no point off a sheet, shares within 2 %, cv ≤ 0.08; at 2.5 spacings cv 0.089
-// when a clean input kept the sheet rule's PCA normals instead of the denoiser's fits). With noise they do not
-// all hold yet (a point off at 2.5 and 3 spacings, cv 0.10 at 2.5; the share of 500 points spreads over
-// −5.2…+3.5 % across seeds): the bounds there are what the rule achieves (before it, most points lay between
-// the sheets at 2.5 and 3 spacings).
+// and with Gaussian noise of 0.2 input spacings along the normal, positions only, the CLI's defaults: no point
+// off a sheet, shares within 2 %, cv ≤ 0.08. Not yet at 2.5 spacings with noise, where the denoised cloud keeps
+// a few points between the sheets (6 output points off, cv 0.105); before the samples' gap test the noisy rows
+// had cv up to 0.14 and shares up to 5 % off, and the 3-spacing one a point off.
 class FoldedSheets : public ::testing::TestWithParam<std::tuple<double, double>> {};
 
 TEST_P(FoldedSheets, ResampledApart) {
   const auto [gap, noise] = GetParam();
   const Outcome o = resampleCase(test::foldedSheets(30000, gap, noise, 15), 500);
   EXPECT_EQ(o.points, 500u);
-  if (noise == 0) {
+  EXPECT_LE(o.shareError, 0.02);
+  if (noise == 0 || gap > 2.5) {
     EXPECT_EQ(o.off, 0u);
-    EXPECT_LE(o.shareError, 0.02);
     EXPECT_LE(o.cv, 0.08);
   } else {
     EXPECT_LE(o.off, o.near / 40);
-    EXPECT_LE(o.shareError, 0.06);
-    EXPECT_LE(o.cv, 0.15);
+    EXPECT_LE(o.cv, 0.12);
   }
 }
 
@@ -264,14 +261,15 @@ TEST(Sheets, NoisyFoldedSheetsThinnedStayApart) {
 }
 
 // A thin closed plate (a box 3 spacings thick, every face sampled): before, 457 of 540 points between the faces.
-// The two faces' shares of 600 points spread over −3.3…+5.2 % across seeds (thin_parts_bench plate 40000 3 0 600
-// --seed 1…8): the bound is that spread, not the issue's 2 %.
+// Uniform on each face: the samples' 1-rings do not reach across the plate (the intrinsic rule's gap test; before
+// it the faces' samples interleaved, cv 0.11–0.14 over seeds and shares off by up to 5 %).
 TEST(Sheets, ThinPlateResampledApart) {
   const Outcome o = resampleCase(test::thinPlate(40000, 3.0, 0.0, 8), 600);
   EXPECT_EQ(o.points, 600u);
   EXPECT_EQ(o.off, 0u);
   EXPECT_EQ(o.components, 1u);
-  EXPECT_LE(o.shareError, 0.06);
+  EXPECT_LE(o.shareError, 0.04);
+  EXPECT_LE(o.cv, 0.08);
 }
 
 // Noisy sheets six spacings apart, where the sheet rule's rows reach the other sheet at a few points only: the

@@ -8,8 +8,12 @@
 #include <string>
 
 #include "iires/detail/parallel.hpp"
+#include "iires/sheets.hpp"
 
 namespace iires {
+namespace {
+const double kGapParallelCos = std::cos(25.0 * M_PI / 180.0);  // SheetParams::gapAngleDeg
+}  // namespace
 
 void IntrinsicParams::validate() const {
   auto fail = [](const std::string& m) { throw std::invalid_argument("IntrinsicParams: " + m); };
@@ -18,20 +22,27 @@ void IntrinsicParams::validate() const {
     fail("toleranceSpacings must be finite and >= 0");
   if (!(maxDistanceSpacings >= 0) || !std::isfinite(maxDistanceSpacings))
     fail("maxDistanceSpacings must be finite and >= 0 (0 = no bound)");
+  if (!(gapSpacings >= 0) || !std::isfinite(gapSpacings)) fail("gapSpacings must be finite and >= 0 (0 = off)");
 }
 
 IntrinsicRule::IntrinsicRule(std::shared_ptr<const GeodesicCoordinates> geo, const IntrinsicParams& params,
-                             const Execution& exec)
-    : geo_(std::move(geo)), params_(params), threads_(exec.threads) {
+                             const Execution& exec, std::vector<std::uint8_t> nearSheets)
+    : geo_(std::move(geo)), params_(params), threads_(exec.threads), nearSheets_(std::move(nearSheets)) {
   if (!geo_) throw std::invalid_argument("IntrinsicRule: geodesic coordinates are null");
+  if (!nearSheets_.empty() && nearSheets_.size() != geo_->size())
+    throw std::invalid_argument("IntrinsicRule: nearSheets must hold one flag per dense point");
   params_.validate();
   tolerance_ = params_.toleranceSpacings * geo_->spacing();
+  minGap_ = params_.gapSpacings * geo_->spacing();
   dims_ = static_cast<std::size_t>(geo_->dimensions());
 }
 
-void IntrinsicRule::update(const std::vector<Eigen::Vector3d>& samples, const std::vector<Eigen::Vector3d>&) {
+void IntrinsicRule::update(const std::vector<Eigen::Vector3d>& samples, const std::vector<Eigen::Vector3d>& normals) {
   const std::size_t n = samples.size();
   pos_ = samples;
+  const bool gapTest = minGap_ > 0 && !nearSheets_.empty() && normals.size() == n;
+  nrm_ = gapTest ? normals : std::vector<Eigen::Vector3d>{};
+  near_.assign(gapTest ? n : 0, 0);
   const std::size_t dims = dims_;
   dense_.assign(n, 0);
   comp_.assign(n, 0);
@@ -41,6 +52,7 @@ void IntrinsicRule::update(const std::vector<Eigen::Vector3d>& samples, const st
     dense_[i] = static_cast<std::uint32_t>(d < 0 ? 0 : d);
     comp_[i] = geo_->component(dense_[i]);
     std::copy_n(&geo_->coordinates()[dense_[i] * dims], dims, &coords_[i * dims]);
+    if (gapTest) near_[i] = nearSheets_[dense_[i]];
   });
   // Sample spacing estimate: the dense cloud covers about size()·(2·spacing)² of surface (a random sampling's
   // mean nearest-neighbour distance is half its hexagonal spacing); N samples on it are about
@@ -65,7 +77,10 @@ bool IntrinsicRule::consistent(const float* ga, const float* gb, double d) const
 
 bool IntrinsicRule::accept(std::size_t i, std::size_t j) const {
   if (i == j) return true;
-  return comp_[i] == comp_[j] && consistent(&coords_[i * dims_], &coords_[j * dims_], (pos_[i] - pos_[j]).norm());
+  if (comp_[i] != comp_[j] || !consistent(&coords_[i * dims_], &coords_[j * dims_], (pos_[i] - pos_[j]).norm()))
+    return false;
+  return near_.empty() || !(near_[i] || near_[j]) ||
+         !acrossGap(pos_[i], nrm_[i], pos_[j], nrm_[j], minGap_, kGapParallelCos);
 }
 
 bool IntrinsicRule::acceptPoints(const Eigen::Vector3d& p, const Eigen::Vector3d& q) const {

@@ -328,7 +328,7 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params, const Ex
     t = clock.begin("geodesic");  // includes the independent stages where they ran during its sweeps
     result.geodesic = std::make_shared<const GeodesicCoordinates>(cloud, gp, exec,
                                                                   neighbours ? &*neighbours : nullptr, independent);
-    rule = std::make_shared<IntrinsicRule>(result.geodesic, params.intrinsicRule, exec);
+    rule = std::make_shared<IntrinsicRule>(result.geodesic, params.intrinsicRule, exec, result.nearSheets);
     result.components = result.geodesic->components();
     result.satellites = result.components * static_cast<std::size_t>(gp.satellites);
     clock.end("geodesic", t);

@@ -151,7 +151,8 @@ void triangulateSamples(const ReconstructParams& params, const Execution& exec, 
     } else if (!tp.neighbourRule && result.resampling.geodesic) {
       // The resampler's intrinsic rule (DESIGN §5.2): 1-rings never link across a thin gap or between objects.
       tp.neighbourRule =
-          std::make_shared<IntrinsicRule>(result.resampling.geodesic, params.resampling.intrinsicRule, exec);
+          std::make_shared<IntrinsicRule>(result.resampling.geodesic, params.resampling.intrinsicRule, exec,
+                                          result.resampling.nearSheets);
     }
     // The sheet rule's pair test (sheets.hpp) on the samples where the rule found another sheet near on the
     // dense cloud: two sheets closer than the samples' spacing, which the dense cloud resolves (its spacing sets
@@ -254,7 +255,8 @@ void carryAttributes(const PointCloud& input, const ReconstructParams& params, c
   SameSheet sameSheet;  // the resampler's intrinsic rule: vertices take values from input points on their sheet
   std::shared_ptr<const IntrinsicRule> rule;
   if (result.resampling.geodesic) {
-    rule = std::make_shared<IntrinsicRule>(result.resampling.geodesic, params.resampling.intrinsicRule, exec);
+    rule = std::make_shared<IntrinsicRule>(result.resampling.geodesic, params.resampling.intrinsicRule, exec,
+                                          result.resampling.nearSheets);
     sameSheet = [&rule](const Eigen::Vector3d& a, const Eigen::Vector3d& b) { return rule->acceptPoints(a, b); };
   }
   result.mesh.vertexAttributes =

@@ -2,8 +2,8 @@
 #pragma once
 /// @file intrinsic.hpp
 /// @brief The intrinsic neighbour rule (paper §3.2; DESIGN §3 step 6): two samples may be neighbours only
-/// when they lie on the same connected component of the cloud and their geodesic coordinates are consistent
-/// with their Euclidean distance. Used by the resampler (ResampleParams::neighbourRule) and, later, by the
+/// when they lie on the same connected component of the cloud, their geodesic coordinates are consistent
+/// with their Euclidean distance and their tangent planes do not face each other across a gap. Used by the resampler (ResampleParams::neighbourRule) and, later, by the
 /// reconstruction's 1-rings.
 ///
 /// Why the test works: |gₛ(p) − gₛ(q)| ≤ d_geo(p, q) for every satellite s (triangle inequality), and for
@@ -34,6 +34,14 @@ struct IntrinsicParams {
   /// Euclidean bound: reject pairs farther apart than this many *sample* spacings (estimated from the dense
   /// spacing and the sample count), so the rule is safe on its own against mirror points. 0 = no bound.
   double maxDistanceSpacings = 6.0;
+  /// The sheet rule's gap test on the samples themselves (sheets.hpp, acrossGap), where the dense cloud has
+  /// another sheet near (IntrinsicRule's nearSheets): two samples whose tangent planes are within 25° of
+  /// parallel, each beyond the other's plane, offset by at least this many dense spacings on average, lie on
+  /// two sheets across a gap and are never neighbours — where the geodesic coordinates cannot tell (a plate's
+  /// two faces are as far from every satellite; a stray point between two sheets links their graphs). Only
+  /// there: samples many spacings apart on one sheet with an inflection between them (a bump's two sides) meet
+  /// the test too. 0 = off.
+  double gapSpacings = 1.25;
 
   /// @throws std::invalid_argument with a readable message when a field is out of range.
   void validate() const;
@@ -46,8 +54,10 @@ class IntrinsicRule final : public NeighbourRule {
  public:
   /// @param geo geodesic coordinates of the dense cloud the samples live on (shared, must not be null)
   /// @param exec the threads of update()
+  /// @param nearSheets per dense point, 1 where the sheet rule found another sheet near (ResampleResult::
+  /// nearSheets); the gap test applies to pairs with such a point nearest either sample (empty: nowhere)
   explicit IntrinsicRule(std::shared_ptr<const GeodesicCoordinates> geo, const IntrinsicParams& params = {},
-                         const Execution& exec = {});
+                         const Execution& exec = {}, std::vector<std::uint8_t> nearSheets = {});
 
   void update(const std::vector<Eigen::Vector3d>& samples, const std::vector<Eigen::Vector3d>& normals) override;
   /// @brief Whether samples @p i and @p j (of the last update()) may be neighbours.
@@ -76,7 +86,10 @@ class IntrinsicRule final : public NeighbourRule {
   double tolerance_ = 0;
   double maxDistance_ = 0;
   std::size_t dims_ = 0;  // geo_->dimensions(), asked once (accept() runs for every candidate pair)
-  std::vector<Eigen::Vector3d> pos_;
+  double minGap_ = 0;  // gapSpacings in absolute units (0 = off)
+  std::vector<std::uint8_t> nearSheets_;  // per dense point
+  std::vector<std::uint8_t> near_;        // per sample: its dense point has another sheet near
+  std::vector<Eigen::Vector3d> pos_, nrm_;
   std::vector<std::uint32_t> dense_, comp_;  // per sample: its nearest dense point and that point's component
   std::vector<float> coords_;        // per sample: that point's geodesic coordinates, sample-major
 };
