@@ -13,6 +13,9 @@
 namespace iires {
 namespace {
 const double kGapParallelCos = std::cos(25.0 * M_PI / 180.0);  // SheetParams::gapAngleDeg
+// Plus this × the pair's distance: the samples' normals' error (SheetParams::heightSlope, ≈ 6°). Samples many
+// dense spacings apart on one slightly wavy sheet (a noisy sheet's residue) otherwise meet the test.
+constexpr double kGapSlope = 0.1;
 }  // namespace
 
 void IntrinsicParams::validate() const {
@@ -80,7 +83,8 @@ bool IntrinsicRule::accept(std::size_t i, std::size_t j) const {
   if (comp_[i] != comp_[j] || !consistent(&coords_[i * dims_], &coords_[j * dims_], (pos_[i] - pos_[j]).norm()))
     return false;
   return near_.empty() || !(near_[i] || near_[j]) ||
-         !acrossGap(pos_[i], nrm_[i], pos_[j], nrm_[j], minGap_, kGapParallelCos);
+         !acrossGap(pos_[i], nrm_[i], pos_[j], nrm_[j], minGap_ + kGapSlope * (pos_[i] - pos_[j]).norm(),
+                    kGapParallelCos);
 }
 
 bool IntrinsicRule::acceptPoints(const Eigen::Vector3d& p, const Eigen::Vector3d& q) const {

@@ -57,8 +57,8 @@ std::vector<PointAttribute> carryAttributes(const PointCloud& input, const std::
 
 /// Exit 0 promises points on the input's surface. Each axis of the working cloud's bounding box is enlarged by
 /// a tenth of its own extent, or one input spacing where that is more (the MLS surface is resolved to about the
-/// input's spacing: at the rim of a plate a few spacings thick a sample may sit 0.6 of one out) but never more
-/// than a quarter of the extent, and in any case by at most three output spacings (a sample 20 units off a ribbon
+/// input's spacing: at the rim of a plate or a fold a few spacings thick a sample may sit 0.6 of one out) but
+/// never more than half the extent, and in any case by at most three output spacings (a sample 20 units off a ribbon
 /// 2 wide is off the surface, however long the ribbon). A sample outside has left the surface (projection
 /// diverged on a degenerate cloud), and the run fails instead of writing it.
 void checkWithinInput(const std::vector<Eigen::Vector3d>& samples, const std::vector<Eigen::Vector3d>& input,
@@ -66,7 +66,7 @@ void checkWithinInput(const std::vector<Eigen::Vector3d>& samples, const std::ve
   Eigen::AlignedBox3d box;
   for (const Eigen::Vector3d& p : input) box.extend(p);
   const Eigen::Vector3d extent = box.sizes();
-  const Eigen::Vector3d resolved = (0.25 * extent).cwiseMin(inputSpacing);
+  const Eigen::Vector3d resolved = (0.5 * extent).cwiseMin(inputSpacing);
   const Eigen::Vector3d margin =
       (0.1 * extent).cwiseMax(resolved).cwiseMin(3 * spacing).array() + 1e-9 * extent.norm();  // 1e-9: rounding
   box.min() -= margin;

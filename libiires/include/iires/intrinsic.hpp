@@ -36,7 +36,8 @@ struct IntrinsicParams {
   double maxDistanceSpacings = 6.0;
   /// The sheet rule's gap test on the samples themselves (sheets.hpp, acrossGap), where the dense cloud has
   /// another sheet near (IntrinsicRule's nearSheets): two samples whose tangent planes are within 25° of
-  /// parallel, each beyond the other's plane, offset by at least this many dense spacings on average, lie on
+  /// parallel, each beyond the other's plane, offset by at least this many dense spacings (plus a tenth of their
+  /// distance, for the normals' error) on average, lie on
   /// two sheets across a gap and are never neighbours — where the geodesic coordinates cannot tell (a plate's
   /// two faces are as far from every satellite; a stray point between two sheets links their graphs). Only
   /// there: samples many spacings apart on one sheet with an inflection between them (a bump's two sides) meet
