@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <exception>
 #include <string>
 #include <vector>
 
@@ -98,7 +99,14 @@ int main(int argc, char** argv) {
     p.intrinsic = intrinsic;
     if (inputPerSample >= 0) p.maxInputPerSample = static_cast<std::size_t>(inputPerSample);
     const double t0 = now();
-    const iires::ResampleResult r = iires::resample(t.cloud, p, iires::Execution{threads});
+    iires::ResampleResult r;
+    try {
+      r = iires::resample(t.cloud, p, iires::Execution{threads});
+    } catch (const std::exception& e) {  // a row that failed is a result too: say so and go on
+      std::printf("%s N=%zu status=failed error=\"%s\"\n", prefix.c_str(), n, e.what());
+      std::fflush(stdout);
+      continue;
+    }
     const double seconds = now() - t0;
     std::size_t off = 0, near = 0, sides[2] = {0, 0};
     double worst = 0, mean = 0;
