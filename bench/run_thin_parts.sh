@@ -4,7 +4,7 @@
 # about: `bench/run_thin_parts.sh quick|full`: generated cases (tests/shapes.hpp, seed 19), positions only, resampled
 # about: with the library's defaults; off_sheet = output points farther than 0.1·gap from the truth (fold and rim
 # about: excepted), share_err_pct = one side's share of the points against its share of the area.
-# columns: case input gap_spacings noise_spacings N off_sheet max_dist_per_gap share_err_pct cv components time_s
+# columns: case input gap_spacings noise_spacings N off_sheet max_dist_per_gap share_err_pct cv components time_s status
 # Thin parts and near-contact surfaces (issue 19): generated cases (tests/shapes.hpp, seed 19), positions only,
 # resampled with the library's defaults (the CLI's). Usage: bench/run_thin_parts.sh [quick|full]
 # (env BUILD, default build-bench: a build with -DIIRES_BUILD_BENCH=ON). One key=value line per (case, input, gap, noise, N), and one per
@@ -12,6 +12,7 @@
 #   case            folded-sheets | plate | two-spheres | nested-spheres
 #   input           input points;  gap_spacings / noise_spacings: gap and Gaussian noise σ in input spacings
 #   N, points       requested and written points;  time_s: wall time of resample();  working: working-cloud points
+#   status          failed when the resampling threw (error: its message); absent otherwise
 #   off_sheet / of  output points farther than 0.1·gap from the truth / points on the near parts (fold and rim
 #                   excepted);  max_dist_per_gap, mean_dist_per_gap: distance to the truth over the gap
 #   side0, side1    points on either near surface;  share_err_pct: side 1's share against its share of the area
