@@ -341,6 +341,21 @@ TEST(Hardening, ThinClosedBoxIsResampledNotRejected) {
   }
 }
 
+// Two sheets joined by a fold 2.5 input spacings wide: the MLS surface overshoots where the flat sheet meets the
+// tight fold by 0.6 input spacings on this sampling, a quarter of the extent across the sheets (the allowance
+// before: the run failed "left the input's bounding box"). Exit 0 with exactly N points, all within one input
+// spacing of the sheets' box.
+TEST(Hardening, TightFoldIsResampledNotRejected) {
+  test::ThinCase fold = test::foldedSheets(100000, 2.5, 0.0, 19);
+  fold.cloud.normals.clear();  // positions only
+  iires::ResampleParams p;
+  p.targetCount = 2000;
+  const iires::ResampleResult r = iires::resample(fold.cloud, p);
+  ASSERT_EQ(r.cloud.size(), 2000u);
+  Eigen::AlignedBox3d box(Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(1 + fold.gap / 2, 1, fold.gap));
+  for (const auto& q : r.cloud.points) EXPECT_LE(box.exteriorDistance(q), fold.spacing) << q.transpose();
+}
+
 TEST(Hardening, TinyCoordinatesAreNamedAsSuch) {
   const std::string dir = tempDir(), in = dir + "/in.xyz";
   PointCloud cloud = readPointCloud(dataPath("points_3/kitten.xyz"));
