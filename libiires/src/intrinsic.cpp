@@ -80,11 +80,10 @@ bool IntrinsicRule::consistent(const float* ga, const float* gb, double d) const
 
 bool IntrinsicRule::accept(std::size_t i, std::size_t j) const {
   if (i == j) return true;
-  if (comp_[i] != comp_[j] || !consistent(&coords_[i * dims_], &coords_[j * dims_], (pos_[i] - pos_[j]).norm()))
-    return false;
+  const double d = (pos_[i] - pos_[j]).norm();
+  if (comp_[i] != comp_[j] || !consistent(&coords_[i * dims_], &coords_[j * dims_], d)) return false;
   return near_.empty() || !(near_[i] || near_[j]) ||
-         !acrossGap(pos_[i], nrm_[i], pos_[j], nrm_[j], minGap_ + kGapSlope * (pos_[i] - pos_[j]).norm(),
-                    kGapParallelCos);
+         !acrossGap(pos_[i], nrm_[i], pos_[j], nrm_[j], minGap_ + kGapSlope * d, kGapParallelCos);
 }
 
 bool IntrinsicRule::acceptPoints(const Eigen::Vector3d& p, const Eigen::Vector3d& q) const {

@@ -3,8 +3,8 @@
 /// @file intrinsic.hpp
 /// @brief The intrinsic neighbour rule (paper §3.2; DESIGN §3 step 6): two samples may be neighbours only
 /// when they lie on the same connected component of the cloud, their geodesic coordinates are consistent
-/// with their Euclidean distance and their tangent planes do not face each other across a gap. Used by the resampler (ResampleParams::neighbourRule) and, later, by the
-/// reconstruction's 1-rings.
+/// with their Euclidean distance and their tangent planes do not face each other across a gap. Used by the
+/// resampler (ResampleParams::neighbourRule) and by the reconstruction's 1-rings.
 ///
 /// Why the test works: |gₛ(p) − gₛ(q)| ≤ d_geo(p, q) for every satellite s (triangle inequality), and for
 /// true neighbours d_geo ≈ |p − q|. A pair that is close in space but far along the surface (across a thin
@@ -36,12 +36,11 @@ struct IntrinsicParams {
   double maxDistanceSpacings = 6.0;
   /// The sheet rule's gap test on the samples themselves (sheets.hpp, acrossGap), where the dense cloud has
   /// another sheet near (IntrinsicRule's nearSheets): two samples whose tangent planes are within 25° of
-  /// parallel, each beyond the other's plane, offset by at least this many dense spacings (plus a tenth of their
-  /// distance, for the normals' error) on average, lie on
-  /// two sheets across a gap and are never neighbours — where the geodesic coordinates cannot tell (a plate's
-  /// two faces are as far from every satellite; a stray point between two sheets links their graphs). Only
-  /// there: samples many spacings apart on one sheet with an inflection between them (a bump's two sides) meet
-  /// the test too. 0 = off.
+  /// parallel, each beyond the other's plane, offset on average by at least this many dense spacings plus a
+  /// tenth of their distance (the normals' error), lie on two sheets across a gap and are never neighbours —
+  /// where the geodesic coordinates cannot tell (a plate's two faces are as far from every satellite; a stray
+  /// point between two sheets links their graphs). Only there: samples many spacings apart on one sheet with an
+  /// inflection between them (a bump's two sides) meet the test too. 0 = off.
   double gapSpacings = 1.25;
 
   /// @throws std::invalid_argument with a readable message when a field is out of range.
