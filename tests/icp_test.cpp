@@ -109,6 +109,13 @@ TEST(Icp, EstimatedOverlapAlignsTwoPartialCloudsWithScale) {
   EXPECT_GT(r.overlap, 0.5);
   EXPECT_LT(r.overlap, 0.95);
   EXPECT_LT(r.reverseOverlap, 0.95);
+  // The caller's tree of the source for the reverse matches: the same result; a tree of other points is refused.
+  const iires::KnnIndex sourceTree(source);
+  const auto again = iires::reg::similarityIcp(source, target, tree, Eigen::Matrix4d::Identity(), p, {}, &sourceTree);
+  EXPECT_EQ(again.T_target_source, r.T_target_source);
+  EXPECT_EQ(again.iterations, r.iterations);
+  EXPECT_THROW(iires::reg::similarityIcp(source, target, tree, Eigen::Matrix4d::Identity(), p, {}, &tree),
+               std::invalid_argument);
 }
 
 TEST(Icp, RigidKeepsUnitScaleAndTrimmedIgnoresExtraPoints) {

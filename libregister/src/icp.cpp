@@ -94,7 +94,7 @@ Eigen::Matrix4d umeyamaTransform(const std::vector<Eigen::Vector3d>& a, const st
 
 IcpResult similarityIcp(const std::vector<Eigen::Vector3d>& source, const std::vector<Eigen::Vector3d>& target,
                         const KnnIndex& targetIndex, const Eigen::Matrix4d& init, const IcpParams& params,
-                        const Execution& exec) {
+                        const Execution& exec, const KnnIndex* sourceIndex) {
   params.validate();
   if (source.size() < 3 || target.size() < 3) throw std::invalid_argument("ICP needs at least 3 points per cloud");
   const std::size_t n = source.size();
@@ -120,18 +120,20 @@ IcpResult similarityIcp(const std::vector<Eigen::Vector3d>& source, const std::v
   };
   // Reverse matches (target → source), for bidirectional mode: the target moved by T⁻¹ against a tree on
   // the source; distances are compared in target units (× scale).
-  std::unique_ptr<KnnIndex> sourceTree;
+  std::unique_ptr<KnnIndex> ownSourceTree;
+  if (sourceIndex && sourceIndex->size() != source.size())
+    throw std::invalid_argument("ICP: the source index is not of the source");
   const std::size_t m = target.size();
   std::size_t keepReverse = m;
   std::vector<std::int64_t> rmatch(params.bidirectional ? m : 0);
   std::vector<double> rd2(rmatch.size());
   std::vector<std::size_t> rorder(rmatch.size());
-  if (params.bidirectional) sourceTree = std::make_unique<KnnIndex>(source);
+  if (params.bidirectional && !sourceIndex) sourceIndex = (ownSourceTree = std::make_unique<KnnIndex>(source)).get();
   auto matchReverse = [&](const Eigen::Matrix4d& t) {
     const Eigen::Matrix4d inv = t.inverse();
     const Eigen::Matrix3d mi = inv.topLeftCorner<3, 3>();
     const Eigen::Vector3d ti = inv.topRightCorner<3, 1>();
-    parallelFor(m, exec.threads, [&](std::size_t i) { rmatch[i] = sourceTree->nearest(mi * target[i] + ti, &rd2[i]); });
+    parallelFor(m, exec.threads, [&](std::size_t i) { rmatch[i] = sourceIndex->nearest(mi * target[i] + ti, &rd2[i]); });
     const double reverseOverlap = params.reverseOverlap > 0.0 ? params.reverseOverlap : params.overlap;
     keepReverse = selectNearest(rd2, rorder, params, reverseOverlap, kRoundingFloor * radius);  // source units
   };

@@ -68,9 +68,11 @@ FractionalFit fractionalRmsd(const std::vector<double>& sortedD2, double minOver
 /// @param targetIndex a k-d tree over @p target
 /// @throws std::invalid_argument for bad parameters or fewer than 3 source points.
 /// @note Deterministic for any thread count (queries per point, then a serial solve).
+/// @param sourceIndex (optional) a k-d tree of @p source the caller already has, for the reverse matches of
+/// params.bidirectional (else one is built per call)
 IcpResult similarityIcp(const std::vector<Eigen::Vector3d>& source, const std::vector<Eigen::Vector3d>& target,
                         const KnnIndex& targetIndex, const Eigen::Matrix4d& init, const IcpParams& params,
-                        const Execution& exec = {});
+                        const Execution& exec = {}, const KnnIndex* sourceIndex = nullptr);
 
 /// @brief Closed-form similarity (or rigid) transform minimising Σ‖s·R·aᵢ + t − bᵢ‖² (Umeyama 1991).
 /// @throws std::invalid_argument when the sizes differ or fewer than 3 pairs are given.
