@@ -403,8 +403,9 @@ TEST(MeshRepair, RelaxNearBoundaryEvensTheRimBandAndKeepsTheRim) {
   for (int y = 0; y <= n; ++y)
     for (int x = 0; x <= n; ++x) {
       const std::size_t v = static_cast<std::size_t>(y * (n + 1) + x);
-      if (std::min({x, y, n - x, n - y}) != 1 && std::min({x, y, n - x, n - y}) != 2)
+      if (std::min({x, y, n - x, n - y}) != 1 && std::min({x, y, n - x, n - y}) != 2) {
         EXPECT_EQ(m.vertices[v], before.vertices[v]) << x << "," << y;  // the rim and the inside stay
+      }
       EXPECT_EQ(m.vertices[v].z(), 0.0);  // moves stay in the tangent plane
     }
   EXPECT_GE(quality(m).first, quality(before).first);
