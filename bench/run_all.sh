@@ -66,10 +66,11 @@ runners() {
 run_benchmarks() {
   # The benchmarks' own set-up: the libraries' packages, Open3D (the peers) and gnuplot (the plots).
   bash scripts/setup.sh --install-only
-  bash scripts/install_packages.sh libopen3d-dev gnuplot-nox
+  bash scripts/install_packages.sh libopen3d-dev gnuplot-nox python3-scipy
   bash datasets/fetch.sh >/dev/null
   bash datasets/fetch.sh $(printf 'meshes/%s.off ' $corpus) points_3/building.ply points_3/before_upsample.xyz >/dev/null
-  cmake -S . -B build-bench -DCMAKE_BUILD_TYPE=Release -DIIRES_BUILD_TESTS=OFF -DIIRES_BUILD_BENCH=ON >/dev/null
+  cmake -S . -B build-bench -DCMAKE_BUILD_TYPE=Release -DIIRES_BUILD_TESTS=OFF -DIIRES_BUILD_BENCH=ON -DIIRES_WITH_MPI=ON \
+    >/dev/null
   cmake --build build-bench -j"$(nproc)" >/dev/null
   local load_start started commit
   load_start=$(cut -d' ' -f1-3 /proc/loadavg)

@@ -1,21 +1,31 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: GPL-3.0-or-later
-# title: Out-of-core tiled resampling vs in-memory (issue 23)
+# title: Out-of-core tiled resampling vs in-memory, one process and MPI ranks (issue 23)
 # about: `bench/run_tiled.sh quick|full`: a scene from `build-bench/bin/scene_generator` (ground, walls, scaled corpus
-# about: models) resampled by `iires-resample` once in memory (`--tiles off`) and once tiled (`--tiles auto --memory GB`),
-# about: 2 threads; peak RSS from GNU time. quick: 1M → 200k at 0.3 GB; full: 5M → 1M at 1.5 GB and 50M → 5M at 4 GB.
-# columns: case mode memory_gb tiles output_points wall_s peak_rss_mb cv survey_s spill_s colours_s
+# about: models) resampled by `iires-resample` in memory (`--tiles off`, 2 threads), tiled (`--tiles auto --memory GB`,
+# about: 1 process × 2 threads) and by `mpirun -n 2 iires-resample-mpi` (2 ranks × 1 thread, same tiles); peak RSS
+# about: from GNU time (the largest process). vs = wall time / the in-memory run's (tiled) or the one-process tiled
+# about: run's (mpi); same = the MPI output is byte-identical to the one-process output. Seams: output points within
+# about: 2 mean spacings of an interior tile face against the rest (cv of the nearest-neighbour distance), and the
+# about: smallest nearest-neighbour distance between points of different tiles / the mean. quick: 1M → 200k at 0.3 GB;
+# about: full: 5M → 1M at 1.5 GB and 50M → 5M at 4 GB (one process only: no in-memory run, it would not fit the
+# about: budget, and no MPI run, which would take as long again).
+# columns: case mode ranks memory_gb tiles output_points wall_s vs peak_rss_mb cv seam_cv interior_cv min_across survey_s spill_s colours_s same
 # One row per line, keys:
 #   case=<input>_to_<N>        the run: input points → N output points
-#   mode=memory|tiled          iires-resample --tiles off, or --tiles auto --memory <GB>
+#   mode=memory|tiled|mpi      --tiles off; --tiles auto --memory <GB>; the same under mpirun
+#   ranks=<R> threads=<T>      processes and threads per process
 #   memory_gb=<GB>             the --memory budget of a tiled run (0 for in-memory)
 #   input_points=<n> n=<N>     input and requested points
 #   output_points=<n>          points written (must equal N)
 #   tiles=<x>x<y>x<z>          the tile grid (1x1x1 in memory)
-#   wall_s=<s>                 wall time of the whole command (read, resample, write)
+#   wall_s=<s> vs=<ratio>      wall time of the whole command (read, resample, write) and its ratio (see above)
 #   peak_rss_mb=<MB>           peak resident memory (/usr/bin/time -f %M)
 #   cv=<cv> mean_spacing=<l>   nearest-neighbour spacing of the output (coefficient of variation, mean)
-#   survey_s spill_s colours_s stage times of the tiled run: pass 1, pass 2, all colour rounds
+#   seam_cv interior_cv min_across   see above (tiled and mpi rows)
+#   survey_s spill_s colours_s stage times of the tiled run (rank 0): pass 1, pass 2, all colour rounds
+#   busy_s=<a/b/..>            per rank: the summed wall time of the tiles it resampled
+#   same=yes|no                mpi rows: output identical to the one-process tiled run's
 # Usage: bench/run_tiled.sh [quick|full]   (env: BUILD=build-bench WORK=/tmp/iires_tiled_bench THREADS=2)
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -27,45 +37,106 @@ mkdir -p "$WORK"
 # The corpus models scene_generator scatters over the scene (its default --models).
 bash datasets/fetch.sh meshes/bunny00.off meshes/fandisk.off meshes/armadillo.off meshes/eight.off meshes/anchor.off \
   meshes/knot1.off > /dev/null
+# The seam figures need numpy and scipy of Debian's python (/usr/bin/python3).
+# mpirun as root and with more ranks than cores (OpenMPI's switches; other MPIs ignore them).
+export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
 
-run() {  # points N mode memory_gb extra-args...
-  local POINTS=$1 N=$2 mode=$3 gb=$4
-  shift 4
+# One run; prints its row. Its output stays in $WORK/out_<mode>.ply until the case is done.
+run() {  # points N mode memory_gb reference_wall extra-args...
+  local POINTS=$1 N=$2 mode=$3 gb=$4 ref=$5
+  shift 5
   local SCENE="$WORK/scene_${POINTS}.ply"
   [ -f "$SCENE" ] || "$BUILD/bin/scene_generator" --points "$POINTS" --out "$SCENE" > /dev/null
-  local report="$WORK/report_$mode.json" out="$WORK/out_$mode.ply"
+  local report="$WORK/report_$mode.json" out="$WORK/out_$mode.ply" ranks=1 threads=$THREADS
+  local -a cmd=("$BUILD/bin/iires-resample")
+  if [ "$mode" = mpi ]; then
+    ranks=2 threads=1
+    cmd=(mpirun -n "$ranks" "$BUILD/bin/iires-resample-mpi")
+  fi
   local start end
   start=$(date +%s.%N)
-  /usr/bin/time -f %M -o "$WORK/rss_$mode" "$BUILD/bin/iires-resample" "$SCENE" "$out" -n "$N" --threads "$THREADS" \
+  /usr/bin/time -f %M -o "$WORK/rss_$mode" "${cmd[@]}" "$SCENE" "$out" -n "$N" --threads "$threads" \
     --report "$report" -q "$@"
   end=$(date +%s.%N)
-  python3 - "$report" "$mode" "$gb" "$POINTS" "$N" "$(cat "$WORK/rss_$mode")" "$start" "$end" <<'PY'
+  local same=""
+  [ "$mode" = mpi ] && { cmp -s "$out" "$WORK/out_tiled.ply" && same=yes || same=no; }
+  /usr/bin/python3 - "$report" "$out" "$mode" "$gb" "$POINTS" "$N" "$(cat "$WORK/rss_$mode")" "$start" "$end" "$ranks" \
+    "$threads" "$ref" "$same" <<'PY'
 import json, sys
+import numpy as np
+from scipy.spatial import cKDTree
+
+def read_ply_xyz(path):
+    """x, y, z of a binary little-endian PLY whose vertex properties are all float or double."""
+    with open(path, "rb") as f:
+        types, count = [], 0
+        while True:
+            line = f.readline().decode("ascii").split()
+            if line[:2] == ["element", "vertex"]:
+                count = int(line[2])
+            elif line and line[0] == "property":
+                types.append((line[2], {"double": "<f8", "float": "<f4"}[line[1]]))
+            elif line == ["end_header"]:
+                break
+        v = np.fromfile(f, dtype=np.dtype(types), count=count)
+    return np.stack([v["x"], v["y"], v["z"]], axis=1).astype(np.float64)
+
+def cv(d):
+    return d.std() / d.mean()
+
 r = json.load(open(sys.argv[1]))
-mode, gb, points, n, rss, start, end = sys.argv[2:]
+out, mode, gb, points, n, rss, start, end, ranks, threads, ref, same = sys.argv[2:]
+wall = float(end) - float(start)
 grid = r.get("grid", [1, 1, 1])
-t = r["time_s"]
-row = {"case": f"{points}_to_{n}", "mode": mode, "memory_gb": gb, "input_points": r["input_points"], "n": n,
-       "output_points": r["output_points"], "tiles": "x".join(map(str, grid)),
-       "wall_s": f"{float(end) - float(start):.1f}", "peak_rss_mb": int(rss) // 1024,
+row = {"case": f"{points}_to_{n}", "mode": mode, "ranks": ranks, "threads": threads, "memory_gb": gb,
+       "input_points": r["input_points"], "n": n, "output_points": r["output_points"],
+       "tiles": "x".join(map(str, grid)), "wall_s": f"{wall:.1f}",
+       "vs": f"{wall / float(ref):.2f}" if float(ref) > 0 else "", "peak_rss_mb": int(rss) // 1024,
        "cv": f"{r['spacing']['cv']:.4f}", "mean_spacing": f"{r['spacing']['mean']:.5g}"}
-if mode == "tiled":
+if mode != "memory":
+    p = read_ply_xyz(out)
+    d, nn = cKDTree(p).query(p, k=2)
+    d, nn = d[:, 1], nn[:, 1]
+    origin, size = np.array(r["origin"]), r["tile_size"]
+    cell = np.floor((p - origin) / size).astype(np.int64)
+    seam = np.full(len(p), np.inf)  # distance to the nearest interior tile face
+    for a in range(3):
+        for k in range(1, grid[a]):
+            seam = np.minimum(seam, np.abs(p[:, a] - (origin[a] + k * size)))
+    near = seam < 2 * d.mean()
+    across = np.any(cell != cell[nn], axis=1)
+    row["seam_cv"] = f"{cv(d[near]):.4f}" if near.any() else ""
+    row["interior_cv"] = f"{cv(d[~near]):.4f}"
+    row["min_across"] = f"{d[across].min() / d.mean():.3f}" if across.any() else ""
+    t = r["time_s"]
     row["survey_s"] = f"{t['survey']:.1f}"
     row["spill_s"] = f"{t['spill']:.1f}"
     row["colours_s"] = f"{sum(v for k, v in t.items() if k.startswith('colour_')):.1f}"
+    busy = [0.0] * int(ranks)
+    for tile in r["tiles"]:
+        busy[tile["rank"]] += tile["time_s"]
+    row["busy_s"] = "/".join(f"{b:.1f}" for b in busy)
+if same:
+    row["same"] = same
 print(" ".join(f"{k}={v}" for k, v in row.items()))
 PY
-  rm -f "$out"
+  awk -v s="$start" -v e="$end" 'BEGIN { print e - s }' > "$WORK/wall_$mode"
 }
 
-# One case: the in-memory run (skipped where it would not fit this machine) and the tiled run.
-case_pair() {  # points N memory_gb in_memory(0|1)
-  [ "$4" = 1 ] && run "$1" "$2" memory 0 --tiles off
-  run "$1" "$2" tiled "$3" --tiles auto --memory "$3" --scratch "$WORK"
+# One case: the in-memory run (skipped where it would not fit this machine), the tiled run and the MPI run.
+case_runs() {  # points N memory_gb in_memory(0|1) mpi(0|1)
+  local ref=0
+  if [ "$4" = 1 ]; then
+    run "$1" "$2" memory 0 0 --tiles off
+    ref=$(cat "$WORK/wall_memory")
+  fi
+  run "$1" "$2" tiled "$3" "$ref" --tiles auto --memory "$3" --scratch "$WORK"
+  [ "$5" = 1 ] && run "$1" "$2" mpi "$3" "$(cat "$WORK/wall_tiled")" --tiles auto --memory "$3" --scratch "$WORK"
+  rm -f "$WORK"/out_*.ply
 }
 if [ "$MODE" = full ]; then
-  case_pair 5000000 1000000 1.5 1
-  case_pair 50000000 5000000 4 0
+  case_runs 5000000 1000000 1.5 1 1
+  case_runs 50000000 5000000 4 0 0
 else
-  case_pair 1000000 200000 0.3 1
+  case_runs 1000000 200000 0.3 1 1
 fi

@@ -257,8 +257,12 @@ TEST(Tiled, MpiRanksWriteTheBytesOfTheSingleProcessRun) {
   ASSERT_EQ(iires::readPointCloud(dir + "/one.ply").size(), 800u);
   for (int ranks : {2, 3}) {
     const std::string out = "ranks" + std::to_string(ranks);
-    ASSERT_EQ(iires::test::run(mpiexec(ranks) + command(mpiTool, out) + " --threads 1", &output), 0) << output;
+    const std::string report = dir + "/" + out + ".json";
+    ASSERT_EQ(iires::test::run(mpiexec(ranks) + command(mpiTool, out) + " --threads 1 --report " + report, &output),
+              0) << output;
     EXPECT_TRUE(iires::test::readText(dir + "/" + out + ".ply") == one) << ranks << " ranks: other bytes";
+    // the report names the rank that resampled each tile: rank 1 had its share
+    EXPECT_NE(iires::test::readText(report).find("\"rank\": 1,"), std::string::npos) << iires::test::readText(report);
   }
   EXPECT_TRUE(emptyDirectory(scratch)) << "spill files left behind";
   // A failure stops every rank with a message and exit code 2, and nothing is written.

@@ -288,9 +288,10 @@ void TileRun::finish(std::size_t t, TileOutcome outcome) {
   if (outcome.rest != 0) reports[outcome.heir].quota += outcome.rest;
 }
 
-/// The run's tiles in order: reports, and the survey sample assigned to tiles and regions.
+/// The run's tiles in order: reports (with each tile's owner), and the survey sample assigned to tiles and regions.
 TileRun prepareRun(const ResampleParams& params, int threads, const TileGrid& grid, const Survey& s,
-                   const TileSpill& files, std::size_t capacity, double contextReach) {
+                   const TileSpill& files, const std::vector<int>& owner, std::size_t capacity,
+                   double contextReach) {
   TileRun run{params, threads, grid, s, files, capacity, contextReach,
               std::vector<std::vector<std::size_t>>(grid.count()), {}, {}, {}, {}};
   run.sampleTile.resize(s.sample.size());
@@ -309,6 +310,7 @@ TileRun prepareRun(const ResampleParams& params, int threads, const TileGrid& gr
     r.index = t;
     r.cell = grid.cell(t);
     r.colour = grid.colour(t);
+    r.rank = owner[t];
     r.points = files.count(t);
     r.share = share[t];
     r.quota = static_cast<long long>(share[t]);
@@ -370,13 +372,15 @@ std::string TiledResult::toJson() const {
   j.beginObject(true).member("input_points", inputPoints).member("requested_points", requestedPoints);
   j.member("output_points", cloud.size());
   j.key("grid").beginArray().value(grid[0]).value(grid[1]).value(grid[2]).endArray();
+  j.key("origin").beginArray().value(origin.x()).value(origin.y()).value(origin.z()).endArray();
   j.member("tile_size", tileSize).member("margin", margin).member("target_spacing", spacing).member("area", area);
   j.member("tile_capacity", tileCapacity);
   j.key("spacing").beginObject().member("mean", spacingStats.mean).member("min", spacingStats.min);
   j.member("max", spacingStats.max).member("cv", spacingStats.cv).endObject();
   j.key("tiles").beginArray();
   for (const TileReport& t : tiles) {
-    j.beginObject().member("index", t.index).member("colour", t.colour).member("points", t.points);
+    j.beginObject().member("index", t.index).member("colour", t.colour).member("rank", t.rank);
+    j.member("points", t.points);
     j.member("loaded_points", t.loadedPoints).member("share", t.share).member("quota", t.quota);
     j.member("requested", t.requested).member("context", t.context).member("produced", t.produced);
     j.member("time_s", t.seconds).endObject();
@@ -439,7 +443,7 @@ TiledResult resampleTiled(const std::string& path, const ResampleParams& params,
   });
   clock.end("spill", t0);
 
-  TileRun run = prepareRun(params, exec.threads, grid, s, *files, result.tileCapacity, 2 * result.spacing);
+  TileRun run = prepareRun(params, exec.threads, grid, s, *files, owner, result.tileCapacity, 2 * result.spacing);
   runColours(run, *files, owner, executor, exec, result.timings);
 
   t0 = clock.begin("assemble");

@@ -37,6 +37,7 @@ struct TileReport {
   std::size_t index = 0;              ///< position in the grid (x fastest)
   std::array<int, 3> cell{};          ///< grid cell
   int colour = 0;                     ///< colour class (processing round)
+  int rank = 0;                       ///< the process that resampled it (0 in a single-process run)
   std::size_t points = 0;             ///< input points in its core and margin
   std::size_t loadedPoints = 0;       ///< of them resampled (a deterministic subset when over the capacity)
   std::size_t share = 0;              ///< N_t: its share of N by surface area
