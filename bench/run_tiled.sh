@@ -7,10 +7,11 @@
 # about: from GNU time (the largest process). vs = wall time / the in-memory run's (tiled) or the one-process tiled
 # about: run's (mpi); same = the MPI output is byte-identical to the one-process output. Seams: output points within
 # about: 2 mean spacings of an interior tile face against the rest (cv of the nearest-neighbour distance), and the
-# about: smallest nearest-neighbour distance between points of different tiles / the mean. quick: 1M → 200k at 0.3 GB;
+# about: smallest nearest-neighbour distance between points of different tiles / the mean, and the share of points
+# about: whose nearest neighbour is nearer than half the mean, near seams and elsewhere. quick: 1M → 200k at 0.3 GB;
 # about: full: 5M → 1M at 1.5 GB and 50M → 5M at 4 GB (one process only: no in-memory run, it would not fit the
 # about: budget, and no MPI run, which would take as long again).
-# columns: case mode ranks memory_gb tiles output_points wall_s vs peak_rss_mb cv seam_cv interior_cv min_across survey_s spill_s colours_s same
+# columns: case mode ranks memory_gb tiles output_points wall_s vs peak_rss_mb cv seam_cv interior_cv min_across close_seam_pct close_interior_pct survey_s spill_s colours_s same
 # One row per line, keys:
 #   case=<input>_to_<N>        the run: input points → N output points
 #   mode=memory|tiled|mpi      --tiles off; --tiles auto --memory <GB>; the same under mpirun
@@ -23,6 +24,9 @@
 #   peak_rss_mb=<MB>           peak resident memory (/usr/bin/time -f %M)
 #   cv=<cv> mean_spacing=<l>   nearest-neighbour spacing of the output (coefficient of variation, mean)
 #   seam_cv interior_cv min_across   see above (tiled and mpi rows)
+#   close_seam_pct close_interior_pct  % of the points within 2 spacings of a seam (and of the others) whose
+#                              nearest neighbour is nearer than half the mean spacing (the in-memory run has such
+#                              pairs too: two sheets of a model closer than the spacing each keep their samples)
 #   survey_s spill_s colours_s stage times of the tiled run (rank 0): pass 1, pass 2, all colour rounds
 #   busy_s=<a/b/..>            per rank: the summed wall time of the tiles it resampled
 #   same=yes|no                mpi rows: output identical to the one-process tiled run's
@@ -93,10 +97,12 @@ row = {"case": f"{points}_to_{n}", "mode": mode, "ranks": ranks, "threads": thre
        "tiles": "x".join(map(str, grid)), "wall_s": f"{wall:.1f}",
        "vs": f"{wall / float(ref):.2f}" if float(ref) > 0 else "", "peak_rss_mb": int(rss) // 1024,
        "cv": f"{r['spacing']['cv']:.4f}", "mean_spacing": f"{r['spacing']['mean']:.5g}"}
+p = read_ply_xyz(out)
+d, nn = cKDTree(p).query(p, k=2)
+d, nn = d[:, 1], nn[:, 1]
+close = d < 0.5 * d.mean()  # near pairs: a seam's duplicates, or two sheets closer than the spacing
+row["close_interior_pct"] = f"{100 * close.mean():.3f}"  # in memory: all points
 if mode != "memory":
-    p = read_ply_xyz(out)
-    d, nn = cKDTree(p).query(p, k=2)
-    d, nn = d[:, 1], nn[:, 1]
     origin, size = np.array(r["origin"]), r["tile_size"]
     cell = np.floor((p - origin) / size).astype(np.int64)
     seam = np.full(len(p), np.inf)  # distance to the nearest interior tile face
@@ -108,6 +114,8 @@ if mode != "memory":
     row["seam_cv"] = f"{cv(d[near]):.4f}" if near.any() else ""
     row["interior_cv"] = f"{cv(d[~near]):.4f}"
     row["min_across"] = f"{d[across].min() / d.mean():.3f}" if across.any() else ""
+    row["close_seam_pct"] = f"{100 * close[near].mean():.3f}" if near.any() else ""
+    row["close_interior_pct"] = f"{100 * close[~near].mean():.3f}"
     t = r["time_s"]
     row["survey_s"] = f"{t['survey']:.1f}"
     row["spill_s"] = f"{t['spill']:.1f}"
