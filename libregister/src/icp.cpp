@@ -8,6 +8,8 @@
 #include <memory>
 #include <numeric>
 #include <stdexcept>
+#include <tuple>
+#include <utility>
 
 #include "iires/detail/parallel.hpp"
 #include "iires/register/hausdorff.hpp"
@@ -63,9 +65,13 @@ std::size_t selectNearest(const std::vector<double>& d2, std::vector<std::size_t
   std::iota(order.begin(), order.end(), std::size_t{0});
   auto closer = [&](std::size_t x, std::size_t y) { return d2[x] < d2[y] || (d2[x] == d2[y] && x < y); };
   if (p.estimateOverlap) {
-    std::sort(order.begin(), order.end(), closer);
+    // (distance, index) pairs sort faster than indices compared through d2, in the same order
+    thread_local std::vector<std::pair<double, std::size_t>> byDistance;
+    byDistance.resize(n);
+    for (std::size_t i = 0; i < n; ++i) byDistance[i] = {d2[i], i};
+    std::sort(byDistance.begin(), byDistance.end());
     std::vector<double> sorted(n);
-    for (std::size_t i = 0; i < n; ++i) sorted[i] = d2[order[i]];
+    for (std::size_t i = 0; i < n; ++i) std::tie(sorted[i], order[i]) = byDistance[i];
     const std::size_t keep = fractionalRmsd(sorted, p.minOverlap, p.overlapExponent, floor).keep;
     std::sort(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(keep));
     return keep;

@@ -6,7 +6,9 @@
 /// (O(1) per query), used by the coarse pass of the rotation search.
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstddef>
 #include <vector>
 
@@ -40,8 +42,33 @@ class DistanceField {
   DistanceField(const std::vector<Eigen::Vector3d>& points, const KnnIndex& index,
                 const DistanceFieldParams& params = {});
 
-  /// @brief The approximate distance from @p query to the nearest point of the set (≥ 0).
-  double distance(const Eigen::Vector3d& query) const;
+  /// @brief The approximate distance from @p query to the nearest point of the set (≥ 0). Inline: the coarse
+  /// rotation search asks it for every point of every pose.
+  double distance(const Eigen::Vector3d& query) const {
+    // Outside the box: the distance to the box plus the field at the nearest point of the box (the exact
+    // distance is at most that, by the triangle inequality).
+    double outside2 = 0;
+    std::size_t cell[3];
+    double f[3];
+    for (int a = 0; a < 3; ++a) {
+      const double q = std::clamp(query[a], origin_[a], far_[a]);
+      outside2 += (query[a] - q) * (query[a] - q);
+      const double u = (q - origin_[a]) * inverseCell_;  // ≥ 0: truncation is the floor
+      cell[a] = std::min(static_cast<std::size_t>(u), nodes_[a] - 2);
+      f[a] = u - static_cast<double>(cell[a]);
+    }
+    const std::size_t sx = 1, sy = nodes_[0], sz = nodes_[0] * nodes_[1];
+    const float* v = values_.data() + cell[0] * sx + cell[1] * sy + cell[2] * sz;
+    // Trilinear interpolation: along x on the four edges, then y, then z.
+    const double x00 = v[0] + f[0] * (v[sx] - v[0]);
+    const double x10 = v[sy] + f[0] * (v[sy + sx] - v[sy]);
+    const double x01 = v[sz] + f[0] * (v[sz + sx] - v[sz]);
+    const double x11 = v[sz + sy] + f[0] * (v[sz + sy + sx] - v[sz + sy]);
+    const double y0 = x00 + f[1] * (x10 - x00);
+    const double y1 = x01 + f[1] * (x11 - x01);
+    const double inside = y0 + f[2] * (y1 - y0);
+    return outside2 > 0 ? inside + std::sqrt(outside2) : inside;
+  }
   /// @brief distance()², the quantity a k-d tree's nearest() reports.
   double squaredDistance(const Eigen::Vector3d& query) const {
     const double d = distance(query);
