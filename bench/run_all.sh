@@ -54,7 +54,8 @@ hippo() {
 }
 
 # Benchmarks with a runner of their own: bench/run_NAME.sh MODE prints key=value lines; its comment lines
-# "# title: ", "# about: " and "# columns: " give its section's heading, text and table columns.
+# "# title: ", "# about: " and "# columns: " give its section's heading, text and table columns, "# plot: " the
+# plots it wrote.
 runners() {
   for runner in bench/run_*.sh; do
     name=$(basename "$runner" .sh); name=${name#run_}
@@ -312,6 +313,10 @@ EOF
     echo
     if [ -s "$out/$name.txt" ]; then table "$(sed -n 's/^# columns: //p' "$runner")" "$out/$name.txt"
     else echo "Not measured in this run."; fi
+    # "# plot: FILE CAPTION": a plot the runner wrote to bench/results/FILE
+    sed -n 's/^# plot: //p' "$runner" | while read -r png caption; do
+      if [ -f "$out/$png" ]; then printf '\n![%s](bench/results/%s)\n' "$caption" "$png"; fi
+    done
   done
 } > "$tmp/BENCHMARKS.md"
 mv "$tmp/BENCHMARKS.md" BENCHMARKS.md

@@ -5,13 +5,20 @@
 # about: models) resampled by `iires-resample` in memory (`--tiles off`, 2 threads), tiled (`--tiles auto --memory GB`,
 # about: 1 process × 2 threads) and by `mpirun -n 2 iires-resample-mpi` (2 ranks × 1 thread, same tiles); peak RSS
 # about: from GNU time (the largest process). vs = wall time / the in-memory run's (tiled) or the one-process tiled
-# about: run's (mpi); same = the MPI output is byte-identical to the one-process output. Seams: output points within
-# about: 2 mean spacings of an interior tile face against the rest (cv of the nearest-neighbour distance), and the
-# about: smallest nearest-neighbour distance between points of different tiles / the mean, and the share of points
-# about: whose nearest neighbour is nearer than half the mean, near seams and elsewhere. quick: 1M → 200k at 0.3 GB;
-# about: full: 5M → 1M at 1.5 GB and 50M → 5M at 4 GB (one process only: no in-memory run, it would not fit the
-# about: budget, and no MPI run, which would take as long again).
-# columns: case mode ranks memory_gb tiles output_points wall_s vs peak_rss_mb cv seam_cv interior_cv min_across close_seam_pct close_interior_pct survey_s spill_s colours_s same
+# about: run's (mpi); same = the MPI output is byte-identical to the one-process output; busy = per rank, the summed
+# about: time of the tiles it resampled. Seams: the cv of the nearest-neighbour distance of the output points within 2
+# about: mean spacings of an interior tile face against the rest's; the smallest nearest-neighbour distance between
+# about: points of different tiles / the mean (min_across), the same over pairs offset along their sheet
+# about: (min_across_sheet: a seam's duplicates, not two sheets of a model closer than the spacing, which the
+# about: in-memory run keeps too); the % of points whose nearest neighbour is nearer than half the mean, near seams
+# about: and elsewhere (the scene's models stand on the ground, whose samples under a model's flat base are such
+# about: pairs in any run: min_across does not isolate the seams). quick: 1M → 200k at 0.3 GB. full: 5M → 1M at 1.5 GB (2 × 2 tiles, one per colour: a second
+# about: rank has nothing to do) and at 0.5 GB (several tiles per colour), 50M → 5M at 4 GB (one process: in memory
+# about: it would not fit the budget); then an estimate (mode=estimate, not measured) for 10⁹ → 10⁸ points on R ranks
+# about: of 2 threads from the 50M run's costs: every rank streams the input twice (survey, spill), the tiles' work
+# about: is shared evenly.
+# plot: tiled.png each tile's time against its points in the 50M-point run (full mode)
+# columns: case mode ranks memory_gb tiles output_points wall_s vs peak_rss_mb cv seam_cv interior_cv min_across min_across_sheet close_seam_pct close_interior_pct survey_s spill_s colours_s busy_s same
 # One row per line, keys:
 #   case=<input>_to_<N>        the run: input points → N output points
 #   mode=memory|tiled|mpi      --tiles off; --tiles auto --memory <GB>; the same under mpirun
@@ -24,6 +31,8 @@
 #   peak_rss_mb=<MB>           peak resident memory (/usr/bin/time -f %M)
 #   cv=<cv> mean_spacing=<l>   nearest-neighbour spacing of the output (coefficient of variation, mean)
 #   seam_cv interior_cv min_across   see above (tiled and mpi rows)
+#   min_across_sheet           min_across over the pairs whose offset lies mostly along their sheet (|n·(q − p)| <
+#                              |q − p| / 2): a seam's duplicates, not two sheets of a model closer than the spacing
 #   close_seam_pct close_interior_pct  % of the points within 2 spacings of a seam (and of the others) whose
 #                              nearest neighbour is nearer than half the mean spacing (the in-memory run has such
 #                              pairs too: two sheets of a model closer than the spacing each keep their samples)
@@ -70,8 +79,9 @@ import json, sys
 import numpy as np
 from scipy.spatial import cKDTree
 
-def read_ply_xyz(path):
-    """x, y, z of a binary little-endian PLY whose vertex properties are all float or double."""
+def read_ply_xyz(path, names=("x", "y", "z")):
+    """Three vertex properties (x, y, z) of a binary little-endian PLY whose vertex properties are all float or
+    double."""
     with open(path, "rb") as f:
         types, count = [], 0
         while True:
@@ -83,7 +93,7 @@ def read_ply_xyz(path):
             elif line == ["end_header"]:
                 break
         v = np.fromfile(f, dtype=np.dtype(types), count=count)
-    return np.stack([v["x"], v["y"], v["z"]], axis=1).astype(np.float64)
+    return np.stack([v[k] for k in names], axis=1).astype(np.float64)
 
 def cv(d):
     return d.std() / d.mean()
@@ -114,6 +124,13 @@ if mode != "memory":
     row["seam_cv"] = f"{cv(d[near]):.4f}" if near.any() else ""
     row["interior_cv"] = f"{cv(d[~near]):.4f}"
     row["min_across"] = f"{d[across].min() / d.mean():.3f}" if across.any() else ""
+    # the same over pairs on one sheet (their offset mostly along it, not along the normal): a seam's duplicates,
+    # not two sheets of a model closer than the spacing
+    nrm = read_ply_xyz(out, ("nx", "ny", "nz"))
+    gap = p[nn] - p
+    along = np.abs(np.einsum("ij,ij->i", nrm, gap)) < 0.5 * d
+    sheet = across & along
+    row["min_across_sheet"] = f"{d[sheet].min() / d.mean():.3f}" if sheet.any() else ""
     row["close_seam_pct"] = f"{100 * close[near].mean():.3f}" if near.any() else ""
     row["close_interior_pct"] = f"{100 * close[~near].mean():.3f}"
     t = r["time_s"]
@@ -142,9 +159,51 @@ case_runs() {  # points N memory_gb in_memory(0|1) mpi(0|1)
   [ "$5" = 1 ] && run "$1" "$2" mpi "$3" "$(cat "$WORK/wall_tiled")" --tiles auto --memory "$3" --scratch "$WORK"
   rm -f "$WORK"/out_*.ply
 }
+# An estimate, not a measurement: 10⁹ points → 10⁸ on R ranks of 2 threads, from a run's report: every rank
+# streams the whole input twice (survey and spill, scaled by the input size), and the tiles' resampling (the sum
+# of the measured tile times, 2 threads each, scaled by the input size) is shared evenly by the ranks, the colour
+# rounds' imbalance left out.
+estimate() {  # report of the measured run
+  /usr/bin/python3 - "$1" <<'PY'
+import json, sys
+r = json.load(open(sys.argv[1]))
+points, t = r["input_points"], r["time_s"]
+tiles = sum(tile["time_s"] for tile in r["tiles"])
+target = 10**9
+for ranks in (1, 16, 64, 256):
+    stream = (t["survey"] + t["spill"]) * target / points
+    work = tiles * target / points / ranks
+    print(f"case={target}_to_{target // 10} mode=estimate ranks={ranks} threads=2 wall_s={stream + work:.0f} "
+          f"survey_s={t['survey'] * target / points:.0f} spill_s={t['spill'] * target / points:.0f} "
+          f"colours_s={work:.0f}")
+PY
+}
+
+# The plot: each tile's resampling time against its points, from a run's report (the per-tile cost the estimate
+# scales).
+plot_tiles() {  # report png
+  /usr/bin/python3 -c 'import json, sys
+for t in json.load(open(sys.argv[1]))["tiles"]:
+    if t["loaded_points"]: print(t["loaded_points"], t["time_s"])' "$1" > "$WORK/tiles.dat"
+  gnuplot <<GP
+set terminal png size 900,560
+set output "$2"
+set xlabel "points resampled by the tile (core and margin)"
+set ylabel "tile time (s), 2 threads"
+set grid
+set key off
+plot "$WORK/tiles.dat" using 1:2 with points pointtype 7
+GP
+}
+
 if [ "$MODE" = full ]; then
   case_runs 5000000 1000000 1.5 1 1
+  # At 1.5 GB the 5M scene is 2 x 2 tiles, one per colour: a second rank has nothing to do. The ranks' scaling
+  # at a budget that gives each colour several tiles:
+  case_runs 5000000 1000000 0.5 0 1
   case_runs 50000000 5000000 4 0 0
+  estimate "$WORK/report_tiled.json"
+  plot_tiles "$WORK/report_tiled.json" bench/results/tiled.png
 else
   case_runs 1000000 200000 0.3 1 1
 fi
