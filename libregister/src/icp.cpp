@@ -62,8 +62,6 @@ std::size_t selectNearest(const std::vector<double>& d2, std::vector<std::size_t
                           double overlap, double floor) {
   const std::size_t n = d2.size();
   order.resize(n);
-  std::iota(order.begin(), order.end(), std::size_t{0});
-  auto closer = [&](std::size_t x, std::size_t y) { return d2[x] < d2[y] || (d2[x] == d2[y] && x < y); };
   if (p.estimateOverlap) {
     // (distance, index) pairs sort faster than indices compared through d2, in the same order
     thread_local std::vector<std::pair<double, std::size_t>> byDistance;
@@ -76,6 +74,8 @@ std::size_t selectNearest(const std::vector<double>& d2, std::vector<std::size_t
     std::sort(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(keep));
     return keep;
   }
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  auto closer = [&](std::size_t x, std::size_t y) { return d2[x] < d2[y] || (d2[x] == d2[y] && x < y); };
   const std::size_t keep = n - allowedOutliers(n, overlap);
   if (keep < n) {
     std::nth_element(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(keep - 1), order.end(), closer);
