@@ -3,6 +3,10 @@
 // is not bounded by memory: a ground plane with walls (open boxes standing on it, like buildings) and copies of
 // corpus models scattered, rotated about the vertical and scaled over it, sampled uniformly by area.
 //   scene_generator --points 50000000 --out scene.ply [--models bunny00,fandisk,...] [--copies 60] [--seed 1]
+//                   [--sink F]
+// --sink F sets each model F of its height into the ground and leaves out the points below it, as a scan sees an
+// object standing on the ground; 0 (the default) stands the models on it, a flat base then lying on the ground
+// (two coincident sheets, both sampled).
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -46,8 +50,10 @@ void addGroundAndWalls(std::vector<Triangle>& t, int buildings, std::mt19937_64&
   }
 }
 
-/// @p copies corpus models, each scaled to 2–8 units, rotated about z and set on the ground.
-void addModels(std::vector<Triangle>& t, const std::vector<std::string>& names, int copies, std::mt19937_64& rng) {
+/// @p copies corpus models, each scaled to 2–8 units, rotated about z and set on the ground, @p sink of its height
+/// below it.
+void addModels(std::vector<Triangle>& t, const std::vector<std::string>& names, int copies, double sink,
+               std::mt19937_64& rng) {
   std::vector<iires::TriangleMesh> meshes;
   for (const std::string& n : names) meshes.push_back(iires::readMesh(std::string(IIRES_BENCH_DATA_DIR) + "/meshes/" + n + ".off"));
   std::uniform_real_distribution<double> at(2, kGround - 2), size(2, 8), angle(0, 2 * M_PI);
@@ -60,7 +66,7 @@ void addModels(std::vector<Triangle>& t, const std::vector<std::string>& names, 
     const Vector3d base(at(rng), at(rng), 0);
     auto place = [&](const Vector3d& v) {
       Vector3d p = r * ((v - box.center()) * scale);
-      return Vector3d(p.x() + base.x(), p.y() + base.y(), p.z() + 0.5 * box.sizes().z() * scale);
+      return Vector3d(p.x() + base.x(), p.y() + base.y(), p.z() + (0.5 - sink) * box.sizes().z() * scale);
     };
     for (const Eigen::Vector3i& f : m.triangles)
       t.push_back({place(m.vertices[f[0]]), place(m.vertices[f[1]]), place(m.vertices[f[2]])});
@@ -74,6 +80,7 @@ int generate(int argc, char** argv) {
   std::string out = "scene.ply", models = "bunny00,fandisk,armadillo,eight,anchor,knot1";
   int copies = 60, buildings = 25;
   std::uint64_t seed = 1;
+  double sink = 0;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string key = argv[i], value = argv[i + 1];
     if (key == "--points") points = std::stoull(value);
@@ -82,6 +89,7 @@ int generate(int argc, char** argv) {
     else if (key == "--copies") copies = std::stoi(value);
     else if (key == "--buildings") buildings = std::stoi(value);
     else if (key == "--seed") seed = std::stoull(value);
+    else if (key == "--sink") sink = std::stod(value);
     else {
       std::fprintf(stderr, "scene_generator: unknown option %s\n", key.c_str());
       return 2;
@@ -90,7 +98,11 @@ int generate(int argc, char** argv) {
   std::mt19937_64 rng(seed);
   std::vector<Triangle> tris;
   addGroundAndWalls(tris, buildings, rng);
-  addModels(tris, iires::bench::split(models), copies, rng);
+  if (!(sink >= 0 && sink < 1)) {
+    std::fprintf(stderr, "scene_generator: --sink must lie in [0, 1)\n");
+    return 2;
+  }
+  addModels(tris, iires::bench::split(models), copies, sink, rng);
   std::vector<double> cdf;
   double total = 0;
   for (const Triangle& t : tris) cdf.push_back(total += 0.5 * (t.b - t.a).cross(t.c - t.a).norm());
@@ -105,7 +117,12 @@ int generate(int argc, char** argv) {
       const Triangle& t = tris[std::min(k, tris.size() - 1)];
       double a = u(rng), b = u(rng);
       if (a + b > 1) a = 1 - a, b = 1 - b;
-      chunk.points.push_back(t.a + a * (t.b - t.a) + b * (t.c - t.a));
+      const Vector3d p = t.a + a * (t.b - t.a) + b * (t.c - t.a);
+      if (sink > 0 && p.z() < 0) {  // below the ground (a sunk model): drawn again
+        --i;
+        continue;
+      }
+      chunk.points.push_back(p);
     }
     writer.write(chunk);
     done += m;
