@@ -262,17 +262,41 @@ TEST(Sheets, NoisyFoldedSheetsThinnedStayApart) {
   EXPECT_LE(off, near / 40);
 }
 
-// A thin closed plate (a box 3 spacings thick, every face sampled): before, 457 of 540 points between the faces.
-// Uniform on each face: the samples' 1-rings do not reach across the plate (the intrinsic rule's gap test; before
-// it the faces' samples interleaved, cv 0.11–0.14 over seeds and shares off by up to 5 %).
-TEST(Sheets, ThinPlateResampledApart) {
-  const Outcome o = resampleCase(test::thinPlate(40000, 3.0, 0.0, 8), 600);
+// Closed shapes with two surfaces a few spacings apart, resampled to 600 points: every point on a surface, the
+// right number of components, each surface's share of the points within shareBound of its share of the area,
+// cv ≤ 0.08.
+// - A thin closed plate (a box 3 spacings thick, every face sampled): before, 457 of 540 points between the
+//   faces; uniform on each face since the samples' 1-rings do not reach across the plate (the intrinsic rule's
+//   gap test; before it the faces' samples interleaved, cv 0.11–0.14 over seeds and shares off by up to 5 %).
+// - Two spheres 2.5 spacings apart: two components (before: one, the geodesic graph linked them).
+// - A sphere inside a sphere 3 spacings apart (both facing outwards, so the normals' sign cannot tell them
+//   apart): before, 505 of 600 points between them.
+struct TwoSurfaces {
+  const char* name;
+  ThinCase (*make)(std::size_t, double, double, std::uint64_t);
+  double gapSpacings;
+  std::uint64_t seed;
+  std::size_t components;
+  double shareBound;
+};
+
+class TwoSurfacesApart : public ::testing::TestWithParam<TwoSurfaces> {};
+
+TEST_P(TwoSurfacesApart, ResampledApart) {
+  const TwoSurfaces& c = GetParam();
+  const Outcome o = resampleCase(c.make(40000, c.gapSpacings, 0.0, c.seed), 600);
   EXPECT_EQ(o.points, 600u);
   EXPECT_EQ(o.off, 0u);
-  EXPECT_EQ(o.components, 1u);
-  EXPECT_LE(o.shareError, 0.04);
+  EXPECT_EQ(o.components, c.components);
+  EXPECT_LE(o.shareError, c.shareBound);
   EXPECT_LE(o.cv, 0.08);
 }
+
+INSTANTIATE_TEST_SUITE_P(Sheets, TwoSurfacesApart,
+                         ::testing::Values(TwoSurfaces{"ThinPlate", test::thinPlate, 3.0, 8, 1, 0.04},
+                                           TwoSurfaces{"TwoSpheres", test::twoSpheres, 2.5, 9, 2, 0.02},
+                                           TwoSurfaces{"NestedSpheres", test::nestedSpheres, 3.0, 10, 2, 0.02}),
+                         [](const ::testing::TestParamInfo<TwoSurfaces>& info) { return info.param.name; });
 
 // Noisy sheets six spacings apart, where the sheet rule's rows reach the other sheet at a few points only: the
 // denoising reads the rule's oriented normals, so its bilateral weights drop the sheet facing the other way
@@ -283,25 +307,6 @@ TEST(Sheets, NoisySheetsSixSpacingsApartStayInPlace) {
   EXPECT_EQ(o.points, 2000u);
   EXPECT_EQ(o.off, 0u);
   EXPECT_LE(o.shareError, 0.02);
-}
-
-// Two spheres 2.5 spacings apart: two components (before: one, the geodesic graph linked them).
-TEST(Sheets, TwoSpheresStayTwo) {
-  const Outcome o = resampleCase(test::twoSpheres(40000, 2.5, 0.0, 9), 600);
-  EXPECT_EQ(o.off, 0u);
-  EXPECT_EQ(o.components, 2u);
-  EXPECT_LE(o.shareError, 0.02);
-  EXPECT_LE(o.cv, 0.08);
-}
-
-// A sphere inside a sphere 3 spacings apart (both facing outwards, so the normals' sign cannot tell them apart):
-// before, 505 of 600 points between them.
-TEST(Sheets, NestedSpheresResampledApart) {
-  const Outcome o = resampleCase(test::nestedSpheres(40000, 3.0, 0.0, 10), 600);
-  EXPECT_EQ(o.off, 0u);
-  EXPECT_EQ(o.components, 2u);
-  EXPECT_LE(o.shareError, 0.02);
-  EXPECT_LE(o.cv, 0.08);
 }
 
 // `--denoise-only` (preprocess() alone) on noisy folded sheets keeps them apart: mean distance to the truth
