@@ -59,7 +59,8 @@ PreprocessResult preprocess(const PointCloud& input, const PreprocessParams& par
       withNormals->points = input.points;
       result.sheets = separateSheets(input.points, *own, withNormals->normals, sp, exec,
                                      input.hasNormals() ? &input.normals : nullptr);
-      dp.keepGivenNormals = input.hasNormals();  // the rule's estimates give way to the denoiser's fits
+      // the rule's estimates give way to the denoiser's fits (as in resample())
+      dp.keepGivenNormals = dp.keepGivenNormals && input.hasNormals();
       cloud = &*withNormals;
     }
   }
