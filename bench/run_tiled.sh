@@ -79,9 +79,9 @@ import json, sys
 import numpy as np
 from scipy.spatial import cKDTree
 
-def read_ply_xyz(path, names=("x", "y", "z")):
-    """Three vertex properties (x, y, z) of a binary little-endian PLY whose vertex properties are all float or
-    double."""
+def read_ply(path):
+    """Positions and normals (None without them) of a binary little-endian PLY whose vertex properties are all
+    float or double."""
     with open(path, "rb") as f:
         types, count = [], 0
         while True:
@@ -93,7 +93,8 @@ def read_ply_xyz(path, names=("x", "y", "z")):
             elif line == ["end_header"]:
                 break
         v = np.fromfile(f, dtype=np.dtype(types), count=count)
-    return np.stack([v[k] for k in names], axis=1).astype(np.float64)
+    columns = lambda names: np.stack([v[k] for k in names], axis=1).astype(np.float64)
+    return columns("xyz"), columns(("nx", "ny", "nz")) if "nx" in v.dtype.names else None
 
 def cv(d):
     return d.std() / d.mean()
@@ -107,7 +108,7 @@ row = {"case": f"{points}_to_{n}", "mode": mode, "ranks": ranks, "threads": thre
        "tiles": "x".join(map(str, grid)), "wall_s": f"{wall:.1f}",
        "vs": f"{wall / float(ref):.2f}" if float(ref) > 0 else "", "peak_rss_mb": int(rss) // 1024,
        "cv": f"{r['spacing']['cv']:.4f}", "mean_spacing": f"{r['spacing']['mean']:.5g}"}
-p = read_ply_xyz(out)
+p, nrm = read_ply(out)
 d, nn = cKDTree(p).query(p, k=2)
 d, nn = d[:, 1], nn[:, 1]
 close = d < 0.5 * d.mean()  # near pairs: a seam's duplicates, or two sheets closer than the spacing
@@ -126,7 +127,6 @@ if mode != "memory":
     row["min_across"] = f"{d[across].min() / d.mean():.3f}" if across.any() else ""
     # the same over pairs on one sheet (their offset mostly along it, not along the normal): a seam's duplicates,
     # not two sheets of a model closer than the spacing
-    nrm = read_ply_xyz(out, ("nx", "ny", "nz"))
     gap = p[nn] - p
     along = np.abs(np.einsum("ij,ij->i", nrm, gap)) < 0.5 * d
     sheet = across & along

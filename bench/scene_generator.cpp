@@ -112,17 +112,13 @@ int generate(int argc, char** argv) {
   for (std::size_t done = 0; done < points;) {
     chunk.points.clear();
     const std::size_t m = std::min<std::size_t>(1u << 20, points - done);
-    for (std::size_t i = 0; i < m; ++i) {
+    while (chunk.points.size() < m) {
       const auto k = static_cast<std::size_t>(std::lower_bound(cdf.begin(), cdf.end(), u(rng) * total) - cdf.begin());
       const Triangle& t = tris[std::min(k, tris.size() - 1)];
       double a = u(rng), b = u(rng);
       if (a + b > 1) a = 1 - a, b = 1 - b;
-      const Vector3d p = t.a + a * (t.b - t.a) + b * (t.c - t.a);
-      if (sink > 0 && p.z() < 0) {  // below the ground (a sunk model): drawn again
-        --i;
-        continue;
-      }
-      chunk.points.push_back(p);
+      chunk.points.push_back(t.a + a * (t.b - t.a) + b * (t.c - t.a));
+      if (sink > 0 && chunk.points.back().z() < 0) chunk.points.pop_back();  // below the ground: drawn again
     }
     writer.write(chunk);
     done += m;
