@@ -203,9 +203,11 @@ Eigen::Vector3d MlsSurface::project(const Eigen::Vector3d& x0, Eigen::Vector3d* 
       const double invH = 1.0 / h;
       thread_local std::vector<double> qu, qv, qz;
       qu.resize(found), qv.resize(found), qz.resize(found);
+      double lowest = std::numeric_limits<double>::max(), highest = std::numeric_limits<double>::lowest();
       for (std::size_t j = 0; j < found; ++j) {
         const Eigen::Vector3d d = (points_[idx[j]] - a) * invH;
         qu[j] = d.dot(u), qv[j] = d.dot(v), qz[j] = d.dot(normal);
+        if (w[j] > 0) lowest = std::min(lowest, qz[j]), highest = std::max(highest, qz[j]);
       }
       Eigen::Matrix<double, 6, 6> ata;
       Eigen::Matrix<double, 6, 1> atb;
@@ -219,7 +221,16 @@ Eigen::Vector3d MlsSurface::project(const Eigen::Vector3d& x0, Eigen::Vector3d* 
       if (c.allFinite()) {
         const Eigen::Vector3d d = (x - a) / h;
         const double pu = d.dot(u), pv = d.dot(v);
-        const double f = c[0] + c[1] * pu + c[2] * pv + c[3] * pu * pu + c[4] * pu * pv + c[5] * pv * pv;
+        // A quadric fit across a crease (the rim of a plate a few spacings thick) bulges past the crease's corner,
+        // off the surface. The kernel resolves no curvature radius below its width h, and a surface of radius h
+        // rises above (or dips below) a point at distance r by at most r²/2h: the height is kept within that
+        // of every point it was fit to (r: the nearest one, in the tangent plane; units of h here).
+        double r2 = std::numeric_limits<double>::max();
+        for (std::size_t j = 0; j < found; ++j)
+          if (w[j] > 0) r2 = std::min(r2, (qu[j] - pu) * (qu[j] - pu) + (qv[j] - pv) * (qv[j] - pv));
+        const double slack = 0.5 * r2;
+        const double f = std::clamp(c[0] + c[1] * pu + c[2] * pv + c[3] * pu * pu + c[4] * pu * pv + c[5] * pv * pv,
+                                    lowest - slack, highest + slack);
         const double fu = c[1] + 2 * c[3] * pu + c[4] * pv, fv = c[2] + c[4] * pu + 2 * c[5] * pv;
         // An ill-conditioned fit (a query far outside its few neighbours) can put the height field kernel
         // widths away from the plane: the plane's projection is the safe answer there.
