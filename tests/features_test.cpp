@@ -91,6 +91,18 @@ TEST(Features, SharpMeshEdgesOfACube) {
   for (const Segment& s : edges) EXPECT_NEAR((s[1] - s[0]).norm(), 1.0, 1e-12);
 }
 
+// The same cube as a triangle soup (every face with its own copies of its corners): the same 12 edges, not none.
+TEST(Features, SharpMeshEdgesOfATriangleSoup) {
+  const iires::TriangleMesh cube = cubeMesh();
+  iires::TriangleMesh soup;
+  for (const auto& t : cube.triangles) {
+    const int base = static_cast<int>(soup.vertices.size());
+    for (int v = 0; v < 3; ++v) soup.vertices.push_back(cube.vertices[t[v]]);
+    soup.triangles.emplace_back(base, base + 1, base + 2);
+  }
+  EXPECT_EQ(iires::sharpMeshEdges(soup, 45.0).size(), 12u);
+}
+
 TEST(Features, ScoreAgainstBruteForce) {
   const auto cloud = iires::test::sphereCloud(2000, 1.0, 3);
   const std::vector<Segment> edges = {{Eigen::Vector3d(-2, 0, 0), Eigen::Vector3d(2, 0, 0)},

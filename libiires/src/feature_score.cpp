@@ -38,6 +38,14 @@ double segmentDistance(const Eigen::Vector3d& p, const Segment& s) {
 }  // namespace
 
 std::vector<Segment> sharpMeshEdges(const TriangleMesh& mesh, double minAngleDegrees, bool includeBoundary) {
+  // Vertices at the same position are one vertex: a triangle soup (each face with its own copies, as some CAD
+  // exports are) has the same edges as the mesh it was welded from.
+  std::map<std::tuple<double, double, double>, int> weld;
+  std::vector<int> id(mesh.vertices.size());
+  for (std::size_t v = 0; v < mesh.vertices.size(); ++v) {
+    const Eigen::Vector3d& p = mesh.vertices[v];
+    id[v] = weld.emplace(std::make_tuple(p.x(), p.y(), p.z()), static_cast<int>(v)).first->second;
+  }
   std::map<std::pair<int, int>, std::vector<std::size_t>> faces;
   std::vector<Eigen::Vector3d> fn(mesh.triangles.size());
   for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
@@ -45,7 +53,7 @@ std::vector<Segment> sharpMeshEdges(const TriangleMesh& mesh, double minAngleDeg
     fn[f] = (mesh.vertices[t[1]] - mesh.vertices[t[0]]).cross(mesh.vertices[t[2]] - mesh.vertices[t[0]]);
     if (fn[f].norm() > 0) fn[f].normalize();
     for (int e = 0; e < 3; ++e) {
-      const int a = t[e], b = t[(e + 1) % 3];
+      const int a = id[t[e]], b = id[t[(e + 1) % 3]];
       faces[{std::min(a, b), std::max(a, b)}].push_back(f);
     }
   }
