@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #include "iires/register/icp.hpp"
+#include "iires/register/open_side.hpp"
 
 #include <gtest/gtest.h>
 
@@ -132,6 +133,31 @@ TEST(Icp, RigidKeepsUnitScaleAndTrimmedIgnoresExtraPoints) {
   EXPECT_EQ(r.matched, 960u);
   p.overlap = 0.0;
   EXPECT_THROW(p.validate(), std::invalid_argument);
+}
+
+// The source covers more of the blob than the target (the target cut at z = 0.1, the source at z = −0.35), all
+// pairs kept: each source point past the target's cut finds the target's rim as its nearest point, and those
+// pairs shrink the scale (by 5 % here) and shift the fit 0.17 towards the cut. Dropping the pairs matched to a rim point
+// (Turk & Levoy's boundary rule) leaves only true counterparts.
+TEST(Icp, PairsMatchedToTheOtherCloudsRimAreLeftOut) {
+  Points target, source;
+  for (const auto& p : blob(6000))
+    if (p.z() > 0.1) target.push_back(p);
+  for (const auto& p : blob(4000))
+    if (p.z() > -0.35) source.push_back(p);
+  const iires::KnnIndex tree(target);
+  const iires::reg::OpenSide rim = iires::reg::openSide(target, tree);
+  ASSERT_GT(rim.rimPoints, 0u);
+  const Eigen::Matrix4d init = similarity(1.03, Eigen::Matrix3d::Identity(), Eigen::Vector3d(0.02, 0, 0));
+  const auto plain = iires::reg::similarityIcp(source, target, tree, init, {});
+  const auto ruled = iires::reg::similarityIcp(source, target, tree, init, {}, {}, nullptr, {nullptr, &rim.rim});
+  EXPECT_GT(std::abs(plain.scale - 1.0), 0.02);  // the bias the rule removes
+  EXPECT_NEAR(ruled.scale, 1.0, 0.005);
+  const Eigen::Vector3d shift = ruled.T_target_source.topRightCorner<3, 1>();
+  EXPECT_LT(shift.norm(), 0.01);
+  const std::vector<std::uint8_t> wrong(target.size() + 1, 0);
+  EXPECT_THROW(iires::reg::similarityIcp(source, target, tree, init, {}, {}, nullptr, {nullptr, &wrong}),
+               std::invalid_argument);
 }
 
 }  // namespace

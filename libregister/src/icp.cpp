@@ -100,7 +100,7 @@ Eigen::Matrix4d umeyamaTransform(const std::vector<Eigen::Vector3d>& a, const st
 
 IcpResult similarityIcp(const std::vector<Eigen::Vector3d>& source, const std::vector<Eigen::Vector3d>& target,
                         const KnnIndex& targetIndex, const Eigen::Matrix4d& init, const IcpParams& params,
-                        const Execution& exec, const KnnIndex* sourceIndex) {
+                        const Execution& exec, const KnnIndex* sourceIndex, const IcpRims& rims) {
   params.validate();
   if (source.size() < 3 || target.size() < 3) throw std::invalid_argument("ICP needs at least 3 points per cloud");
   const std::size_t n = source.size();
@@ -130,6 +130,8 @@ IcpResult similarityIcp(const std::vector<Eigen::Vector3d>& source, const std::v
   if (sourceIndex && sourceIndex->size() != source.size())
     throw std::invalid_argument("ICP: the source index is not of the source");
   const std::size_t m = target.size();
+  if ((rims.source && rims.source->size() != source.size()) || (rims.target && rims.target->size() != m))
+    throw std::invalid_argument("ICP: rim flags of another cloud");
   std::size_t keepReverse = m;
   std::vector<std::int64_t> rmatch(params.bidirectional ? m : 0);
   std::vector<double> rd2(rmatch.size());
@@ -145,18 +147,24 @@ IcpResult similarityIcp(const std::vector<Eigen::Vector3d>& source, const std::v
   };
   for (int it = 0; it < params.maxIterations; ++it) {
     matchAll(T);
-    a.resize(keep);
-    b.resize(keep);
-    for (std::size_t j = 0; j < keep; ++j) {
-      a[j] = source[order[j]];
-      b[j] = target[static_cast<std::size_t>(match[order[j]])];
-    }
-    if (params.bidirectional) {
-      matchReverse(T);
-      for (std::size_t j = 0; j < keepReverse; ++j) {
-        a.push_back(source[static_cast<std::size_t>(rmatch[rorder[j]])]);
+    if (params.bidirectional) matchReverse(T);
+    // The kept pairs, those matched to a rim point left out (all of them when that leaves fewer than 3).
+    for (const bool boundaryRule : {true, false}) {
+      a.clear();
+      b.clear();
+      for (std::size_t j = 0; j < keep; ++j) {
+        const auto t = static_cast<std::size_t>(match[order[j]]);
+        if (boundaryRule && rims.target && (*rims.target)[t]) continue;
+        a.push_back(source[order[j]]);
+        b.push_back(target[t]);
+      }
+      for (std::size_t j = 0; params.bidirectional && j < keepReverse; ++j) {
+        const auto s = static_cast<std::size_t>(rmatch[rorder[j]]);
+        if (boundaryRule && rims.source && (*rims.source)[s]) continue;
+        a.push_back(source[s]);
         b.push_back(target[rorder[j]]);
       }
+      if (a.size() >= 3) break;
     }
     const Eigen::Matrix4d next = umeyamaTransform(a, b, params.estimateScale);
     result.iterations = it + 1;

@@ -53,7 +53,8 @@ OpenSide openSide(const std::vector<Eigen::Vector3d>& points, const KnnIndex& in
   if (index.size() != points.size()) throw std::invalid_argument("open side: the index is not of these points");
   OpenSide out;
   if (points.size() < params.neighbours) return out;
-  std::vector<char> rim(points.size(), 0);
+  std::vector<std::uint8_t>& rim = out.rim;
+  rim.assign(points.size(), 0);
   const double minGap = params.minGapDeg * M_PI / 180.0;
   parallelFor(points.size(), threads, [&](std::size_t i) {
     thread_local std::vector<std::uint32_t> idx;

@@ -189,7 +189,7 @@ struct Refined {
 /// unknown one is estimated in every iteration (fractional RMSD, both directions).
 Refined refineCandidates(const std::vector<Eigen::Vector3d>& ns, const std::vector<Eigen::Vector3d>& nt,
                          const KnnIndex& sourceTree, const KnnIndex& targetTree, const RotationSearchResult& found,
-                         const RegistrationParams& params, const Execution& exec) {
+                         const IcpRims& rims, const RegistrationParams& params, const Execution& exec) {
   IcpParams ip = params.icp;
   const bool estimate = params.overlap == 0.0;
   ip.overlap = estimate ? 1.0 : params.overlap;
@@ -209,7 +209,7 @@ Refined refineCandidates(const std::vector<Eigen::Vector3d>& ns, const std::vect
     Eigen::Matrix4d init = Eigen::Matrix4d::Identity();
     init.topLeftCorner<3, 3>() = found.candidates[c].scale * found.candidates[c].rotation;
     init.topRightCorner<3, 1>() = found.candidates[c].translation;
-    out.icp[c] = similarityIcp(ns, nt, targetTree, init, screen, exec, &sourceTree);
+    out.icp[c] = similarityIcp(ns, nt, targetTree, init, screen, exec, &sourceTree, rims);
     out.score[c] = scorePose(ns, nt, targetTree, out.icp[c].T_target_source, params, exec.threads);
   }
   for (std::size_t c = 1; c < nc; ++c)
@@ -217,7 +217,7 @@ Refined refineCandidates(const std::vector<Eigen::Vector3d>& ns, const std::vect
   IcpResult& best = out.icp[out.best];
   if (!best.converged) {  // the winner continues to convergence
     const int screened = best.iterations;
-    best = similarityIcp(ns, nt, targetTree, best.T_target_source, ip, exec, &sourceTree);
+    best = similarityIcp(ns, nt, targetTree, best.T_target_source, ip, exec, &sourceTree, rims);
     best.iterations += screened;
   }
   if (estimate) {
@@ -230,7 +230,7 @@ Refined refineCandidates(const std::vector<Eigen::Vector3d>& ns, const std::vect
     polish.reverseOverlap = kPolishShare * best.reverseOverlap;
     const int before = best.iterations;
     const double forward = best.overlap, reverse = best.reverseOverlap;
-    best = similarityIcp(ns, nt, targetTree, best.T_target_source, polish, exec, &sourceTree);
+    best = similarityIcp(ns, nt, targetTree, best.T_target_source, polish, exec, &sourceTree, rims);
     best.iterations += before;
     best.overlap = forward;
     best.reverseOverlap = reverse;
@@ -457,7 +457,9 @@ RegistrationResult registerClouds(const PointCloud& sourceIn, const PointCloud& 
 
   // 5. ICP from each of the best few candidates, ranked by the symmetric score.
   t = Clock::now();
-  const Refined refined = refineCandidates(ns, nt, sourceTree, targetTree, found, params, exec);
+  const auto flags = [](const OpenSide& side) { return side.rim.empty() ? nullptr : &side.rim; };
+  const Refined refined =
+      refineCandidates(ns, nt, sourceTree, targetTree, found, {flags(sourceSide), flags(targetSide)}, params, exec);
   stage("icp", t);
 
   // 6. The result, the runner-up and the ambiguity flags; back to original units.

@@ -6,6 +6,7 @@
 
 #include <Eigen/Core>
 #include <cstddef>
+#include <cstdint>
 #include <vector>
 
 #include "iires/execution.hpp"
@@ -32,6 +33,12 @@ struct IcpParams {
 
   /// @throws std::invalid_argument when a field is out of range.
   void validate() const;
+};
+
+/// @brief Per-point rim flags of the source and the target (OpenSide::rim), either may be null.
+struct IcpRims {
+  const std::vector<std::uint8_t>* source = nullptr;
+  const std::vector<std::uint8_t>* target = nullptr;
 };
 
 /// @brief What similarityIcp() found.
@@ -70,9 +77,13 @@ FractionalFit fractionalRmsd(const std::vector<double>& sortedD2, double minOver
 /// @note Deterministic for any thread count (queries per point, then a serial solve).
 /// @param sourceIndex (optional) a k-d tree of @p source the caller already has, for the reverse matches of
 /// params.bidirectional (else one is built per call)
+/// @param rims (optional) the clouds' rim flags (open_side.hpp): a pair whose nearest point lies on the other
+/// cloud's rim is left out of the fit (Turk & Levoy's boundary rule): a point beyond that cloud's cut finds the
+/// rim as its nearest point, not its counterpart, and such pairs pull the fit's scale and position towards the
+/// cut. Without any pair left, all are used.
 IcpResult similarityIcp(const std::vector<Eigen::Vector3d>& source, const std::vector<Eigen::Vector3d>& target,
                         const KnnIndex& targetIndex, const Eigen::Matrix4d& init, const IcpParams& params,
-                        const Execution& exec = {}, const KnnIndex* sourceIndex = nullptr);
+                        const Execution& exec = {}, const KnnIndex* sourceIndex = nullptr, const IcpRims& rims = {});
 
 /// @brief Closed-form similarity (or rigid) transform minimising Σ‖s·R·aᵢ + t − bᵢ‖² (Umeyama 1991).
 /// @throws std::invalid_argument when the sizes differ or fewer than 3 pairs are given.

@@ -8,6 +8,7 @@
 
 #include <Eigen/Core>
 #include <cstddef>
+#include <cstdint>
 #include <vector>
 
 #include "iires/knn.hpp"
@@ -31,6 +32,7 @@ struct OpenSide {
   /// Unit vector from the centroid of all points to the centroid of the rim points; zero without rim points
   /// (a closed surface) or when the two centroids coincide
   Eigen::Vector3d direction = Eigen::Vector3d::Zero();
+  std::vector<std::uint8_t> rim;  ///< per point: 1 when it passed the boundary test (empty: too few points)
 };
 
 /// @brief The rim points of @p points (an evenly spaced sampling of a surface) and their direction.
