@@ -80,7 +80,7 @@ FractionalFit fractionalRmsd(const std::vector<double>& sortedD2, double minOver
 /// @param rims (optional) the clouds' rim flags (open_side.hpp): a pair whose nearest point lies on the other
 /// cloud's rim is left out of the fit (Turk & Levoy's boundary rule): a point beyond that cloud's cut finds the
 /// rim as its nearest point, not its counterpart, and such pairs pull the fit's scale and position towards the
-/// cut. Without any pair left, all are used.
+/// cut. When fewer than 3 pairs would be left, all are used.
 IcpResult similarityIcp(const std::vector<Eigen::Vector3d>& source, const std::vector<Eigen::Vector3d>& target,
                         const KnnIndex& targetIndex, const Eigen::Matrix4d& init, const IcpParams& params,
                         const Execution& exec = {}, const KnnIndex* sourceIndex = nullptr, const IcpRims& rims = {});
