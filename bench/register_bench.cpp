@@ -6,7 +6,9 @@
 // N(0, (0.33·l)²) along the normal (l = the clean cloud's mean nearest-neighbour spacing); the source is put
 // under a random rotation (uniform on SO(3)), a scale in [0.2, 5] (log-uniform) and a translation of 1–3
 // object diagonals. Partial scans: --cut F cuts the share F of the source off by a random plane, --target-cut F
-// the share F of the target by another random plane (both clouds partial, different parts missing);
+// the share F of the target by another random plane (both clouds partial, different parts missing); --halves B
+// makes source and target the two sides of one random plane sharing a band of the share B (two scans from
+// opposite sides: each holds (1 + B)/2 of the surface);
 // --outliers F adds F·n points spread uniformly over each cloud's bounding box grown by 10 %. iires runs at its
 // defaults (no overlap hint) unless --overlap gives one. Success (DESIGN §7): rotation error < 5°, error of
 // the mapped source centroid < 2 % of the target's diagonal, scale error < 2 %; the surface criterion (mean
@@ -17,7 +19,7 @@
 // Prints key=value lines, one per model and method, and a summary per method.
 // time_s is wall time per pair, cpu_s the process's user + system CPU time per pair (all threads; on a shared
 // machine the honest measure of work). For iires the mean wall time of each stage is printed too.
-//   register_bench [--models bunny00,armadillo,...] [--trials N] [--first-trial K] [--cut F] [--target-cut F]
+//   register_bench [--models bunny00,armadillo,...] [--trials N] [--first-trial K] [--cut F] [--target-cut F] [--halves B]
 //                  [--partial (= --cut 0.25)] [--outliers F] [--overlap F] [--symmetric knot1,...] [--seed S]
 //                  [--threads T] [--methods iires,iires-euler,o3d-fpfh,o3d-fpfh-norm,o3d-icp]
 //                  [--source-count N] [--target-count N] [--samples M] [--so3-count K] [--thin F] [--icp-candidates C]
@@ -35,6 +37,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <fstream>
 #include <functional>
 #include <iostream>
 #include <map>
@@ -77,14 +80,19 @@ struct Model {
   iires::PointCloud points;  // point-set models (kitten): points with normals
 };
 
+/// A corpus mesh (meshes/NAME.off) or a real scan with normals (points_3/NAME.xyz or .ply: kitten, hippo1, ...).
 Model loadModel(const std::string& name) {
   Model m;
   m.name = name;
-  if (name == "kitten") {
-    m.points = iires::readPointCloud(std::string(IIRES_DATA_DIR) + "/points_3/kitten.xyz");
-  } else {
-    m.mesh = iires::readMesh(std::string(IIRES_DATA_DIR) + "/meshes/" + name + ".off");
+  const std::string data = std::string(IIRES_DATA_DIR) + "/";
+  for (const char* ext : {".xyz", ".ply"}) {
+    const std::string path = data + "points_3/" + name + ext;
+    if (!std::ifstream(path)) continue;
+    m.points = iires::readPointCloud(path);
+    if (!m.points.hasNormals()) throw std::invalid_argument(path + ": the noise model needs normals");
+    return m;
   }
+  m.mesh = iires::readMesh(data + "meshes/" + name + ".off");
   return m;
 }
 
@@ -139,6 +147,27 @@ iires::PointCloud cutByPlane(const iires::PointCloud& c, double share, std::mt19
   for (std::size_t i = 0; i < h.size(); ++i)
     if (h[i] < sorted[k]) kept.points.push_back(c.points[i]);
   return kept;
+}
+
+/// The two sides of one random plane sharing a band: @p source keeps the points below the plane's
+/// (1 + band)/2 quantile, @p target those above its (1 − band)/2 quantile (quantiles of each cloud's own points),
+/// so each keeps (1 + band)/2 of the surface and the two share the band (two scans from opposite sides).
+void halvesByPlane(iires::PointCloud& source, iires::PointCloud& target, double band, std::mt19937_64& rng) {
+  std::normal_distribution<double> g(0, 1);
+  const Vec n = Vec(g(rng), g(rng), g(rng)).normalized();
+  auto keepSide = [&](iires::PointCloud& c, double share, bool below) {
+    std::vector<double> h;
+    for (const auto& p : c.points) h.push_back(p.dot(n));
+    std::vector<double> sorted = h;
+    const auto k = std::min(sorted.size() - 1, static_cast<std::size_t>(share * static_cast<double>(sorted.size())));
+    std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(k), sorted.end());
+    iires::PointCloud kept;
+    for (std::size_t i = 0; i < h.size(); ++i)
+      if (below ? h[i] < sorted[k] : h[i] >= sorted[k]) kept.points.push_back(c.points[i]);
+    c = std::move(kept);
+  };
+  keepSide(source, 0.5 * (1 + band), true);
+  keepSide(target, 0.5 * (1 - band), false);
 }
 
 /// @p c plus share·n points uniform in its bounding box grown by 10 % of the diagonal on each side.
@@ -318,6 +347,7 @@ struct Options {
   int trials = 50, firstTrial = 0, threads = 0;
   bool verbose = false;
   double cut = 0, targetCut = 0, outliers = 0, overlapHint = 0;  // 0 = no cut / no outliers / no hint
+  double halves = -1;  // ≥ 0: the two sides of one plane sharing this band (--halves)
   std::vector<std::string> symmetric = {"knot1"};
   std::uint64_t seed = 1;
   std::size_t sourceCount = 5000, targetCount = 30000;
@@ -405,12 +435,14 @@ Options parseOptions(int argc, char** argv) {
     else if (a == "--partial") o.cut = 0.25;
     else if (a == "--cut") o.cut = std::stod(next());
     else if (a == "--target-cut") o.targetCut = std::stod(next());
+    else if (a == "--halves") o.halves = std::stod(next());
     else if (a == "--outliers") o.outliers = std::stod(next());
     else if (a == "--overlap") o.overlapHint = std::stod(next());
     else if (a == "--symmetric") o.symmetric = split(next());
     else if (a == "--verbose") o.verbose = true;
     else throw std::invalid_argument("unknown argument " + a);
   }
+  if (o.halves > 1) throw std::invalid_argument("--halves: the shared band is a share of the surface, at most 1");
   return o;
 }
 
@@ -433,6 +465,7 @@ Trial makeTrial(const Model& model, const std::string& name, int trial, const Op
   const iires::PointCloud whole = src;
   if (o.cut > 0) src = cutByPlane(src, o.cut, rng);
   if (o.targetCut > 0) t.target = cutByPlane(t.target, o.targetCut, rng);
+  if (o.halves >= 0) halvesByPlane(src, t.target, o.halves, rng);
   const std::size_t sourceSurfacePoints = src.size();
   addOutliers(src, o.outliers, rng);
   addOutliers(t.target, o.outliers, rng);
@@ -511,9 +544,9 @@ int main(int argc, char** argv) {
     std::cerr << ex.what() << "\n";
     return 2;
   }
-  const bool partial = o.cut > 0 || o.targetCut > 0;
-  std::printf("config cut=%.3f target_cut=%.3f outliers=%.3f overlap_hint=%.3f\n", o.cut, o.targetCut, o.outliers,
-              o.overlapHint);
+  const bool partial = o.cut > 0 || o.targetCut > 0 || o.halves >= 0;
+  std::printf("config cut=%.3f target_cut=%.3f halves=%.3f outliers=%.3f overlap_hint=%.3f\n", o.cut, o.targetCut,
+              o.halves, o.outliers, o.overlapHint);
   open3d::utility::SetVerbosityLevel(open3d::utility::VerbosityLevel::Error);
   std::map<std::string, Tally> overall;
   for (const auto& name : o.models) {
