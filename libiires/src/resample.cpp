@@ -126,13 +126,12 @@ std::vector<Eigen::Vector3d> creaseNormals(const PointCloud& cloud, const Resamp
 
 /// The samples `--sharp-edges` holds: the feature chains sampled at edgeRatio × the output spacing (coarser when
 /// they would take over half of N) and put exactly on the creases; sets featurePoints and featureSamples (how
-/// many of them fit beside the caller's fixed samples). The crease fits read creaseNormals() where it has some.
-std::vector<Eigen::Vector3d> creaseSamples(const PointCloud& working, double area, const ResampleParams& params,
-                                           const PreprocessParams& pp, const Execution& exec, ResampleResult& result) {
-  PointCloud plain;
-  plain.normals = creaseNormals(working, params, pp, result.preprocessing, exec);
-  if (!plain.normals.empty()) plain.points = working.points;
-  const PointCloud& cloud = plain.normals.empty() ? working : plain;
+/// many of them fit beside the caller's fixed samples). @p normals (optional) replace the cloud's for the crease
+/// fits (creaseNormals()).
+std::vector<Eigen::Vector3d> creaseSamples(PointCloud cloud, std::vector<Eigen::Vector3d> normals, double area,
+                                           const ResampleParams& params, const Execution& exec,
+                                           ResampleResult& result) {
+  if (!normals.empty()) cloud.normals = std::move(normals);
   const FeatureParams& fp = params.features;
   const FeatureResult features = detectFeatures(cloud, fp, exec);
   const double l0 = std::sqrt(2.0 * area / (std::sqrt(3.0) * static_cast<double>(params.targetCount)));
@@ -296,6 +295,7 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params, const Ex
   pp.sheets = params.intrinsic;
   const bool sheets = params.intrinsic && cloud.size() > static_cast<std::size_t>(sp.pcaNeighbours);
   std::vector<std::uint8_t> nearSheets;  // per point of the final working cloud (the MLS surface's gate)
+  std::vector<Eigen::Vector3d> featureNormals;  // creaseNormals()
   // Normals the sheet rule estimates give way to the denoiser's fits on a clean input; given ones are kept.
   pp.denoise.keepGivenNormals = pp.denoise.keepGivenNormals && cloud.hasNormals();
   if (sheets) nearSheets = sheetRule(cloud, *neighbours, sp, exec, clock, result);
@@ -312,6 +312,7 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params, const Ex
       if (sheets) nearSheets = refilter(cloud, index, neighbours, tableK, laterK, sp, exec);
     }
     result.preprocessing.cloud = {};
+    featureNormals = creaseNormals(cloud, params, pp, result.preprocessing, exec);
     clock.end("preprocess", t);
   }
   // The geodesic graph builds a k-d tree of these (Z-ordered) points as well and hands it to the surface: one
@@ -365,7 +366,8 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params, const Ex
   ResampleParams local = params;  // sharp edges add fixed samples
   if (params.sharpEdges) {
     t = clock.begin("features");
-    const std::vector<Eigen::Vector3d> onEdges = creaseSamples(cloud, surface->area(), params, pp, exec, result);
+    const std::vector<Eigen::Vector3d> onEdges =
+        creaseSamples(cloud, std::move(featureNormals), surface->area(), params, exec, result);
     local.fixedSamples.insert(local.fixedSamples.end(), onEdges.begin(),
                               onEdges.begin() + static_cast<long>(result.featureSamples));
     clock.end("features", t);
