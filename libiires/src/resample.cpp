@@ -109,29 +109,11 @@ PointCloud workingCloud(PointCloud cloud, const ResampleParams& params, const Ex
   return select(cloud, mortonOrder(cloud.points, exec.threads));
 }
 
-/// The normals the crease detection reads on a clean input whose normals were estimated: the denoiser's plain
-/// fits (one sweep without its bilateral term, oriented over the graph). The pipeline's own normals there are
-/// bilateral fits weighted by the sheet rule's estimates, which are blended across a crease, and blend the fits
-/// too: joint's creases were found 0.69 output spacings from the nearest sample instead of 0.46. Empty otherwise.
-std::vector<Eigen::Vector3d> creaseNormals(const PointCloud& cloud, const ResampleParams& params,
-                                           const PreprocessParams& pp, const PreprocessResult& done,
-                                           const Execution& exec) {
-  if (!params.sharpEdges || !done.cleanInput || pp.denoise.keepGivenNormals) return {};
-  DenoiseParams dp = pp.denoise;
-  dp.iterations = 0;  // the fits only, positions kept
-  PointCloud bare;
-  bare.points = cloud.points;
-  return denoise(bare, dp, exec).cloud.normals;
-}
-
 /// The samples `--sharp-edges` holds: the feature chains sampled at edgeRatio × the output spacing (coarser when
 /// they would take over half of N) and put exactly on the creases; sets featurePoints and featureSamples (how
-/// many of them fit beside the caller's fixed samples). @p normals (optional) replace the cloud's for the crease
-/// fits (creaseNormals()).
-std::vector<Eigen::Vector3d> creaseSamples(PointCloud cloud, std::vector<Eigen::Vector3d> normals, double area,
-                                           const ResampleParams& params, const Execution& exec,
-                                           ResampleResult& result) {
-  if (!normals.empty()) cloud.normals = std::move(normals);
+/// many of them fit beside the caller's fixed samples).
+std::vector<Eigen::Vector3d> creaseSamples(const PointCloud& cloud, double area, const ResampleParams& params,
+                                           const Execution& exec, ResampleResult& result) {
   const FeatureParams& fp = params.features;
   const FeatureResult features = detectFeatures(cloud, fp, exec);
   const double l0 = std::sqrt(2.0 * area / (std::sqrt(3.0) * static_cast<double>(params.targetCount)));
@@ -295,7 +277,6 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params, const Ex
   pp.sheets = params.intrinsic;
   const bool sheets = params.intrinsic && cloud.size() > static_cast<std::size_t>(sp.pcaNeighbours);
   std::vector<std::uint8_t> nearSheets;  // per point of the final working cloud (the MLS surface's gate)
-  std::vector<Eigen::Vector3d> featureNormals;  // creaseNormals()
   // Normals the sheet rule estimates give way to the denoiser's fits on a clean input; given ones are kept.
   pp.denoise.keepGivenNormals = pp.denoise.keepGivenNormals && cloud.hasNormals();
   if (sheets) nearSheets = sheetRule(cloud, *neighbours, sp, exec, clock, result);
@@ -312,7 +293,6 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params, const Ex
       if (sheets) nearSheets = refilter(cloud, index, neighbours, tableK, laterK, sp, exec);
     }
     result.preprocessing.cloud = {};
-    featureNormals = creaseNormals(cloud, params, pp, result.preprocessing, exec);
     clock.end("preprocess", t);
   }
   // The geodesic graph builds a k-d tree of these (Z-ordered) points as well and hands it to the surface: one
@@ -366,8 +346,7 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params, const Ex
   ResampleParams local = params;  // sharp edges add fixed samples
   if (params.sharpEdges) {
     t = clock.begin("features");
-    const std::vector<Eigen::Vector3d> onEdges =
-        creaseSamples(cloud, std::move(featureNormals), surface->area(), params, exec, result);
+    const std::vector<Eigen::Vector3d> onEdges = creaseSamples(cloud, surface->area(), params, exec, result);
     local.fixedSamples.insert(local.fixedSamples.end(), onEdges.begin(),
                               onEdges.begin() + static_cast<long>(result.featureSamples));
     clock.end("features", t);
