@@ -134,40 +134,38 @@ Cloud transformed(const Cloud& p, const Eigen::Matrix4d& T) {
   return out;
 }
 
-/// The points of @p c on the kept side of a random plane that cuts off the share @p share of them.
-iires::PointCloud cutByPlane(const iires::PointCloud& c, double share, std::mt19937_64& rng) {
+/// A random plane normal (uniform on the sphere).
+Vec randomNormal(std::mt19937_64& rng) {
   std::normal_distribution<double> g(0, 1);
-  const Vec n = Vec(g(rng), g(rng), g(rng)).normalized();
+  return Vec(g(rng), g(rng), g(rng)).normalized();
+}
+
+/// The points of @p c below (or, @p below false, above) the plane with normal @p n through the quantile @p share of
+/// their heights along it: the share @p share of them (or 1 − share).
+iires::PointCloud sideOfPlane(const iires::PointCloud& c, const Vec& n, double share, bool below) {
   std::vector<double> h;
   for (const auto& p : c.points) h.push_back(p.dot(n));
   std::vector<double> sorted = h;
-  const std::size_t k = std::min(sorted.size() - 1, static_cast<std::size_t>((1.0 - share) * sorted.size()));
+  const auto k = std::min(sorted.size() - 1, static_cast<std::size_t>(share * static_cast<double>(sorted.size())));
   std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(k), sorted.end());
   iires::PointCloud kept;
   for (std::size_t i = 0; i < h.size(); ++i)
-    if (h[i] < sorted[k]) kept.points.push_back(c.points[i]);
+    if (below ? h[i] < sorted[k] : h[i] >= sorted[k]) kept.points.push_back(c.points[i]);
   return kept;
+}
+
+/// The points of @p c on the kept side of a random plane that cuts off the share @p share of them.
+iires::PointCloud cutByPlane(const iires::PointCloud& c, double share, std::mt19937_64& rng) {
+  return sideOfPlane(c, randomNormal(rng), 1.0 - share, true);
 }
 
 /// The two sides of one random plane sharing a band: @p source keeps the points below the plane's
 /// (1 + band)/2 quantile, @p target those above its (1 − band)/2 quantile (quantiles of each cloud's own points),
 /// so each keeps (1 + band)/2 of the surface and the two share the band (two scans from opposite sides).
 void halvesByPlane(iires::PointCloud& source, iires::PointCloud& target, double band, std::mt19937_64& rng) {
-  std::normal_distribution<double> g(0, 1);
-  const Vec n = Vec(g(rng), g(rng), g(rng)).normalized();
-  auto keepSide = [&](iires::PointCloud& c, double share, bool below) {
-    std::vector<double> h;
-    for (const auto& p : c.points) h.push_back(p.dot(n));
-    std::vector<double> sorted = h;
-    const auto k = std::min(sorted.size() - 1, static_cast<std::size_t>(share * static_cast<double>(sorted.size())));
-    std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(k), sorted.end());
-    iires::PointCloud kept;
-    for (std::size_t i = 0; i < h.size(); ++i)
-      if (below ? h[i] < sorted[k] : h[i] >= sorted[k]) kept.points.push_back(c.points[i]);
-    c = std::move(kept);
-  };
-  keepSide(source, 0.5 * (1 + band), true);
-  keepSide(target, 0.5 * (1 - band), false);
+  const Vec n = randomNormal(rng);
+  source = sideOfPlane(source, n, 0.5 * (1 + band), true);
+  target = sideOfPlane(target, n, 0.5 * (1 - band), false);
 }
 
 /// @p c plus share·n points uniform in its bounding box grown by 10 % of the diagonal on each side.

@@ -95,13 +95,13 @@ int generate(int argc, char** argv) {
       return 2;
     }
   }
-  std::mt19937_64 rng(seed);
-  std::vector<Triangle> tris;
-  addGroundAndWalls(tris, buildings, rng);
   if (!(sink >= 0 && sink < 1)) {
     std::fprintf(stderr, "scene_generator: --sink must lie in [0, 1)\n");
     return 2;
   }
+  std::mt19937_64 rng(seed);
+  std::vector<Triangle> tris;
+  addGroundAndWalls(tris, buildings, rng);
   addModels(tris, iires::bench::split(models), copies, sink, rng);
   std::vector<double> cdf;
   double total = 0;
