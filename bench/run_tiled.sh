@@ -115,7 +115,8 @@ close = d < 0.5 * d.mean()  # near pairs: a seam's duplicates, or two sheets clo
 row["close_interior_pct"] = f"{100 * close.mean():.3f}"  # in memory: all points
 if mode != "memory":
     origin, size = np.array(r["origin"]), r["tile_size"]
-    cell = np.floor((p - origin) / size).astype(np.int64)
+    # a point's tile; points the surface puts just outside the tiled box (below the ground) are in the edge tile
+    cell = np.clip(np.floor((p - origin) / size).astype(np.int64), 0, np.array(grid) - 1)
     seam = np.full(len(p), np.inf)  # distance to the nearest interior tile face
     for a in range(3):
         for k in range(1, grid[a]):
