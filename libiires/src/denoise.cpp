@@ -26,6 +26,13 @@ constexpr std::size_t kMaxNeighbours = 128;  // DenoiseParams::neighbours is at 
 // places (a sphere with radial noise of 1.25 spacings: 0.5 spacings moved, and 526 of 3,000 output normals
 // inward when the signs were trusted, 39 when not; sheets with noise of 0.2 spacings move 0.12).
 constexpr double kTrustedSignNoise = 0.3;
+// A first sweep that moves the points by more than 1/kNoiseKernelRatio of the median kernel width on average
+// meets noise about as wide as the kernel, which its fits then follow instead of averaging: the sweeps start
+// again with a kernel twice as wide, at most kWideNeighbours points per fit. CGAL's sphere_20k (radial noise
+// σ = 1.6 spacings): first sweep 0.23 kernel widths, radial rms 0.023 → 0.0095 after three sweeps of the wide
+// kernel; moderate noise (bunny00, ±0.66 spacings) moves 0.1–0.15 and keeps the kernel.
+constexpr double kNoiseKernelRatio = 5.0;
+constexpr std::size_t kWideNeighbours = 64;
 
 void checkCloud(const PointCloud& cloud, std::size_t minPoints) {
   if (cloud.empty()) throw InputError("denoise: the cloud is empty");
@@ -124,6 +131,57 @@ MlsPlane fitWeightedPlane(const std::vector<Eigen::Vector3d>& points,
   return plane;
 }
 
+/// Each point's neighbour rows (Morton order, the point itself first) and kernel width.
+struct Rows {
+  std::size_t stride = 0;          ///< entries per row (K)
+  std::vector<std::uint32_t> nbr;  ///< n × stride, padded with the point itself
+  std::vector<std::uint32_t> found;  ///< per point, the neighbours its fits read (at most k)
+  std::vector<double> h;           ///< kernel width: distance to the kernelK-th neighbour, robustly clamped
+  double spacing = 0;              ///< mean distance to the nearest neighbour
+  double medianH = 0;              ///< median of h
+};
+
+/// The rows of @p in (point a = the caller's point order[a]): from @p table (the caller's order, mapped to ours)
+/// when it holds K columns, else from a k-d tree of @p in.
+Rows findRows(const std::vector<Eigen::Vector3d>& in, const std::vector<std::uint32_t>& order,
+              const NeighbourTable* table, std::size_t k, std::size_t kernelK, double kernelQuantile, int threads) {
+  const std::size_t n = in.size(), K = std::max(k, kernelK + 1);
+  Rows r;
+  r.stride = K;
+  r.nbr.resize(n * K);
+  r.found.resize(n);
+  r.h.assign(n, 0.0);
+  std::vector<double> nearest(n, 0.0);
+  if (table && table->k() < K) table = nullptr;
+  std::optional<KnnIndex> own;
+  if (!table) own.emplace(in);
+  std::vector<std::uint32_t> rankOf;
+  if (table) {
+    rankOf.resize(n);
+    for (std::size_t a = 0; a < n; ++a) rankOf[order[a]] = static_cast<std::uint32_t>(a);
+  }
+  parallelFor(n, threads, [&](std::size_t i) {
+    std::vector<std::uint32_t> idx;
+    std::vector<double> d2;
+    const std::size_t f = table ? table->get(order[i], K, idx, d2) : own->knn(in[i], K, idx, d2);
+    if (table)
+      for (std::uint32_t& j : idx) j = rankOf[j];
+    std::copy(idx.begin(), idx.begin() + static_cast<long>(f), r.nbr.begin() + static_cast<long>(i * K));
+    std::fill(r.nbr.begin() + static_cast<long>(i * K + f), r.nbr.begin() + static_cast<long>((i + 1) * K),
+              static_cast<std::uint32_t>(i));
+    r.found[i] = static_cast<std::uint32_t>(std::min(f, k));
+    r.h[i] = std::sqrt(d2[std::min(f - 1, kernelK)]);
+    nearest[i] = std::sqrt(d2[std::min<std::size_t>(f - 1, 1)]);
+  });
+  r.spacing = std::accumulate(nearest.begin(), nearest.end(), 0.0) / static_cast<double>(n);
+  // Robust kernel width (DESIGN §3.3): clamp h to a quantile, so one outlier's huge h_i stays local; a
+  // point whose own h is 0 (duplicates) gets the median.
+  const double cap = quantile(r.h, kernelQuantile);
+  r.medianH = quantile(r.h, 0.5);
+  for (double& hi : r.h) hi = hi > 0 ? std::min(hi, cap) : (r.medianH > 0 ? r.medianH : 1.0);
+  return r;
+}
+
 }  // namespace
 
 void DenoiseParams::validate() const {
@@ -168,7 +226,6 @@ DenoiseResult denoise(const PointCloud& input, const DenoiseParams& params, cons
   checkCloud(input, k + 1);
   const std::size_t n = input.size();
   const std::size_t kernelK = static_cast<std::size_t>(params.kernelNeighbour);
-  const std::size_t K = denoiseNeighbours(params);  // neighbours per query, the point itself included
   bool given = input.hasNormals();
 
   // Work in Morton order: neighbours in space are neighbours in memory (k-NN queries and sweeps stay in
@@ -181,38 +238,8 @@ DenoiseResult denoise(const PointCloud& input, const DenoiseParams& params, cons
   }
 
   // Neighbour lists, found once on the input: each sweep moves points by a fraction of the spacing only.
-  std::vector<std::uint32_t> nbr(n * K);
-  std::vector<std::uint32_t> found(n);
-  std::vector<double> h(n, 0.0), nearest(n, 0.0);
-  {
-    // A given table's rows are in the caller's order: read the caller's point and map its neighbours to ours.
-    if (table && table->k() < K) table = nullptr;
-    std::optional<KnnIndex> own;
-    if (!table) own.emplace(in);
-    std::vector<std::uint32_t> rankOf;
-    if (table) {
-      rankOf.resize(n);
-      for (std::size_t a = 0; a < n; ++a) rankOf[order[a]] = static_cast<std::uint32_t>(a);
-    }
-    parallelFor(n, exec.threads, [&](std::size_t i) {
-      std::vector<std::uint32_t> idx;
-      std::vector<double> d2;
-      const std::size_t f = table ? table->get(order[i], K, idx, d2) : own->knn(in[i], K, idx, d2);
-      if (table)
-        for (std::uint32_t& j : idx) j = rankOf[j];
-      std::copy(idx.begin(), idx.begin() + static_cast<long>(f), nbr.begin() + static_cast<long>(i * K));
-      std::fill(nbr.begin() + static_cast<long>(i * K + f), nbr.begin() + static_cast<long>((i + 1) * K),
-                static_cast<std::uint32_t>(i));
-      found[i] = static_cast<std::uint32_t>(std::min(f, k));
-      h[i] = std::sqrt(d2[std::min(f - 1, kernelK)]);
-      nearest[i] = std::sqrt(d2[std::min<std::size_t>(f - 1, 1)]);
-    });
-  }
-  const double spacing = std::accumulate(nearest.begin(), nearest.end(), 0.0) / static_cast<double>(n);
-  // Robust kernel width (DESIGN §3.3): clamp h to a quantile, so one outlier's huge h_i stays local; a
-  // point whose own h is 0 (duplicates) gets the median.
-  const double cap = quantile(h, params.kernelQuantile), median = quantile(h, 0.5);
-  for (double& hi : h) hi = hi > 0 ? std::min(hi, cap) : (median > 0 ? median : 1.0);
+  Rows rows = findRows(in, order, table, k, kernelK, params.kernelQuantile, exec.threads);
+  bool widened = false;
   DenoiseResult result;
   const auto sweepStart = Clock::now();
   result.neighbourSeconds = std::chrono::duration<double>(sweepStart - start).count();
@@ -226,12 +253,12 @@ DenoiseResult denoise(const PointCloud& input, const DenoiseParams& params, cons
   for (int it = 0; it < sweeps; ++it) {
     const bool useBilateral = sharp > 0 && ((given && !probing) || it > 0);
     parallelFor(n, exec.threads, [&](std::size_t i) {
-      const std::uint32_t* nb = nbr.data() + i * K;
-      const std::size_t count = found[i];
+      const std::uint32_t* nb = rows.nbr.data() + i * rows.stride;
+      const std::size_t count = rows.found[i];
       // eq. (2): θ_j = exp(−|p_j − p|²/h²); the covariance uses the wider exp(−|p_j − p|²/(2h)²) = θ_j^¼ (one
       // exp per neighbour). The bilateral normal term, when on, multiplies all of them (centre, normal, quadric).
       double w[kMaxNeighbours], wn[kMaxNeighbours];
-      const double invN2 = 0.25 / (h[i] * h[i]);
+      const double invN2 = 0.25 / (rows.h[i] * rows.h[i]);
       for (std::size_t j = 0; j < count; ++j) {
         double e = -(cur[nb[j]] - cur[i]).squaredNorm() * invN2;
         if (useBilateral) {
@@ -250,7 +277,7 @@ DenoiseResult denoise(const PointCloud& input, const DenoiseParams& params, cons
       if (params.degree == 2) std::copy(w, w + count, theta);  // the quadric's weights
       const MlsPlane plane = fitWeightedPlane(cur, nb, count, w, wn, nullptr, normals[i], 0.0);
       Eigen::Vector3d p = projectOntoPlane(cur[i], plane), normal = plane.normal;  // eq. (3)
-      if (params.degree == 2) projectOntoQuadric(cur[i], cur, nb, count, theta, h[i], plane, p, normal);
+      if (params.degree == 2) projectOntoQuadric(cur[i], cur, nb, count, theta, rows.h[i], plane, p, normal);
       next[i] = params.iterations > 0 ? p : cur[i];
       nextNormals[i] = normal;
       moved[i] = (next[i] - cur[i]).norm();
@@ -261,16 +288,29 @@ DenoiseResult denoise(const PointCloud& input, const DenoiseParams& params, cons
     normals.swap(nextNormals);
     if (params.iterations == 0) break;
     const double meanMove = std::accumulate(moved.begin(), moved.end(), 0.0) / static_cast<double>(n);
+    if (it == 0 && !widened && meanMove * kNoiseKernelRatio > rows.medianH) {
+      // Noise as wide as the kernel: the fits follow it. Again from the input with a kernel twice as wide
+      // (four times the points; Euclidean rows: a table's filtered rows are too short).
+      widened = true;
+      const std::size_t wideKernel = std::min(4 * kernelK, kWideNeighbours / 2);
+      rows = findRows(in, order, nullptr, std::max(wideKernel + 1, std::min(4 * k, kWideNeighbours)), wideKernel,
+                      params.kernelQuantile, exec.threads);
+      cur = in;
+      for (std::size_t a = 0; a < n; ++a) normals[a] = given ? input.normals[order[a]] : Eigen::Vector3d::Zero();
+      probing = given && !params.keepGivenNormals;
+      it = -1;
+      continue;
+    }
     if (probing) {
       probing = false;
-      if (meanMove <= kTrustedSignNoise * spacing) {  // trusted: the first sweep again, with the estimates
+      if (meanMove <= kTrustedSignNoise * rows.spacing) {  // trusted: the first sweep again, with the estimates
         normals.swap(nextNormals);
         it = -1;
         continue;
       }
       given = false;  // too noisy to trust their sign: the sweeps go on as without normals, from this one
     }
-    if (it == 0 && params.cleanDisplacement > 0 && meanMove < params.cleanDisplacement * spacing) {
+    if (it == 0 && params.cleanDisplacement > 0 && meanMove < params.cleanDisplacement * rows.spacing) {
       result.cleanInput = true;  // noise probe: keep the input positions
       if (given && params.keepGivenNormals) normals = std::move(nextNormals);
       break;
@@ -281,7 +321,8 @@ DenoiseResult denoise(const PointCloud& input, const DenoiseParams& params, cons
   const auto orientStart = Clock::now();
   result.sweepSeconds = std::chrono::duration<double>(orientStart - sweepStart).count();
   if (!given && params.orientNormals)
-    orientNormals(cur, normals, nbr, K, std::min<std::size_t>(K, static_cast<std::size_t>(params.orientNeighbours) + 1),
+    orientNormals(cur, normals, rows.nbr, rows.stride,
+                  std::min<std::size_t>(rows.stride, static_cast<std::size_t>(params.orientNeighbours) + 1),
                   exec.threads, true);
   result.orientSeconds = std::chrono::duration<double>(Clock::now() - orientStart).count();
 
@@ -297,7 +338,7 @@ DenoiseResult denoise(const PointCloud& input, const DenoiseParams& params, cons
   }
   result.meanDisplacement = sum / static_cast<double>(n);
   result.maxDisplacement = worst;
-  result.kernelWidth = median;
+  result.kernelWidth = rows.medianH;
   result.seconds = std::chrono::duration<double>(Clock::now() - start).count();
   return result;
 }
