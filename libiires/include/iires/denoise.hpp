@@ -50,7 +50,9 @@ struct DenoiseParams {
   /// the 8th neighbour, 24 leaves the kernel unchanged but feeds the quadric (degree 2) enough points —
   /// on bunny00, 100k points, ±0.66·l noise: mean error 0.132·l with 8 (plane), 0.115·l with 24 (quadric).
   int neighbours = 24;
-  int kernelNeighbour = 8;      ///< h_i = distance from point i to its kernelNeighbour-th neighbour [8]
+  /// h_i = distance from point i to its kernelNeighbour-th neighbour [8]; noise as wide as that kernel (a first
+  /// sweep moving the points by over a fifth of it) restarts the sweeps with 4× the neighbours (at most 64)
+  int kernelNeighbour = 8;
   double kernelQuantile = 0.9;  ///< h is clamped to this quantile of all h_i, so outliers cannot inflate it
   int iterations = 3;  ///< projection sweeps (Jacobi: each sweep reads the previous sweep's positions)
   /// 1 = the paper's plane (eq. 3): p moves along n_a onto the plane through a(p);
