@@ -289,13 +289,13 @@ DenoiseResult denoise(const PointCloud& input, const DenoiseParams& params, cons
     normals.swap(nextNormals);
     if (params.iterations == 0) break;
     const double meanMove = std::accumulate(moved.begin(), moved.end(), 0.0) / static_cast<double>(n);
-    if (it == 0 && !widened && meanMove * kNoiseKernelRatio > rows.medianH) {
-      // Noise as wide as the kernel: the fits follow it. Again from the input with a kernel twice as wide
-      // (four times the points; Euclidean rows: a table's filtered rows are too short).
+    // Noise as wide as the kernel: the fits follow it. Again from the input with a kernel twice as wide (four
+    // times the points; Euclidean rows: a table's filtered rows are too short), where the caps leave room.
+    const std::size_t wideKernel = std::max(kernelK, std::min(4 * kernelK, kWideNeighbours / 2));
+    if (it == 0 && !widened && wideKernel > kernelK && meanMove * kNoiseKernelRatio > rows.medianH) {
       widened = true;
-      const std::size_t wideKernel = std::min(4 * kernelK, kWideNeighbours / 2);
-      rows = findRows(in, order, nullptr, std::max(wideKernel + 1, std::min(4 * k, kWideNeighbours)), wideKernel,
-                      params.kernelQuantile, exec.threads);
+      const std::size_t wideK = std::max({wideKernel + 1, k, std::min(4 * k, kWideNeighbours)});
+      rows = findRows(in, order, nullptr, wideK, wideKernel, params.kernelQuantile, exec.threads);
       cur = in;
       for (std::size_t a = 0; a < n; ++a) normals[a] = given ? input.normals[order[a]] : Eigen::Vector3d::Zero();
       probing = given && !params.keepGivenNormals;
