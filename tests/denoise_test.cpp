@@ -20,6 +20,17 @@ namespace {
 using iires::DenoiseParams;
 using iires::PointCloud;
 
+/// @p count points on the unit sphere (seed @p seed), moved radially by Gaussian noise of σ = @p sigma (seed
+/// @p noiseSeed), without normals.
+PointCloud noisySphere(std::size_t count, std::uint64_t seed, double sigma, std::uint64_t noiseSeed) {
+  PointCloud cloud = iires::test::sphereCloud(count, 1.0, seed);
+  std::mt19937_64 rng(noiseSeed);
+  std::normal_distribution<double> g(0.0, sigma);
+  for (auto& p : cloud.points) p *= 1.0 + g(rng);
+  cloud.normals.clear();
+  return cloud;
+}
+
 TEST(Denoise, KernelIsTheGaussianOfEq2) {
   EXPECT_DOUBLE_EQ(iires::mlsKernel(0.0, 0.5), 1.0);
   EXPECT_NEAR(iires::mlsKernel(0.5, 0.5), std::exp(-1.0), 1e-15);
@@ -134,13 +145,8 @@ TEST(Denoise, NoiseAsWideAsTheKernelWidensIt) {
   // so the 8th neighbour's kernel is about as wide as the noise): the first sweep moves the points by more than
   // a fifth of the kernel, and the sweeps of the kernel twice as wide bring the radial rms below 0.012 (0.023
   // with the narrow one).
-  PointCloud cloud = iires::test::sphereCloud(20000, 1.0, 5);
-  std::mt19937_64 rng(20);
-  std::normal_distribution<double> g(0.0, 0.04);
-  for (auto& p : cloud.points) p *= 1.0 + g(rng);
-  cloud.normals.clear();
   DenoiseParams params;
-  const auto r = iires::denoise(cloud, params);
+  const auto r = iires::denoise(noisySphere(20000, 5, 0.04, 20), params);
   double sum = 0, sum2 = 0;
   for (const auto& p : r.cloud.points) sum += p.norm(), sum2 += p.squaredNorm();
   const double n = static_cast<double>(r.cloud.size()), mean = sum / n;
@@ -148,12 +154,10 @@ TEST(Denoise, NoiseAsWideAsTheKernelWidensIt) {
   EXPECT_LT(rms, 0.012);
   EXPECT_NEAR(mean, 1.0, 0.01);  // the wide kernel's quadric fits do not shrink the sphere
   // Moderate noise keeps the kernel: σ = 0.3 spacings gives the same kernel width with and without noise.
-  PointCloud mild = iires::test::sphereCloud(20000, 1.0, 5);
-  const auto clean = iires::denoise(mild, params);
-  const double l = iires::meanNeighbourSpacing(mild.points);
-  std::normal_distribution<double> small(0.0, 0.3 * l);
-  for (auto& p : mild.points) p *= 1.0 + small(rng);
-  EXPECT_NEAR(iires::denoise(mild, params).kernelWidth, clean.kernelWidth, 0.2 * clean.kernelWidth);
+  const auto clean = iires::denoise(iires::test::sphereCloud(20000, 1.0, 5), params);
+  const double l = iires::meanNeighbourSpacing(iires::test::sphereCloud(20000, 1.0, 5).points);
+  EXPECT_NEAR(iires::denoise(noisySphere(20000, 5, 0.3 * l, 21), params).kernelWidth, clean.kernelWidth,
+              0.2 * clean.kernelWidth);
 }
 
 TEST(Denoise, SameOutputForOneAndTwoThreads) {
@@ -298,11 +302,7 @@ TEST(Denoise, BunnyWithNoiseAndOutliersEndToEnd) {
 // output of denoise()'s own search, also for a cloud not in Morton order (its rows are mapped to the internal
 // order).
 TEST(Denoise, BorrowedNeighbourTableGivesTheSameOutput) {
-  PointCloud cloud = iires::test::sphereCloud(4000, 1.0, 6);
-  std::mt19937_64 rng(2);
-  std::normal_distribution<double> g(0.0, 0.004);
-  for (auto& p : cloud.points) p *= 1.0 + g(rng);
-  cloud.normals.clear();
+  const PointCloud cloud = noisySphere(4000, 6, 0.004, 2);
   const iires::KnnIndex index(cloud.points);
   const iires::NeighbourTable table(index, cloud.points, iires::denoiseNeighbours({}));
   const auto own = iires::denoise(cloud), borrowed = iires::denoise(cloud, {}, {}, &table);
