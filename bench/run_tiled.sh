@@ -12,7 +12,7 @@
 # about: (min_across_sheet: a seam's duplicates, not two sheets of a model closer than the spacing, which the
 # about: in-memory run keeps too); the % of points whose nearest neighbour is nearer than half the mean, near seams
 # about: and elsewhere (the scene's models stand on the ground, whose samples under a model's flat base are such
-# about: pairs in any run: min_across does not isolate the seams). quick: 1M → 200k at 0.3 GB. full: 5M → 1M at 1.5 GB (2 × 2 tiles, one per colour: a second
+# about: pairs in any run). quick: 1M → 200k at 0.3 GB. full: 5M → 1M at 1.5 GB (2 × 2 tiles, one per colour: a second
 # about: rank has nothing to do) and at 0.5 GB (several tiles per colour), 50M → 5M at 4 GB (one process: in memory
 # about: it would not fit the budget); then an estimate (mode=estimate, not measured) for 10⁹ → 10⁸ points on R ranks
 # about: of 2 threads from the 50M run's costs: every rank streams the input twice (survey, spill), the tiles' work
