@@ -241,6 +241,7 @@ DenoiseResult denoise(const PointCloud& input, const DenoiseParams& params, cons
   // Neighbour lists, found once on the input: each sweep moves points by a fraction of the spacing only.
   Rows rows = findRows(in, order, table, k, kernelK, params.kernelQuantile, exec.threads);
   bool widened = false;
+  const std::size_t wideKernel = std::max(kernelK, std::min(4 * kernelK, kWideNeighbours / 2));  // see below
   DenoiseResult result;
   const auto sweepStart = Clock::now();
   result.neighbourSeconds = std::chrono::duration<double>(sweepStart - start).count();
@@ -291,7 +292,6 @@ DenoiseResult denoise(const PointCloud& input, const DenoiseParams& params, cons
     const double meanMove = std::accumulate(moved.begin(), moved.end(), 0.0) / static_cast<double>(n);
     // Noise as wide as the kernel: the fits follow it. Again from the input with a kernel twice as wide (four
     // times the points; Euclidean rows: a table's filtered rows are too short), where the caps leave room.
-    const std::size_t wideKernel = std::max(kernelK, std::min(4 * kernelK, kWideNeighbours / 2));
     if (it == 0 && !widened && wideKernel > kernelK && meanMove * kNoiseKernelRatio > rows.medianH) {
       widened = true;
       const std::size_t wideK = std::max({wideKernel + 1, k, std::min(4 * k, kWideNeighbours)});
