@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <array>
 #include <filesystem>
 #include <fstream>
 #include <random>
@@ -186,6 +187,28 @@ TEST(Tiled, AutoTileSizeFollowsTheMemoryBudget) {
   const iires::TiledResult whole = iires::resampleTiled(dir + "/scene.ply", paramsFor(1000), tp);
   EXPECT_EQ(whole.grid[0] * whole.grid[1] * whole.grid[2], 1) << "fits the default budget: one tile";
   EXPECT_EQ(whole.cloud.size(), 1000u);
+}
+
+TEST(Tiled, AutoTilesLeaveNoRankIdle) {
+  // The smallest budget (a tile holds 10⁵ points) fits the scene's 171k points in 3 × 2 tiles, where two colours
+  // hold one tile each: a second rank would sit idle through their rounds.
+  const std::string dir = iires::test::tempDir();
+  iires::writePointCloud(dir + "/scene.ply", scene(150000, 11));
+  iires::TileParams tp;
+  tp.scratchDir = dir;
+  tp.memoryBudgetGB = 0.01;
+  tp.marginSpacings = 2;
+  const iires::TiledResult r = iires::resampleTiled(dir + "/scene.ply", paramsFor(40000), tp, iires::Execution{2});
+  ASSERT_EQ(r.cloud.size(), 40000u);
+  // No split of the tiles over two ranks can end before the largest tile of each colour, or before half of it.
+  std::array<double, 8> largest{}, sum{};
+  for (const iires::TileReport& t : r.tiles) {
+    largest[t.colour] = std::max(largest[t.colour], static_cast<double>(t.points));
+    sum[t.colour] += static_cast<double>(t.points);
+  }
+  double twoRanks = 0, total = 0;
+  for (int c = 0; c < 8; ++c) twoRanks += std::max(largest[c], sum[c] / 2), total += sum[c];
+  EXPECT_LE(twoRanks / (total / 2), 1.25) << "on a " << r.grid[0] << "x" << r.grid[1] << "x" << r.grid[2] << " grid";
 }
 
 TEST(Tiled, BadInputAndParameters) {

@@ -2,9 +2,11 @@
 #include "iires/tiled.hpp"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <exception>
+#include <limits>
 #include <numeric>
 #include <optional>
 #include <stdexcept>
@@ -107,48 +109,93 @@ std::vector<std::size_t> apportion(const std::vector<double>& weights, std::size
   return share;
 }
 
+/// The number of tiles of edge @p size over the survey's bounds.
+std::size_t gridCount(const Survey& s, double size) {
+  double count = 1;
+  for (int a = 0; a < 3; ++a) count *= std::max(1.0, std::ceil(s.bounds.sizes()[a] / size));
+  return count > 1e15 ? std::numeric_limits<std::size_t>::max() : static_cast<std::size_t>(count);
+}
+
 /// The grid with tiles of edge @p size over the survey's bounds.
 TileGrid makeGrid(const Survey& s, double size, double margin) {
+  if (const std::size_t count = gridCount(s, size); count > kMaxTiles)
+    throw std::invalid_argument("a tile size of " + std::to_string(size) + " makes " + std::to_string(count) +
+                                " tiles; at most " + std::to_string(kMaxTiles));
   TileGrid g;
   g.origin = s.bounds.min();
   g.size = size;
   g.margin = margin;
   for (int a = 0; a < 3; ++a)
     g.dims[a] = std::max(1, static_cast<int>(std::ceil(s.bounds.sizes()[a] / size)));
-  if (g.count() > kMaxTiles)
-    throw std::invalid_argument("a tile size of " + std::to_string(size) + " makes " + std::to_string(g.count()) +
-                                " tiles; at most " + std::to_string(kMaxTiles));
   return g;
+}
+
+/// Per tile, the survey sample points in its region (what the tile will load, up to the sample's scale).
+std::vector<std::size_t> regionCounts(const Survey& s, const TileGrid& g) {
+  std::vector<std::size_t> count(g.count(), 0);
+  for (const Eigen::Vector3d& p : s.sample) g.forEachRegion(p, [&](std::size_t t) { ++count[t]; });
+  return count;
 }
 
 /// The largest number of input points one tile's region holds, estimated from the survey sample.
 double largestRegion(const Survey& s, const TileGrid& g) {
-  std::vector<std::size_t> count(g.count(), 0);
-  for (const Eigen::Vector3d& p : s.sample) g.forEachRegion(p, [&](std::size_t t) { ++count[t]; });
+  const std::vector<std::size_t> count = regionCounts(s, g);
   return static_cast<double>(*std::max_element(count.begin(), count.end())) * static_cast<double>(s.points) /
          static_cast<double>(s.sample.size());
 }
 
+/// The grid's critical path, in survey points: the colours run one after another and a colour's tiles side by
+/// side, so with unlimited processes a run takes the sum over colours of the largest tile's work (its region).
+double criticalPath(const Survey& s, const TileGrid& g) {
+  const std::vector<std::size_t> load = regionCounts(s, g);
+  std::array<std::size_t, 8> largest{};
+  for (std::size_t t = 0; t < g.count(); ++t) largest[g.colour(t)] = std::max(largest[g.colour(t)], load[t]);
+  return static_cast<double>(std::accumulate(largest.begin(), largest.end(), std::size_t{0}));
+}
+
 /// The tile grid: the given tile size, or the largest tiles whose regions fit @p capacity points. Tiles are
-/// never smaller than two margins (a region then meets only adjacent tiles).
+/// never smaller than two margins (a region then meets only adjacent tiles). Once the input needs more than one
+/// tile, the tiles shrink further until the critical path is at most 1/kParallelism of the sample: processes
+/// share each colour's round, and a colour of one large tile would leave all but one idle. The rule ignores the
+/// process count, so the grid (and the output) is the same for any number of ranks.
 TileGrid chooseGrid(const Survey& s, const TileParams& tp, double margin, std::size_t capacity) {
+  constexpr double kParallelism = 8;
+  constexpr double kSpreadMargins = 16;  // spreading stops at tiles this many margins wide (the margins' overlap
+                                         // then adds at most (1 + 2/16)² − 1 ≈ 27 % to a tile's area)
   const double minSize = std::max(2.0 * margin, 1e-12 * s.bounds.diagonal().norm());
   if (tp.tileSize > 0) return makeGrid(s, std::max(tp.tileSize, minSize), margin);
   double size = std::max(s.bounds.sizes().maxCoeff() * (1 + 1e-9), minSize);
+  const auto fits = [&](const TileGrid& g) {
+    return largestRegion(s, g) <= 0.9 * static_cast<double>(capacity) &&
+           (g.count() == 1 || size * 0.8 < kSpreadMargins * margin ||
+            criticalPath(s, g) <= static_cast<double>(s.sample.size()) / kParallelism);
+  };
   for (;;) {
     const TileGrid g = makeGrid(s, size, margin);
-    if (largestRegion(s, g) <= 0.9 * static_cast<double>(capacity) || size <= minSize) return g;
+    if (fits(g) || size <= minSize) return g;
     const double next = std::max(size * 0.8, minSize);
-    if (makeGrid(s, next, margin).count() > kMaxTiles) return g;
+    if (gridCount(s, next) > kMaxTiles) return g;
     size = next;
   }
 }
 
-/// Each tile's process: the k-th tile of a colour (in tile order) goes to rank k mod @p ranks.
-std::vector<int> owners(const TileGrid& g, int ranks) {
+/// Each tile's process: a colour's tiles, largest region first, each to the process with the least load so far
+/// (ties to the lower rank). The assignment changes only who computes a tile, never its result.
+std::vector<int> owners(const Survey& s, const TileGrid& g, int ranks) {
+  const std::vector<std::size_t> load = regionCounts(s, g);
   std::vector<int> owner(g.count(), 0);
-  std::array<int, 8> position{};
-  for (std::size_t t = 0; t < g.count(); ++t) owner[t] = position[g.colour(t)]++ % ranks;
+  for (int colour = 0; colour < 8; ++colour) {
+    std::vector<std::size_t> tiles;
+    for (std::size_t t = 0; t < g.count(); ++t)
+      if (g.colour(t) == colour) tiles.push_back(t);
+    std::stable_sort(tiles.begin(), tiles.end(), [&](std::size_t a, std::size_t b) { return load[a] > load[b]; });
+    std::vector<std::size_t> rankLoad(static_cast<std::size_t>(ranks), 0);
+    for (std::size_t t : tiles) {
+      const auto least = std::min_element(rankLoad.begin(), rankLoad.end());
+      owner[t] = static_cast<int>(least - rankLoad.begin());
+      *least += load[t];
+    }
+  }
   return owner;
 }
 
@@ -431,7 +478,7 @@ TiledResult resampleTiled(const std::string& path, const ResampleParams& params,
   clock.end("survey", t0);
 
   t0 = clock.begin("spill");
-  const std::vector<int> owner = owners(grid, executor.ranks());
+  const std::vector<int> owner = owners(s, grid, executor.ranks());
   std::optional<detail::ScratchDirectory> scratch;
   std::optional<TileSpill> files;
   together(executor, [&] {
