@@ -1,22 +1,22 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: GPL-3.0-or-later
 # title: Out-of-core tiled resampling vs in-memory, one process and MPI ranks (issue 23)
-# about: `bench/run_tiled.sh quick|full`: a scene from `build-bench/bin/scene_generator` (ground, walls, scaled corpus
-# about: models) resampled by `iires-resample` in memory (`--tiles off`, 2 threads), tiled (`--tiles auto --memory GB`,
-# about: 1 process × 2 threads) and by `mpirun -n 2 iires-resample-mpi` (2 ranks × 1 thread, same tiles); peak RSS
-# about: from GNU time (the largest process). vs = wall time / the in-memory run's (tiled) or the one-process tiled
-# about: run's (mpi); same = the MPI output is byte-identical to the one-process output; busy = per rank, the summed
-# about: time of the tiles it resampled. Seams: the cv of the nearest-neighbour distance of the output points within 2
-# about: mean spacings of an interior tile face against the rest's; the smallest nearest-neighbour distance between
-# about: points of different tiles / the mean (min_across), the same over pairs offset along their sheet
-# about: (min_across_sheet: a seam's duplicates, not two sheets of a model closer than the spacing, which the
-# about: in-memory run keeps too); the % of points whose nearest neighbour is nearer than half the mean, near seams
-# about: and elsewhere (the scene's models stand on the ground, whose samples under a model's flat base are such
-# about: pairs in any run). quick: 1M → 200k at 0.3 GB. full: 5M → 1M at 1.5 GB (2 × 2 tiles, one per colour: a second
-# about: rank has nothing to do) and at 0.5 GB (several tiles per colour), 50M → 5M at 4 GB (one process: in memory
-# about: it would not fit the budget); then an estimate (mode=estimate, not measured) for 10⁹ → 10⁸ points on R ranks
-# about: of 2 threads from the 50M run's costs: every rank streams the input twice (survey, spill), the tiles' work
-# about: is shared evenly.
+# about: `bench/run_tiled.sh quick|full`: a scene from `build-bench/bin/scene_generator` (ground, walls, scaled
+# about: corpus models) resampled by `iires-resample` in memory (`--tiles off`, 2 threads), tiled (`--tiles auto
+# about: --memory GB`, 1 process × 2 threads) and by `mpirun -n R iires-resample-mpi` (R ranks × 1 thread, same
+# about: tiles; R = 4 oversubscribes the 2 cores); peak RSS from GNU time (the largest process). vs = wall time /
+# about: the in-memory run's (tiled) or the one-process tiled run's (mpi); same = the MPI output is byte-identical
+# about: to the one-process output; busy = per rank, the summed time of the tiles it resampled. Seams: the cv of
+# about: the nearest-neighbour distance of the output points within 2 mean spacings of an interior tile face
+# about: against the rest's; the smallest nearest-neighbour distance between points of different tiles / the mean
+# about: (min_across), the same over pairs offset along their sheet (min_across_sheet: a seam's duplicates, not two
+# about: sheets of a model closer than the spacing, which the in-memory run keeps too); the % of points whose
+# about: nearest neighbour is nearer than half the mean, near seams and elsewhere (the scene's models stand on the
+# about: ground, whose samples under a model's flat base are such pairs in any run). quick: 1M → 200k at 0.3 GB.
+# about: full: 5M → 1M at 1.5 GB (2 and 4 ranks) and at 0.5 GB, 50M → 5M at 4 GB (one process: in memory it would
+# about: not fit the budget); then an estimate (mode=estimate, not measured) for 10⁹ → 10⁸ points on R ranks of 2
+# about: threads from the 50M run's costs: every rank streams the input twice (survey, spill), the tiles' work is
+# about: shared evenly.
 # plot: tiled.png each tile's time against its points in the 50M-point run (full mode)
 # columns: case mode ranks memory_gb tiles output_points wall_s vs peak_rss_mb cv seam_cv interior_cv min_across min_across_sheet close_seam_pct close_interior_pct survey_s spill_s colours_s busy_s same
 # One row per line, keys:
@@ -63,7 +63,7 @@ run() {  # points N mode memory_gb reference_wall extra-args...
   local report="$WORK/report_$mode.json" out="$WORK/out_$mode.ply" ranks=1 threads=$THREADS
   local -a cmd=("$BUILD/bin/iires-resample")
   if [ "$mode" = mpi ]; then
-    ranks=2 threads=1
+    ranks=${RANKS:-2} threads=1
     cmd=(mpirun -n "$ranks" "$BUILD/bin/iires-resample-mpi")
   fi
   local start end
@@ -150,14 +150,16 @@ PY
 }
 
 # One case: the in-memory run (skipped where it would not fit this machine), the tiled run and the MPI run.
-case_runs() {  # points N memory_gb in_memory(0|1) mpi(0|1)
+case_runs() {  # points N memory_gb in_memory(0|1) "mpi rank counts" (may be empty)
   local ref=0
   if [ "$4" = 1 ]; then
     run "$1" "$2" memory 0 0 --tiles off
     ref=$(cat "$WORK/wall_memory")
   fi
   run "$1" "$2" tiled "$3" "$ref" --tiles auto --memory "$3" --scratch "$WORK"
-  [ "$5" = 1 ] && run "$1" "$2" mpi "$3" "$(cat "$WORK/wall_tiled")" --tiles auto --memory "$3" --scratch "$WORK"
+  for ranks in $5; do
+    RANKS=$ranks run "$1" "$2" mpi "$3" "$(cat "$WORK/wall_tiled")" --tiles auto --memory "$3" --scratch "$WORK"
+  done
   rm -f "$WORK"/out_*.ply
 }
 # An estimate, not a measurement: 10⁹ points → 10⁸ on R ranks of 2 threads, from a run's report: every rank
@@ -198,13 +200,11 @@ GP
 }
 
 if [ "$MODE" = full ]; then
-  case_runs 5000000 1000000 1.5 1 1
-  # At 1.5 GB the 5M scene is 2 x 2 tiles, one per colour: a second rank has nothing to do. The ranks' scaling
-  # at a budget that gives each colour several tiles:
-  case_runs 5000000 1000000 0.5 0 1
-  case_runs 50000000 5000000 4 0 0
+  case_runs 5000000 1000000 1.5 1 "2 4"
+  case_runs 5000000 1000000 0.5 0 2
+  case_runs 50000000 5000000 4 0 ""
   estimate "$WORK/report_tiled.json"
   plot_tiles "$WORK/report_tiled.json" bench/results/tiled.png
 else
-  case_runs 1000000 200000 0.3 1 1
+  case_runs 1000000 200000 0.3 1 2
 fi
