@@ -16,6 +16,7 @@
 #include <unordered_map>
 #include <unordered_set>
 
+#include "iires/detail/parallel.hpp"
 #include "iires/reconstruct/mesh_quality.hpp"
 
 namespace iires {
@@ -526,47 +527,69 @@ BadTriangleReport repairBadTriangles(TriangleMesh& mesh, const std::vector<Eigen
   return report;
 }
 
+namespace {
+
+/// The fans around one vertex: faces joined through a shared edge (v, x), by union-find over local indices.
+struct Fans {
+  std::vector<std::uint32_t> parent, size;
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> spokes;  // (other vertex, local face)
+
+  std::uint32_t find(std::uint32_t x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  }
+  /// Groups @p faces (all around @p v) into fans; returns how many.
+  std::size_t group(const std::vector<Eigen::Vector3i>& T, std::uint32_t v, const std::vector<std::uint32_t>& faces) {
+    parent.resize(faces.size());
+    for (std::uint32_t i = 0; i < faces.size(); ++i) parent[i] = i;
+    spokes.clear();
+    for (std::uint32_t i = 0; i < faces.size(); ++i)
+      for (int c = 0; c < 3; ++c)
+        if (const std::uint32_t x = vtx(T[faces[i]], c); x != v) spokes.emplace_back(x, i);
+    std::sort(spokes.begin(), spokes.end());
+    std::size_t fans = faces.size();
+    for (std::size_t s = 1; s < spokes.size(); ++s)
+      if (spokes[s].first == spokes[s - 1].first) {
+        const std::uint32_t a = find(spokes[s].second), b = find(spokes[s - 1].second);
+        if (a != b) parent[std::max(a, b)] = std::min(a, b), --fans;
+      }
+    return fans;
+  }
+};
+
+}  // namespace
+
 std::size_t removeExtraFans(TriangleMesh& mesh) {
   auto& T = mesh.triangles;
   const std::size_t nv = mesh.vertices.size();
-  // Vertex → faces (CSR).
   const detail::VertexFaces vf = detail::vertexFaces(mesh);
   const std::vector<std::uint32_t>&start = vf.start, &incident = vf.incident;
+  // Which vertices have several fans in the mesh as given (in parallel); the ordered pass below visits those,
+  // and any vertex that lost a face to an earlier one.
+  std::vector<char> several(nv, 0);
+  parallelFor(nv, 0, [&](std::size_t v) {
+    thread_local Fans fans;
+    thread_local std::vector<std::uint32_t> faces;
+    faces.assign(incident.begin() + start[v], incident.begin() + start[v + 1]);
+    several[v] = faces.size() > 1 && fans.group(T, static_cast<std::uint32_t>(v), faces) > 1;
+  });
   std::vector<char> removed(T.size(), 0);
   std::size_t count = 0;
-  std::vector<std::uint32_t> faces, parent, size;
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> spokes;  // (other vertex, local face)
+  std::vector<std::uint32_t> faces;
+  Fans fans;
   for (std::uint32_t v = 0; v < nv; ++v) {
     faces.clear();
     for (std::uint32_t s = start[v]; s < start[v + 1]; ++s)
       if (!removed[incident[s]]) faces.push_back(incident[s]);
-    if (faces.size() < 2) continue;
-    // Fans: faces around v joined through a shared edge (v, x).
-    parent.resize(faces.size());
-    for (std::uint32_t i = 0; i < faces.size(); ++i) parent[i] = i;
-    auto find = [&](std::uint32_t x) {
-      while (parent[x] != x) x = parent[x] = parent[parent[x]];
-      return x;
-    };
-    spokes.clear();
-    for (std::uint32_t i = 0; i < faces.size(); ++i)
-      for (int c = 0; c < 3; ++c) {
-        const std::uint32_t x = vtx(T[faces[i]], c);
-        if (x != v) spokes.emplace_back(x, i);
-      }
-    std::sort(spokes.begin(), spokes.end());
-    for (std::size_t s = 1; s < spokes.size(); ++s)
-      if (spokes[s].first == spokes[s - 1].first) {
-        const std::uint32_t a = find(spokes[s].second), b = find(spokes[s - 1].second);
-        if (a != b) parent[std::max(a, b)] = std::min(a, b);
-      }
-    size.assign(faces.size(), 0);
-    for (std::uint32_t i = 0; i < faces.size(); ++i) ++size[find(i)];
+    if (faces.size() < 2 || (!several[v] && faces.size() == start[v + 1] - start[v])) continue;
+    if (fans.group(T, v, faces) < 2) continue;
+    fans.size.assign(faces.size(), 0);
+    for (std::uint32_t i = 0; i < faces.size(); ++i) ++fans.size[fans.find(i)];
     std::uint32_t best = 0;
     for (std::uint32_t i = 1; i < faces.size(); ++i)
-      if (size[i] > size[best]) best = i;  // roots only have size > 0; ties keep the lowest face
+      if (fans.size[i] > fans.size[best]) best = i;  // roots only have size > 0; ties keep the lowest face
     for (std::uint32_t i = 0; i < faces.size(); ++i)
-      if (find(i) != best) removed[faces[i]] = 1, ++count;
+      if (fans.find(i) != best) removed[faces[i]] = 1, ++count;
   }
   if (count) {
     std::size_t w = 0;

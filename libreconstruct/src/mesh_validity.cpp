@@ -6,6 +6,7 @@
 #include <stdexcept>
 #include <utility>
 
+#include "iires/detail/radix_sort.hpp"
 #include "iires/reconstruct/self_intersections.hpp"
 #include "mesh_edges.hpp"
 
@@ -26,37 +27,35 @@ std::size_t removeFaces(TriangleMesh& mesh, const std::vector<char>& drop) {
 /// At every edge with more than two faces keep the lowest-index face and the lowest-index one using the edge in
 /// the opposite direction (else the next one): the pair that can stay consistently oriented.
 std::size_t removeNonManifoldEdgeFaces(TriangleMesh& mesh, std::size_t* edgesFound) {
-  struct Use {
-    std::uint64_t key;
-    std::uint32_t face;
-    bool forward;
-  };
-  std::vector<Use> uses;
+  // Each face's use of an edge: (edge key, face · 2 + whether it runs from the lower vertex to the higher),
+  // sorted by edge, faces ascending within an edge (the sort is stable).
+  std::vector<KeyedIndex> uses;
   uses.reserve(3 * mesh.triangles.size());
   for (std::uint32_t f = 0; f < mesh.triangles.size(); ++f)
     for (int c = 0; c < 3; ++c) {
       const auto a = static_cast<std::uint32_t>(mesh.triangles[f][c]);
       const auto b = static_cast<std::uint32_t>(mesh.triangles[f][(c + 1) % 3]);
       if (a == b) continue;
-      uses.push_back({detail::undirectedKey(a, b), f, a < b});
+      uses.emplace_back(detail::undirectedKey(a, b), 2 * f + (a < b ? 1 : 0));
     }
-  std::sort(uses.begin(), uses.end(),
-            [](const Use& x, const Use& y) { return x.key != y.key ? x.key < y.key : x.face < y.face; });
+  radixSort(uses, 1);
+  const auto face = [&](std::size_t k) { return uses[k].second / 2; };
+  const auto forward = [&](std::size_t k) { return uses[k].second % 2; };
   std::vector<char> drop(mesh.triangles.size(), 0);
   std::size_t found = 0;
   for (std::size_t i = 0; i < uses.size();) {
     std::size_t j = i;
-    while (j < uses.size() && uses[j].key == uses[i].key) ++j;
+    while (j < uses.size() && uses[j].first == uses[i].first) ++j;
     if (j - i > 2) {
       ++found;
       std::size_t second = i + 1;
       for (std::size_t k = i + 1; k < j; ++k)
-        if (uses[k].forward != uses[i].forward) {
+        if (forward(k) != forward(i)) {
           second = k;
           break;
         }
       for (std::size_t k = i + 1; k < j; ++k)
-        if (k != second) drop[uses[k].face] = 1;
+        if (k != second) drop[face(k)] = 1;
     }
     i = j;
   }

@@ -54,77 +54,70 @@ bool facesIntersect(const Eigen::Vector3i& f, const Eigen::Vector3i& g, const st
   return CGAL::do_intersect(tf, tg);
 }
 
-/// Per vertex, whether its faces provably meet each other only in their common vertex and edges: seen along the
+/// Whether vertex @p v's faces provably meet each other only in their common vertex and edges: seen along the
 /// fan's mean normal n, every face leans less than 60° from n (so it projects one-to-one onto the plane ⊥ n, into
 /// the angular wedge between its two spokes) and the wedges do not overlap — two of them touch only along a common
 /// spoke. Then two faces of the fan can only meet over a common ray, i.e. in their common edge. The test is in
 /// floating point with a margin (kMargin radians) no rounding can cross; fans that fail it get the exact tests.
-std::vector<char> separatedFans(const TriangleMesh& mesh) {
+bool separatedFan(const TriangleMesh& mesh, const detail::VertexFaces& vf, std::size_t v) {
   constexpr double kMargin = 1e-9, kMinLean = 0.5;  // cos 60°
-  const std::size_t nv = mesh.vertices.size();
-  const detail::VertexFaces vf = detail::vertexFaces(mesh);
-  const std::vector<std::uint32_t>&start = vf.start, &incident = vf.incident;
-  std::vector<char> good(nv, 0);
   struct Wedge {
     double from, to, length;  // angles of its spokes, and the angle between them
     int first, last;          // spoke vertices
   };
-  std::vector<Wedge> wedges;
-  std::vector<std::array<int, 2>> spokes;
-  for (std::size_t v = 0; v < nv; ++v) {
-    if (start[v] == start[v + 1]) continue;
-    const Eigen::Vector3d& o = mesh.vertices[v];
-    Eigen::Vector3d n = Eigen::Vector3d::Zero();
-    spokes.clear();
-    bool ok = true;
-    for (std::uint32_t s = start[v]; s < start[v + 1] && ok; ++s) {
-      const auto& t = mesh.triangles[incident[s]];
-      int c = 0;
-      while (static_cast<std::size_t>(t[c]) != v) ++c;
-      const int a = t[(c + 1) % 3], b = t[(c + 2) % 3];
-      if (a == b || static_cast<std::size_t>(a) == v || static_cast<std::size_t>(b) == v) ok = false;
-      spokes.push_back({a, b});
-      n += (mesh.vertices[static_cast<std::size_t>(a)] - o).cross(mesh.vertices[static_cast<std::size_t>(b)] - o);
-    }
-    if (!ok || !(n.norm() > 0)) continue;
-    n.normalize();
-    const Eigen::Vector3d u = n.unitOrthogonal(), w = n.cross(u);
-    auto angle = [&](int x) {
-      const Eigen::Vector3d d = mesh.vertices[static_cast<std::size_t>(x)] - o;
-      return std::atan2(d.dot(w), d.dot(u));
-    };
-    wedges.clear();
-    for (const auto& [a, b] : spokes) {
-      const Eigen::Vector3d fn = (mesh.vertices[static_cast<std::size_t>(a)] - o)
-                                     .cross(mesh.vertices[static_cast<std::size_t>(b)] - o);
-      if (!(fn.dot(n) >= kMinLean * fn.norm())) {
-        ok = false;
-        break;
-      }
-      const double from = angle(a), to = angle(b);
-      double length = to - from;
-      if (length < 0) length += 2 * M_PI;
-      if (!(length > kMargin && length < M_PI - kMargin)) {
-        ok = false;
-        break;
-      }
-      wedges.push_back({from, to, length, a, b});
-    }
-    if (!ok) continue;
-    // Sorted by their first spoke, each wedge must end before the next begins (or on the same spoke), and all of
-    // them together must go round once.
-    std::sort(wedges.begin(), wedges.end(), [](const Wedge& x, const Wedge& y) { return x.from < y.from; });
-    double turn = 0;
-    for (std::size_t i = 0; i < wedges.size() && ok && wedges.size() > 1; ++i) {
-      const Wedge &x = wedges[i], &y = wedges[(i + 1) % wedges.size()];
-      double gap = y.from - x.to;  // in [0, 2π): an overlap becomes a gap near 2π, and the turn two rounds
-      if (gap < 0) gap += 2 * M_PI;
-      if (!(gap > kMargin || (x.last == y.first && y.from == x.to))) ok = false;
-      turn += x.length + gap;
-    }
-    if (wedges.size() > 1 && std::abs(turn - 2 * M_PI) > 1e-6) ok = false;
-    good[v] = ok ? 1 : 0;
+  thread_local std::vector<Wedge> wedges;
+  thread_local std::vector<std::array<int, 2>> spokes;
+  if (vf.start[v] == vf.start[v + 1]) return false;
+  const Eigen::Vector3d& o = mesh.vertices[v];
+  auto at = [&](int x) -> const Eigen::Vector3d& { return mesh.vertices[static_cast<std::size_t>(x)]; };
+  Eigen::Vector3d n = Eigen::Vector3d::Zero();
+  spokes.clear();
+  for (std::uint32_t s = vf.start[v]; s < vf.start[v + 1]; ++s) {
+    const auto& t = mesh.triangles[vf.incident[s]];
+    int c = 0;
+    while (static_cast<std::size_t>(t[c]) != v) ++c;
+    const int a = t[(c + 1) % 3], b = t[(c + 2) % 3];
+    if (a == b || static_cast<std::size_t>(a) == v || static_cast<std::size_t>(b) == v) return false;
+    spokes.push_back({a, b});
+    n += (at(a) - o).cross(at(b) - o);
   }
+  if (!(n.norm() > 0)) return false;
+  n.normalize();
+  const Eigen::Vector3d u = n.unitOrthogonal(), w = n.cross(u);
+  auto angle = [&](int x) {
+    const Eigen::Vector3d d = at(x) - o;
+    return std::atan2(d.dot(w), d.dot(u));
+  };
+  wedges.clear();
+  for (const auto& [a, b] : spokes) {
+    const Eigen::Vector3d fn = (at(a) - o).cross(at(b) - o);
+    if (!(fn.dot(n) >= kMinLean * fn.norm())) return false;
+    const double from = angle(a), to = angle(b);
+    double length = to - from;
+    if (length < 0) length += 2 * M_PI;
+    if (!(length > kMargin && length < M_PI - kMargin)) return false;
+    wedges.push_back({from, to, length, a, b});
+  }
+  if (wedges.size() == 1) return true;
+  // Sorted by their first spoke, each wedge must end before the next begins (or on the same spoke), and all of
+  // them together must go round once.
+  std::sort(wedges.begin(), wedges.end(), [](const Wedge& x, const Wedge& y) { return x.from < y.from; });
+  double turn = 0;
+  for (std::size_t i = 0; i < wedges.size(); ++i) {
+    const Wedge &x = wedges[i], &y = wedges[(i + 1) % wedges.size()];
+    double gap = y.from - x.to;  // in [0, 2π): an overlap becomes a gap near 2π, and the turn two rounds
+    if (gap < 0) gap += 2 * M_PI;
+    if (!(gap > kMargin || (x.last == y.first && y.from == x.to))) return false;
+    turn += x.length + gap;
+  }
+  return std::abs(turn - 2 * M_PI) <= 1e-6;
+}
+
+/// separatedFan() of every vertex.
+std::vector<char> separatedFans(const TriangleMesh& mesh, int threads) {
+  const detail::VertexFaces vf = detail::vertexFaces(mesh);
+  std::vector<char> good(mesh.vertices.size(), 0);
+  parallelFor(good.size(), threads, [&](std::size_t v) { good[v] = separatedFan(mesh, vf, v) ? 1 : 0; });
   return good;
 }
 
@@ -139,7 +132,7 @@ bool overlap(const CGAL::Bbox_3& a, const CGAL::Bbox_3& b) {
 /// corner of the two boxes' intersection. Linear for a mesh of similar triangles (a reconstruction); returns false,
 /// leaving the work to CGAL's box intersection, when the sizes vary too much for a grid (boxes over many cells).
 template <typename Skip>
-bool gridCandidates(const std::vector<Box>& boxes, const Skip& skip,
+bool gridCandidates(const std::vector<Box>& boxes, const Skip& skip, int threads,
                     std::vector<std::pair<std::size_t, std::size_t>>& out) {
   if (boxes.size() < 2) return true;
   std::vector<double> extent(boxes.size());
@@ -171,22 +164,29 @@ bool gridCandidates(const std::vector<Box>& boxes, const Skip& skip,
       for (std::uint64_t y = lo[1]; y <= hi[1]; ++y)
         for (std::uint64_t z = lo[2]; z <= hi[2]; ++z) entries.emplace_back(key(x, y, z), i);
   }
-  radixSort(entries, 1);  // stable: boxes in index order within a cell
-  for (std::size_t r = 0; r < entries.size();) {
-    std::size_t e = r;
-    while (e < entries.size() && entries[e].first == entries[r].first) ++e;
-    for (std::size_t i = r; i < e; ++i)
-      for (std::size_t j = i + 1; j < e; ++j) {
-        const std::uint32_t bi = entries[i].second, bj = entries[j].second;
-        // The lowest corner of the two boxes' intersection lies in the cell max(low_i, low_j).
-        if (key(std::max(low[bi][0], low[bj][0]), std::max(low[bi][1], low[bj][1]),
-                std::max(low[bi][2], low[bj][2])) != entries[r].first)
-          continue;  // reported in another cell
-        if (!overlap(boxes[bi].bbox(), boxes[bj].bbox()) || skip(boxes[bi].info(), boxes[bj].info())) continue;
-        out.emplace_back(boxes[bi].info(), boxes[bj].info());  // bi < bj, and faces are in box order
-      }
-    r = e;
-  }
+  radixSort(entries, threads);  // stable: boxes in index order within a cell
+  std::vector<std::size_t> cellStart;  // where each cell's entries begin, and the end
+  for (std::size_t r = 0; r < entries.size(); ++r)
+    if (r == 0 || entries[r].first != entries[r - 1].first) cellStart.push_back(r);
+  cellStart.push_back(entries.size());
+  // The cells in parallel blocks, each block's pairs apart, joined in block order.
+  constexpr std::size_t kCellsPerBlock = 1024;
+  const std::size_t cells = cellStart.size() - 1, blocks = (cells + kCellsPerBlock - 1) / kCellsPerBlock;
+  std::vector<std::vector<std::pair<std::size_t, std::size_t>>> found(blocks);
+  parallelFor(blocks, threads, [&](std::size_t block) {
+    for (std::size_t c = block * kCellsPerBlock; c < std::min(cells, (block + 1) * kCellsPerBlock); ++c)
+      for (std::size_t i = cellStart[c]; i < cellStart[c + 1]; ++i)
+        for (std::size_t j = i + 1; j < cellStart[c + 1]; ++j) {
+          const std::uint32_t bi = entries[i].second, bj = entries[j].second;
+          // The lowest corner of the two boxes' intersection lies in the cell max(low_i, low_j).
+          if (key(std::max(low[bi][0], low[bj][0]), std::max(low[bi][1], low[bj][1]),
+                  std::max(low[bi][2], low[bj][2])) != entries[i].first)
+            continue;  // reported in another cell
+          if (!overlap(boxes[bi].bbox(), boxes[bj].bbox()) || skip(boxes[bi].info(), boxes[bj].info())) continue;
+          found[block].emplace_back(boxes[bi].info(), boxes[bj].info());  // bi < bj, faces are in box order
+        }
+  });
+  for (const auto& f : found) out.insert(out.end(), f.begin(), f.end());
   return true;
 }
 
@@ -207,9 +207,9 @@ std::vector<std::pair<std::size_t, std::size_t>> selfIntersections(const Triangl
     if (CGAL::collinear(a, b, c)) continue;  // degenerate: counted apart
     boxes.emplace_back(a.bbox() + b.bbox() + c.bbox(), f);
   }
-  // Candidates from overlapping boxes (sequential), then the exact tests in parallel.
+  // Candidates from overlapping boxes, then the exact tests.
   // Faces with a common vertex whose fan is separated (separatedFans) need no test.
-  const std::vector<char> separated = separatedFans(mesh);
+  const std::vector<char> separated = separatedFans(mesh, threads);
   auto skip = [&](std::size_t f, std::size_t g) {
     for (int i = 0; i < 3; ++i)
       for (int j = 0; j < 3; ++j)
@@ -217,7 +217,7 @@ std::vector<std::pair<std::size_t, std::size_t>> selfIntersections(const Triangl
     return false;
   };
   std::vector<std::pair<std::size_t, std::size_t>> candidates;
-  if (!gridCandidates(boxes, skip, candidates)) {
+  if (!gridCandidates(boxes, skip, threads, candidates)) {
     candidates.clear();
     std::vector<const Box*> ptr;
     ptr.reserve(boxes.size());
