@@ -104,9 +104,9 @@ bool emptyDirectory(const std::string& dir) { return std::filesystem::is_empty(d
 
 TEST(Tiled, EightTilesMatchTheInMemoryRunWithoutSeams) {
   const std::string dir = iires::test::tempDir();
-  const PointCloud input = scene(240000, 3);
+  const PointCloud input = scene(900000, 3);  // 1.0M points
   iires::writePointCloud(dir + "/scene.ply", input);
-  constexpr std::size_t kN = 16000;
+  constexpr std::size_t kN = 60000;
   const iires::ResampleResult memory = iires::resample(input, paramsFor(kN));
   const std::string scratch = iires::test::tempDir();
   const iires::TiledResult tiled = iires::resampleTiled(dir + "/scene.ply", paramsFor(kN), unitTiles(scratch));
