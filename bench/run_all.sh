@@ -274,13 +274,14 @@ EOF
 every method meshes the same resampled points (local = iires-reconstruct; input-advancing-front meshes the dense
 input). si = self-intersecting face pairs, nm = non-manifold edges + vertices, genus truth/ours (closed
 components), loops = boundary loops, lt30 = % of angles under 30°, H = Hausdorff distance mesh → truth and truth →
-mesh, uncov = % of the input farther than 2 spacings from the mesh.
+mesh, uncov = % of the input farther than 2 spacings from the mesh, checks = the validity stage (self-intersection and
+non-manifold checks and their repairs) in % of the rest of the meshing time (local only).
 
 EOF
   awk '{ for (i = 1; i <= NF; i++) { split($i, p, "="); kv[p[1]] = p[2] }
          if ($0 ~ /status=ok/) print $0 " nm=" kv["nonmanifold_edges"] + kv["nonmanifold_vertices"]; else print }' \
     "$out/reconstruct.txt" > "$tmp/reconstruct_nm.txt"
-  table "model:model density_ratio:density n method self_intersections:si nm genus_truth:genus_truth genus:genus boundary_loops:loops q_avg q_min pct_angle_lt30:lt30 mesh_to_truth_pct_diag:H_mesh→truth truth_to_mesh_pct_diag:H_truth→mesh uncovered_pct:uncov time_s" \
+  table "model:model density_ratio:density n method self_intersections:si nm genus_truth:genus_truth genus:genus boundary_loops:loops q_avg q_min pct_angle_lt30:lt30 mesh_to_truth_pct_diag:H_mesh→truth truth_to_mesh_pct_diag:H_truth→mesh uncovered_pct:uncov time_s validity_pct_of_meshing:checks" \
     "$tmp/reconstruct_nm.txt" "status="
   cat <<EOF
 
