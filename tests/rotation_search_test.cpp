@@ -202,6 +202,7 @@ TEST(RotationSearch, CoarseOffsetsFindTheRotationOfAFortyPercentCut) {
     RotationSearchParams p;
     p.overlaps = {1.0, 0.8, 0.6};  // the registration's levels when the overlap is not given
     p.coarseOffsetRadius = radius;
+    p.coarseKeep = 48;  // the case was drawn for 48 coarse survivors (with 96 the true rotation survives anyway)
     const auto found = RotationSearch(s, t, p, iires::Execution{2}).search(grid);
     ASSERT_FALSE(found.candidates.empty());
     const double error = iires::reg::rotationAngle(found.candidates.front().rotation, truth) * 180 / M_PI;

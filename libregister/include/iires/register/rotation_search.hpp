@@ -52,7 +52,8 @@ struct RotationSearchParams {
   Eigen::Vector3d targetOpenSide = Eigen::Vector3d::Zero();  ///< see sourceOpenSide
   double openSideShift = 0.4;       ///< a and b above, normalised units (≥ 0; 0 = the open sides are not used)
   double openSideScaleSlope = 0.3;  ///< κ above (≥ 0, κ·openSideShift < 1) [40 % cuts: σ ≈ 1 − 0.3·|τ|]
-  std::size_t coarseKeep = 48;    ///< best coarse candidates passed on to the exact energy (≥ 1)
+  std::size_t coarseKeep = 96;    ///< best coarse candidates passed on to the exact energy (≥ 1): the coarse
+                                  ///< energy (subsets, few offsets) ranks a partial scan's true rotation lower
   std::size_t fullKeep = 48;      ///< best exact candidates kept for the selection of distinct ones (≥ 1)
   std::size_t keep = 5;           ///< distinct candidates returned, best first (≥ 1)
   double minSeparationDeg = 25.0; ///< returned candidates differ pairwise by at least this rotation angle
