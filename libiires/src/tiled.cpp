@@ -137,17 +137,16 @@ std::vector<std::size_t> regionCounts(const Survey& s, const TileGrid& g) {
   return count;
 }
 
-/// The largest number of input points one tile's region holds, estimated from the survey sample.
-double largestRegion(const Survey& s, const TileGrid& g) {
-  const std::vector<std::size_t> count = regionCounts(s, g);
-  return static_cast<double>(*std::max_element(count.begin(), count.end())) * static_cast<double>(s.points) /
+/// The largest number of input points one tile's region holds, estimated from the regions' survey points @p load.
+double largestRegion(const Survey& s, const std::vector<std::size_t>& load) {
+  return static_cast<double>(*std::max_element(load.begin(), load.end())) * static_cast<double>(s.points) /
          static_cast<double>(s.sample.size());
 }
 
-/// The grid's critical path, in survey points: the colours run one after another and a colour's tiles side by
-/// side, so with unlimited processes a run takes the sum over colours of the largest tile's work (its region).
-double criticalPath(const Survey& s, const TileGrid& g) {
-  const std::vector<std::size_t> load = regionCounts(s, g);
+/// The grid's critical path, in survey points (@p load per tile): the colours run one after another and a
+/// colour's tiles side by side, so with unlimited processes a run takes the sum over colours of the largest
+/// tile's work (its region).
+double criticalPath(const TileGrid& g, const std::vector<std::size_t>& load) {
   std::array<std::size_t, 8> largest{};
   for (std::size_t t = 0; t < g.count(); ++t) largest[g.colour(t)] = std::max(largest[g.colour(t)], load[t]);
   return static_cast<double>(std::accumulate(largest.begin(), largest.end(), std::size_t{0}));
@@ -166,9 +165,10 @@ TileGrid chooseGrid(const Survey& s, const TileParams& tp, double margin, std::s
   if (tp.tileSize > 0) return makeGrid(s, std::max(tp.tileSize, minSize), margin);
   double size = std::max(s.bounds.sizes().maxCoeff() * (1 + 1e-9), minSize);
   const auto fits = [&](const TileGrid& g) {
-    return largestRegion(s, g) <= 0.9 * static_cast<double>(capacity) &&
+    const std::vector<std::size_t> load = regionCounts(s, g);
+    return largestRegion(s, load) <= 0.9 * static_cast<double>(capacity) &&
            (g.count() == 1 || size * 0.8 < kSpreadMargins * margin ||
-            criticalPath(s, g) <= static_cast<double>(s.sample.size()) / kParallelism);
+            criticalPath(g, load) <= static_cast<double>(s.sample.size()) / kParallelism);
   };
   for (;;) {
     const TileGrid g = makeGrid(s, size, margin);
