@@ -559,7 +559,7 @@ struct Fans {
 
 }  // namespace
 
-std::size_t removeExtraFans(TriangleMesh& mesh) {
+std::size_t removeExtraFans(TriangleMesh& mesh, int threads) {
   auto& T = mesh.triangles;
   const std::size_t nv = mesh.vertices.size();
   const detail::VertexFaces vf = detail::vertexFaces(mesh);
@@ -567,7 +567,7 @@ std::size_t removeExtraFans(TriangleMesh& mesh) {
   // Which vertices have several fans in the mesh as given (in parallel); the ordered pass below visits those,
   // and any vertex that lost a face to an earlier one.
   std::vector<char> several(nv, 0);
-  parallelFor(nv, 0, [&](std::size_t v) {
+  parallelFor(nv, threads, [&](std::size_t v) {
     thread_local Fans fans;
     thread_local std::vector<std::uint32_t> faces;
     faces.assign(incident.begin() + start[v], incident.begin() + start[v + 1]);

@@ -81,9 +81,10 @@ std::vector<char> grownRegion(const TriangleMesh& mesh, const std::vector<std::p
 }
 
 /// Make every edge and vertex manifold by removing faces; returns the faces removed.
-std::size_t removeNonManifold(TriangleMesh& mesh, std::size_t minComponentFaces, std::size_t* edgesFound = nullptr) {
+std::size_t removeNonManifold(TriangleMesh& mesh, std::size_t minComponentFaces, int threads,
+                              std::size_t* edgesFound = nullptr) {
   std::size_t removed = removeNonManifoldEdgeFaces(mesh, edgesFound);
-  if (const std::size_t fans = removeExtraFans(mesh); fans > 0) {
+  if (const std::size_t fans = removeExtraFans(mesh, threads); fans > 0) {
     removed += fans;
     if (minComponentFaces > 1) removed += removeSmallComponents(mesh, minComponentFaces);
   }
@@ -92,10 +93,10 @@ std::size_t removeNonManifold(TriangleMesh& mesh, std::size_t minComponentFaces,
 
 /// Fill the holes a removal opened as the pipeline fills holes: small loops, extra fans, large loops.
 void refill(TriangleMesh& mesh, std::vector<Eigen::Vector3d>& normals, const ValidityParams& params,
-            ValidityReport& report) {
+            int threads, ValidityReport& report) {
   const std::size_t faces = mesh.triangles.size(), vertices = mesh.vertices.size();
   fillSmallHoles(mesh, normals, params.holes);
-  const std::size_t pinched = removeNonManifold(mesh, params.minComponentFaces);
+  const std::size_t pinched = removeNonManifold(mesh, params.minComponentFaces, threads);
   if (params.holes.maxRefinedExtent > 0) {
     orientConsistently(mesh, normals);  // fillLargeHoles needs an oriented 2-manifold
     fillLargeHoles(mesh, normals, params.holes);
@@ -116,21 +117,21 @@ ValidityReport repairValidity(TriangleMesh& mesh, std::vector<Eigen::Vector3d>& 
                               const Execution& exec) {
   params.validate();
   ValidityReport report;
-  report.facesRemoved += removeNonManifold(mesh, params.minComponentFaces, &report.nonManifoldEdges);
+  report.facesRemoved += removeNonManifold(mesh, params.minComponentFaces, exec.threads, &report.nonManifoldEdges);
   std::vector<std::pair<std::size_t, std::size_t>> pairs = selfIntersections(mesh, exec.threads);
   report.intersectingPairs = pairs.size();
   for (int round = 1; round <= params.rounds && !pairs.empty() && params.refill; ++round) {
     ++report.rounds;
     report.facesRemoved += removeFaces(mesh, grownRegion(mesh, pairs, round));
-    report.facesRemoved += removeNonManifold(mesh, params.minComponentFaces);
+    report.facesRemoved += removeNonManifold(mesh, params.minComponentFaces, exec.threads);
     if (params.minComponentFaces > 1) report.facesRemoved += removeSmallComponents(mesh, params.minComponentFaces);
-    refill(mesh, normals, params, report);
+    refill(mesh, normals, params, exec.threads, report);
     pairs = selfIntersections(mesh, exec.threads);
   }
   // What still intersects goes without a fill: removing faces creates no intersection, and removeNonManifold
   // only removes faces too.
   while (!pairs.empty()) {
-    const std::size_t removed = removeFaces(mesh, grownRegion(mesh, pairs, 0)) + removeNonManifold(mesh, 0);
+    const std::size_t removed = removeFaces(mesh, grownRegion(mesh, pairs, 0)) + removeNonManifold(mesh, 0, exec.threads);
     report.removedWithoutFill += removed;
     report.facesRemoved += removed;
     pairs = selfIntersections(mesh, exec.threads);

@@ -181,13 +181,14 @@ void triangulateSamples(const ReconstructParams& params, const Execution& exec, 
 /// Small components removed, small holes closed (again after removing the fans a fill pinched together), large
 /// holes closed, edges flipped back to Delaunay, bad triangles repaired, the band along open boundaries relaxed.
 /// Returns the faces flipped by the orientation passes that large holes and remeshing need first.
-std::size_t closeHoles(const ReconstructParams& params, ReconstructResult& result, std::vector<Eigen::Vector3d>& normals) {
+std::size_t closeHoles(const ReconstructParams& params, const Execution& exec, ReconstructResult& result,
+                       std::vector<Eigen::Vector3d>& normals) {
   std::size_t flipped = 0;
   if (params.minComponentFaces > 1) result.smallComponentFaces = removeSmallComponents(result.mesh, params.minComponentFaces);
   if (params.fillHoles) {
     result.holes = fillSmallHoles(result.mesh, normals, params.holes);
     // A filled loop can pinch two sheets together at a vertex: drop the smaller fan there, and close again.
-    if (removeExtraFans(result.mesh) > 0) {
+    if (removeExtraFans(result.mesh, exec.threads) > 0) {
       if (params.minComponentFaces > 1)
         result.smallComponentFaces += removeSmallComponents(result.mesh, params.minComponentFaces);
       const HoleFillingReport again = fillSmallHoles(result.mesh, normals, params.holes);
@@ -291,7 +292,7 @@ ReconstructResult reconstruct(const PointCloud& input, const ReconstructParams& 
 
   t = clock.begin("holes");
   std::vector<Eigen::Vector3d> normals = result.samples.normals;  // grows with any vertex hole filling adds
-  std::size_t flippedEarlier = closeHoles(params, result, normals);  // by orientation passes needed first
+  std::size_t flippedEarlier = closeHoles(params, exec, result, normals);  // by orientation passes needed first
   clock.end("holes", t);
 
   if (params.repairValidity) {

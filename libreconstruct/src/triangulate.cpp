@@ -209,7 +209,7 @@ TriangulateResult triangulateLocal(const PointCloud& cloud, const TriangulatePar
     used.insert(e2);
     result.mesh.triangles.emplace_back(static_cast<int>(c.v[0]), static_cast<int>(c.v[1]), static_cast<int>(c.v[2]));
   }
-  result.removedFans = removeExtraFans(result.mesh);
+  result.removedFans = removeExtraFans(result.mesh, exec.threads);
   result.kept = result.mesh.triangles.size();
   if (params.flipMaxDihedral > 0 && params.maxFlipSweeps > 0)
     result.flips = flipToDelaunay(result.mesh, params.flipMaxDihedral, params.maxFlipSweeps);

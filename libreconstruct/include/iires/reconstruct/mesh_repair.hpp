@@ -103,8 +103,8 @@ std::size_t remeshBadRegions(TriangleMesh& mesh, std::vector<Eigen::Vector3d>& n
 /// keep the fan with the most faces (ties: the one with the lowest face index) and remove the others' faces.
 /// The holes this opens are for fillSmallHoles().
 /// @return number of faces removed.
-/// @note Vertices are visited in index order; deterministic. O(F log F).
-std::size_t removeExtraFans(TriangleMesh& mesh);
+/// @note Vertices are visited in index order; deterministic for any @p threads (0 = all cores). O(F log F).
+std::size_t removeExtraFans(TriangleMesh& mesh, int threads = 0);
 
 /// @brief Remove the faces of connected components (through shared vertices) with fewer than @p minFaces faces:
 /// stray islands a local method leaves inside a hole. @return number of faces removed.
