@@ -232,10 +232,10 @@ DenoiseResult denoise(const PointCloud& input, const DenoiseParams& params, cons
   // Work in Morton order: neighbours in space are neighbours in memory (k-NN queries and sweeps stay in
   // cache). in[a] is the caller's point order[a]; the output is put back in the caller's order.
   const std::vector<std::uint32_t> order = mortonOrder(input.points, exec.threads);
-  std::vector<Eigen::Vector3d> in(n), normals(n, Eigen::Vector3d::Zero());
+  std::vector<Eigen::Vector3d> in(n), inNormals(n, Eigen::Vector3d::Zero());
   for (std::size_t a = 0; a < n; ++a) {
     in[a] = input.points[order[a]];
-    if (given) normals[a] = input.normals[order[a]];
+    if (given) inNormals[a] = input.normals[order[a]];
   }
 
   // Neighbour lists, found once on the input: each sweep moves points by a fraction of the spacing only.
@@ -246,7 +246,7 @@ DenoiseResult denoise(const PointCloud& input, const DenoiseParams& params, cons
   const auto sweepStart = Clock::now();
   result.neighbourSeconds = std::chrono::duration<double>(sweepStart - start).count();
 
-  std::vector<Eigen::Vector3d> cur = in, next(n), nextNormals(n);
+  std::vector<Eigen::Vector3d> cur = in, normals = inNormals, next(n), nextNormals(n);
   std::vector<double> moved(n);
   const double sharp = params.sharpnessAngle > 0 ? 1.0 - std::cos(params.sharpnessAngle * M_PI / 180.0) : 0.0;
   const double invSharp2 = sharp > 0 ? 1.0 / (sharp * sharp) : 0.0;
@@ -297,7 +297,7 @@ DenoiseResult denoise(const PointCloud& input, const DenoiseParams& params, cons
       const std::size_t wideK = std::max({wideKernel + 1, k, std::min(4 * k, kWideNeighbours)});
       rows = findRows(in, order, nullptr, wideK, wideKernel, params.kernelQuantile, exec.threads);
       cur = in;
-      for (std::size_t a = 0; a < n; ++a) normals[a] = given ? input.normals[order[a]] : Eigen::Vector3d::Zero();
+      normals = inNormals;
       probing = given && !params.keepGivenNormals;
       it = -1;
       continue;
