@@ -189,26 +189,42 @@ TEST(Tiled, AutoTileSizeFollowsTheMemoryBudget) {
   EXPECT_EQ(whole.cloud.size(), 1000u);
 }
 
-TEST(Tiled, AutoTilesLeaveNoRankIdle) {
-  // The smallest budget (a tile holds 10⁵ points) fits the scene's 171k points in 3 × 2 tiles, where two colours
-  // hold one tile each: a second rank would sit idle through their rounds.
-  const std::string dir = iires::test::tempDir();
-  iires::writePointCloud(dir + "/scene.ply", scene(150000, 11));
-  iires::TileParams tp;
-  tp.scratchDir = dir;
-  tp.memoryBudgetGB = 0.01;
-  tp.marginSpacings = 2;
-  const iires::TiledResult r = iires::resampleTiled(dir + "/scene.ply", paramsFor(40000), tp, iires::Execution{2});
-  ASSERT_EQ(r.cloud.size(), 40000u);
-  // No split of the tiles over two ranks can end before the largest tile of each colour, or before half of it.
-  std::array<double, 8> largest{}, sum{};
-  for (const iires::TileReport& t : r.tiles) {
-    largest[t.colour] = std::max(largest[t.colour], static_cast<double>(t.points));
-    sum[t.colour] += static_cast<double>(t.points);
+/// Spheres of radius 0.3 on a 3 × 3 × 3 lattice of unit step, @p count points in all (a scene whose tiles stack
+/// in 3-D: eight colours).
+PointCloud sphereLattice(std::size_t count, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> g(0.0, 1.0);
+  PointCloud c;
+  for (std::size_t i = 0; i < count; ++i) {
+    const Vector3d centre(static_cast<double>(i % 3), static_cast<double>(i / 3 % 3), static_cast<double>(i / 9 % 3));
+    c.points.push_back(centre + 0.3 * Vector3d(g(rng), g(rng), g(rng)).normalized());
   }
-  double twoRanks = 0, total = 0;
-  for (int c = 0; c < 8; ++c) twoRanks += std::max(largest[c], sum[c] / 2), total += sum[c];
-  EXPECT_LE(twoRanks / (total / 2), 1.25) << "on a " << r.grid[0] << "x" << r.grid[1] << "x" << r.grid[2] << " grid";
+  return c;
+}
+
+TEST(Tiled, AutoTilesLeaveNoRankIdle) {
+  // The smallest budget (a tile holds 10⁵ points): the terrain scene's 171k points fit 3 × 2 tiles, where two
+  // colours hold one tile each, so a second rank would sit idle through their rounds; the sphere lattice's fit
+  // 2 × 2 × 2 tiles, one per colour.
+  for (const PointCloud& input : {scene(150000, 11), sphereLattice(170000, 12)}) {
+    const std::string dir = iires::test::tempDir();
+    iires::writePointCloud(dir + "/scene.ply", input);
+    iires::TileParams tp;
+    tp.scratchDir = dir;
+    tp.memoryBudgetGB = 0.01;
+    tp.marginSpacings = 2;
+    const iires::TiledResult r = iires::resampleTiled(dir + "/scene.ply", paramsFor(40000), tp, iires::Execution{2});
+    ASSERT_EQ(r.cloud.size(), 40000u);
+    // No split of the tiles over two ranks can end before the largest tile of each colour, or before half of it.
+    std::array<double, 8> largest{}, sum{};
+    for (const iires::TileReport& t : r.tiles) {
+      largest[t.colour] = std::max(largest[t.colour], static_cast<double>(t.points));
+      sum[t.colour] += static_cast<double>(t.points);
+    }
+    double twoRanks = 0, total = 0;
+    for (int c = 0; c < 8; ++c) twoRanks += std::max(largest[c], sum[c] / 2), total += sum[c];
+    EXPECT_LE(twoRanks / (total / 2), 1.25) << "on a " << r.grid[0] << "x" << r.grid[1] << "x" << r.grid[2] << " grid";
+  }
 }
 
 TEST(Tiled, BadInputAndParameters) {
