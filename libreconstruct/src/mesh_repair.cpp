@@ -8,7 +8,6 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
-#include <deque>
 #include <limits>
 #include <map>
 #include <stdexcept>
@@ -17,6 +16,7 @@
 #include <unordered_set>
 
 #include "iires/detail/parallel.hpp"
+#include "iires/detail/radix_sort.hpp"
 #include "iires/reconstruct/mesh_quality.hpp"
 
 namespace iires {
@@ -683,46 +683,63 @@ std::size_t flipToDelaunay(TriangleMesh& mesh, double maxDihedralDeg, int maxSwe
 OrientationReport orientConsistently(TriangleMesh& mesh, const std::vector<Eigen::Vector3d>& normals) {
   OrientationReport report;
   auto& T = mesh.triangles;
-  const auto map = edgeFaces(mesh);
-  // Face adjacency through manifold edges.
-  std::vector<std::vector<std::uint32_t>> adj(T.size());
-  for (const auto& [key, faces] : map)
-    if (faces.size() == 2) adj[faces[0]].push_back(faces[1]), adj[faces[1]].push_back(faces[0]);
-  for (auto& a : adj) std::sort(a.begin(), a.end());
+  const auto nf = static_cast<std::uint32_t>(T.size());
+  // The manifold edges' face pairs: the faces' edge uses sorted by edge (faces ascending within one edge).
+  std::vector<KeyedIndex> uses;
+  uses.reserve(3 * T.size());
+  for (std::uint32_t f = 0; f < nf; ++f)
+    for (int c = 0; c < 3; ++c) uses.emplace_back(undirectedKey(vtx(T[f], c), vtx(T[f], (c + 1) % 3)), f);
+  radixSort(uses, 1);
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> manifold;  // (f, g), f < g
+  for (std::size_t i = 0; i < uses.size();) {
+    std::size_t j = i + 1;
+    while (j < uses.size() && uses[j].first == uses[i].first) ++j;
+    if (j - i == 2) manifold.emplace_back(uses[i].second, uses[i + 1].second);
+    i = j;
+  }
+  // Face adjacency through manifold edges (CSR), each face's neighbours ascending.
+  std::vector<std::uint32_t> start(T.size() + 1, 0), adj(2 * manifold.size());
+  for (const auto& [f, g] : manifold) ++start[f + 1], ++start[g + 1];
+  for (std::size_t f = 0; f < T.size(); ++f) start[f + 1] += start[f];
+  std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
+  for (const auto& [f, g] : manifold) adj[fill[f]++] = g, adj[fill[g]++] = f;
+  for (std::size_t f = 0; f < T.size(); ++f) std::sort(adj.begin() + start[f], adj.begin() + start[f + 1]);
   auto sharesDirection = [&](std::uint32_t f, std::uint32_t g) {
     for (int c = 0; c < 3; ++c)
       for (int e = 0; e < 3; ++e)
         if (T[f][c] == T[g][e] && T[f][(c + 1) % 3] == T[g][(e + 1) % 3]) return true;
     return false;
   };
-  std::vector<int> component(T.size(), -1);
-  std::vector<std::vector<std::uint32_t>> members;
-  for (std::uint32_t seed = 0; seed < T.size(); ++seed) {
-    if (component[seed] >= 0) continue;
-    const int id = static_cast<int>(members.size());
-    members.emplace_back();
-    std::deque<std::uint32_t> queue{seed};
-    component[seed] = id;
-    while (!queue.empty()) {
-      const std::uint32_t f = queue.front();
-      queue.pop_front();
-      members.back().push_back(f);
-      for (std::uint32_t g : adj[f]) {
-        if (component[g] >= 0) continue;
-        component[g] = id;
+  // Breadth-first from each component's lowest face; `order` holds the components' faces one after another.
+  std::vector<char> seen(T.size(), 0);
+  std::vector<std::uint32_t> order;
+  std::vector<std::size_t> componentStart;
+  order.reserve(T.size());
+  for (std::uint32_t seed = 0; seed < nf; ++seed) {
+    if (seen[seed]) continue;
+    componentStart.push_back(order.size());
+    seen[seed] = 1;
+    order.push_back(seed);
+    for (std::size_t head = componentStart.back(); head < order.size(); ++head) {
+      const std::uint32_t f = order[head];
+      for (std::uint32_t k = start[f]; k < start[f + 1]; ++k) {
+        const std::uint32_t g = adj[k];
+        if (seen[g]) continue;
+        seen[g] = 1;
         if (sharesDirection(f, g)) {
           std::swap(T[g][1], T[g][2]);
           ++report.facesFlipped;
         }
-        queue.push_back(g);
+        order.push_back(g);
       }
     }
   }
-  report.components = members.size();
-  for (const auto& faces : members) {
+  componentStart.push_back(order.size());
+  report.components = componentStart.size() - 1;
+  for (std::size_t c = 0; c + 1 < componentStart.size(); ++c) {
     double sign = 0;
-    for (std::uint32_t f : faces) {
-      const auto& t = T[f];
+    for (std::size_t k = componentStart[c]; k < componentStart[c + 1]; ++k) {
+      const auto& t = T[order[k]];
       const Eigen::Vector3d fn = faceNormal(mesh, vtx(t, 0), vtx(t, 1), vtx(t, 2));
       if (normals.size() == mesh.vertices.size())
         sign += fn.dot(normals[vtx(t, 0)] + normals[vtx(t, 1)] + normals[vtx(t, 2)]);
@@ -730,12 +747,12 @@ OrientationReport orientConsistently(TriangleMesh& mesh, const std::vector<Eigen
         sign += mesh.vertices[vtx(t, 0)].dot(fn);  // 6 × signed volume
     }
     if (sign < 0) {
-      for (std::uint32_t f : faces) std::swap(T[f][1], T[f][2]);
-      report.facesFlipped += faces.size();
+      for (std::size_t k = componentStart[c]; k < componentStart[c + 1]; ++k) std::swap(T[order[k]][1], T[order[k]][2]);
+      report.facesFlipped += componentStart[c + 1] - componentStart[c];
     }
   }
-  for (const auto& [key, faces] : map)
-    if (faces.size() == 2 && sharesDirection(faces[0], faces[1])) ++report.conflicts;
+  for (const auto& [f, g] : manifold)
+    if (sharesDirection(f, g)) ++report.conflicts;
   return report;
 }
 
