@@ -7,6 +7,7 @@
 #include <random>
 
 #include "iires/reconstruct/self_intersections.hpp"
+#include "shapes.hpp"
 
 namespace iires {
 namespace {
@@ -14,6 +15,7 @@ namespace {
 using V = Eigen::Vector3d;
 using F = Eigen::Vector3i;
 using Pairs = std::vector<std::pair<std::size_t, std::size_t>>;
+using test::uvSphereMesh;
 
 TriangleMesh tetrahedron() {
   TriangleMesh m;
@@ -22,33 +24,9 @@ TriangleMesh tetrahedron() {
   return m;
 }
 
-/// A closed UV sphere (no intersections by construction).
-TriangleMesh uvSphere(int rings, int segments) {
-  TriangleMesh m;
-  m.vertices.emplace_back(0, 0, 1);
-  for (int r = 1; r < rings; ++r)
-    for (int s = 0; s < segments; ++s) {
-      const double th = M_PI * r / rings, ph = 2 * M_PI * s / segments;
-      m.vertices.emplace_back(std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), std::cos(th));
-    }
-  m.vertices.emplace_back(0, 0, -1);
-  const int south = static_cast<int>(m.vertices.size()) - 1;
-  auto at = [&](int r, int s) { return 1 + (r - 1) * segments + (s % segments); };
-  for (int s = 0; s < segments; ++s) {
-    m.triangles.emplace_back(0, at(1, s), at(1, s + 1));
-    m.triangles.emplace_back(south, at(rings - 1, s + 1), at(rings - 1, s));
-  }
-  for (int r = 1; r + 1 < rings; ++r)
-    for (int s = 0; s < segments; ++s) {
-      m.triangles.emplace_back(at(r, s), at(r + 1, s), at(r + 1, s + 1));
-      m.triangles.emplace_back(at(r, s), at(r + 1, s + 1), at(r, s + 1));
-    }
-  return m;
-}
-
 TEST(SelfIntersections, NoneOnClosedConvexMeshes) {
   EXPECT_TRUE(selfIntersections(tetrahedron()).empty());
-  EXPECT_TRUE(selfIntersections(uvSphere(12, 20)).empty());
+  EXPECT_TRUE(selfIntersections(uvSphereMesh(12, 20)).empty());
 }
 
 TEST(SelfIntersections, TrianglePiercingOneFace) {
@@ -99,11 +77,11 @@ TEST(SelfIntersections, DuplicateFaceAndDegenerateFace) {
 // random (folds, fans that overlap, faces through neighbours) and two overlapping spheres.
 TEST(SelfIntersections, MatchesBruteForceOnCrumpledMeshes) {
   for (double noise : {0.0, 0.02, 0.08, 0.3}) {
-    TriangleMesh m = uvSphere(10, 14);
+    TriangleMesh m = uvSphereMesh(10, 14);
     std::mt19937_64 rng(7);
     std::normal_distribution<double> g(0.0, noise);
     for (auto& v : m.vertices) v += V(g(rng), g(rng), g(rng));
-    const TriangleMesh s = uvSphere(6, 8);
+    const TriangleMesh s = uvSphereMesh(6, 8);
     const int off = static_cast<int>(m.vertices.size());
     for (const auto& v : s.vertices) m.vertices.push_back(0.6 * v + V(0.7, 0.1, 0.0));
     for (const auto& t : s.triangles) m.triangles.push_back(t + F(off, off, off));
@@ -114,7 +92,7 @@ TEST(SelfIntersections, MatchesBruteForceOnCrumpledMeshes) {
 }
 
 TEST(SelfIntersections, SameAnswerForAnyThreadCount) {
-  TriangleMesh a = uvSphere(16, 24), b = uvSphere(16, 24);
+  TriangleMesh a = uvSphereMesh(16, 24), b = uvSphereMesh(16, 24);
   const int off = static_cast<int>(a.vertices.size());
   for (const auto& v : b.vertices) a.vertices.push_back(0.7 * v + V(0.5, 0.2, 0.1));
   for (const auto& t : b.triangles) a.triangles.push_back(t + F(off, off, off));
@@ -122,6 +100,47 @@ TEST(SelfIntersections, SameAnswerForAnyThreadCount) {
   EXPECT_FALSE(one.empty());  // two spheres cut each other along a closed curve
   EXPECT_EQ(one, selfIntersections(a, 2));
   for (const auto& [f, g] : one) EXPECT_TRUE(f < b.triangles.size() && g >= b.triangles.size());
+}
+
+TEST(SelfIntersections, OnlyThePairsOfChangedFaces) {
+  TriangleMesh a = uvSphereMesh(16, 24), b = uvSphereMesh(16, 24);
+  const std::size_t first = a.triangles.size();
+  const int off = static_cast<int>(a.vertices.size());
+  for (const auto& v : b.vertices) a.vertices.push_back(0.7 * v + V(0.5, 0.2, 0.1));
+  for (const auto& t : b.triangles) a.triangles.push_back(t + F(off, off, off));
+  const Pairs all = selfIntersections(a, 1);
+  ASSERT_FALSE(all.empty());
+  // Every pair holds a face of each sphere; flag every third face of the second one.
+  std::vector<char> changed(a.triangles.size(), 0);
+  for (std::size_t f = first; f < changed.size(); f += 3) changed[f] = 1;
+  Pairs expected;
+  for (const auto& [f, g] : all)
+    if (changed[f] || changed[g]) expected.emplace_back(f, g);
+  ASSERT_FALSE(expected.empty());
+  ASSERT_LT(expected.size(), all.size());
+  EXPECT_EQ(selfIntersections(a, changed, 1), expected);
+  EXPECT_EQ(selfIntersections(a, changed, 2), expected);
+  EXPECT_TRUE(selfIntersections(a, std::vector<char>(a.triangles.size(), 0)).empty());
+  EXPECT_EQ(selfIntersections(a, std::vector<char>(a.triangles.size(), 1)), all);
+  EXPECT_THROW(selfIntersections(a, std::vector<char>(3, 1)), std::invalid_argument);
+}
+
+TEST(SelfIntersections, FacesChangedSinceFlagsAddedAndMovedFaces) {
+  const TriangleMesh before = uvSphereMesh(8, 12);
+  TriangleMesh after = before;
+  EXPECT_EQ(facesChangedSince(before, after), std::vector<char>(after.triangles.size(), 0));
+  // Reordered corners and faces are the same faces; a moved vertex changes its faces; a new face is changed.
+  std::swap(after.triangles[0][1], after.triangles[0][2]);
+  std::swap(after.triangles[1], after.triangles[2]);
+  after.vertices[5] += V(0.01, 0, 0);
+  after.vertices.push_back(V(2, 2, 2));
+  after.triangles.emplace_back(0, 1, static_cast<int>(after.vertices.size()) - 1);
+  const std::vector<char> changed = facesChangedSince(before, after);
+  for (std::size_t f = 0; f < after.triangles.size(); ++f) {
+    const auto& t = after.triangles[f];
+    const bool expected = f + 1 == after.triangles.size() || t[0] == 5 || t[1] == 5 || t[2] == 5;
+    EXPECT_EQ(changed[f] != 0, expected) << "face " << f;
+  }
 }
 
 }  // namespace

@@ -85,6 +85,30 @@ inline PointCloud uStrip(std::size_t perSquare, double gap, std::uint64_t seed) 
 // Used by the tests (small clouds) and by bench/thin_parts_bench (large ones).
 
 
+/// A closed UV sphere (no intersections by construction).
+inline TriangleMesh uvSphereMesh(int rings, int segments) {
+  TriangleMesh m;
+  m.vertices.emplace_back(0, 0, 1);
+  for (int r = 1; r < rings; ++r)
+    for (int s = 0; s < segments; ++s) {
+      const double th = M_PI * r / rings, ph = 2 * M_PI * s / segments;
+      m.vertices.emplace_back(std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), std::cos(th));
+    }
+  m.vertices.emplace_back(0, 0, -1);
+  const int south = static_cast<int>(m.vertices.size()) - 1;
+  auto at = [&](int r, int s) { return 1 + (r - 1) * segments + (s % segments); };
+  for (int s = 0; s < segments; ++s) {
+    m.triangles.emplace_back(0, at(1, s), at(1, s + 1));
+    m.triangles.emplace_back(south, at(rings - 1, s + 1), at(rings - 1, s));
+  }
+  for (int r = 1; r + 1 < rings; ++r)
+    for (int s = 0; s < segments; ++s) {
+      m.triangles.emplace_back(at(r, s), at(r + 1, s), at(r + 1, s + 1));
+      m.triangles.emplace_back(at(r, s), at(r + 1, s + 1), at(r, s + 1));
+    }
+  return m;
+}
+
 /// A generated thin case: the cloud (outward unit normals), its input spacing and gap, and the truth.
 struct ThinCase {
   std::string name;

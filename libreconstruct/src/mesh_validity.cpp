@@ -2,6 +2,8 @@
 #include "iires/reconstruct/mesh_validity.hpp"
 
 #include <algorithm>
+#include <cstdio>
+#include <cstdlib>
 #include <cstdint>
 #include <stdexcept>
 #include <utility>
@@ -114,27 +116,35 @@ void ValidityParams::validate() const {
 }
 
 ValidityReport repairValidity(TriangleMesh& mesh, std::vector<Eigen::Vector3d>& normals, const ValidityParams& params,
-                              const Execution& exec) {
+                              const Execution& exec, const TriangleMesh* clean) {
   params.validate();
   ValidityReport report;
   report.facesRemoved += removeNonManifold(mesh, params.minComponentFaces, exec.threads, &report.nonManifoldEdges);
-  std::vector<std::pair<std::size_t, std::size_t>> pairs = selfIntersections(mesh, exec.threads);
+  // Removing faces creates no intersection: what a clean mesh can have is between changed faces and the rest.
+  std::vector<std::pair<std::size_t, std::size_t>> pairs =
+      clean ? selfIntersections(mesh, facesChangedSince(*clean, mesh), exec.threads) : selfIntersections(mesh, exec.threads);
   report.intersectingPairs = pairs.size();
+  if (getenv("DBG_SI") && clean) { auto full = selfIntersections(mesh, exec.threads); auto ch = facesChangedSince(*clean, mesh); std::size_t nch=0; for (char c: ch) nch+=c;
+      fprintf(stderr, "initial: local %zu full %zu changed %zu faces %zu\n", pairs.size(), full.size(), nch, mesh.triangles.size());
+      for (auto& [f,g] : full) if (!std::binary_search(pairs.begin(), pairs.end(), std::make_pair(f,g))) fprintf(stderr, "  missed %zu %zu changed %d %d\n", f, g, ch[f], ch[g]); }
   for (int round = 1; round <= params.rounds && !pairs.empty() && params.refill; ++round) {
     ++report.rounds;
     report.facesRemoved += removeFaces(mesh, grownRegion(mesh, pairs, round));
     report.facesRemoved += removeNonManifold(mesh, params.minComponentFaces, exec.threads);
     if (params.minComponentFaces > 1) report.facesRemoved += removeSmallComponents(mesh, params.minComponentFaces);
+    const TriangleMesh removed = mesh;  // free of intersections: every face of a pair went
     refill(mesh, normals, params, exec.threads, report);
-    pairs = selfIntersections(mesh, exec.threads);
+    pairs = selfIntersections(mesh, facesChangedSince(removed, mesh), exec.threads);
+    if (getenv("DBG_SI")) { auto full = selfIntersections(mesh, exec.threads); auto ch = facesChangedSince(removed, mesh); std::size_t nch=0; for (char c: ch) nch+=c;
+      fprintf(stderr, "round %d: local %zu full %zu changed %zu faces %zu\n", round, pairs.size(), full.size(), nch, mesh.triangles.size());
+      for (auto& [f,g] : full) if (!std::binary_search(pairs.begin(), pairs.end(), std::make_pair(f,g))) fprintf(stderr, "  missed %zu %zu changed %d %d\n", f, g, ch[f], ch[g]); }
   }
   // What still intersects goes without a fill: removing faces creates no intersection, and removeNonManifold
   // only removes faces too.
-  while (!pairs.empty()) {
+  if (!pairs.empty()) {
     const std::size_t removed = removeFaces(mesh, grownRegion(mesh, pairs, 0)) + removeNonManifold(mesh, 0, exec.threads);
     report.removedWithoutFill += removed;
     report.facesRemoved += removed;
-    pairs = selfIntersections(mesh, exec.threads);
   }
   return report;
 }

@@ -230,6 +230,7 @@ std::size_t repairMeshValidity(const ReconstructParams& params, const Execution&
   vp.minComponentFaces = params.minComponentFaces;
   result.validity = repairValidity(result.mesh, normals, vp, exec);
   if (result.validity.facesAdded > 0 && params.repairQuality > 0) {
+    const TriangleMesh clean = result.mesh;
     // The fills can hold poor triangles: the same quality repairs as above, then the check again (a repair that
     // made something intersect is undone by removal there).
     const BadTriangleReport again = repairBadTriangles(result.mesh, normals, params.repairQuality, params.repairDeviation);
@@ -240,7 +241,7 @@ std::size_t repairMeshValidity(const ReconstructParams& params, const Execution&
       result.remeshedVertices += remeshBadRegions(result.mesh, normals, params.repairQuality);
     }
     vp.rounds = 1;
-    const ValidityReport check = repairValidity(result.mesh, normals, vp, exec);
+    const ValidityReport check = repairValidity(result.mesh, normals, vp, exec, &clean);
     result.validity.rounds += check.rounds;
     result.validity.facesRemoved += check.facesRemoved;
     result.validity.facesAdded += check.facesAdded;

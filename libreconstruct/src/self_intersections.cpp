@@ -11,6 +11,7 @@
 #include <cmath>
 #include <Eigen/Geometry>
 #include <cstdint>
+#include <stdexcept>
 
 #include "iires/detail/parallel.hpp"
 #include "iires/detail/radix_sort.hpp"
@@ -113,11 +114,13 @@ bool separatedFan(const TriangleMesh& mesh, const detail::VertexFaces& vf, std::
   return std::abs(turn - 2 * M_PI) <= 1e-6;
 }
 
-/// separatedFan() of every vertex.
-std::vector<char> separatedFans(const TriangleMesh& mesh, int threads) {
+/// separatedFan() of every vertex (of the vertices flagged in @p only, when given; 0 for the others).
+std::vector<char> separatedFans(const TriangleMesh& mesh, int threads, const std::vector<char>* only = nullptr) {
   const detail::VertexFaces vf = detail::vertexFaces(mesh);
   std::vector<char> good(mesh.vertices.size(), 0);
-  parallelFor(good.size(), threads, [&](std::size_t v) { good[v] = separatedFan(mesh, vf, v) ? 1 : 0; });
+  parallelFor(good.size(), threads, [&](std::size_t v) {
+    if (!only || (*only)[v]) good[v] = separatedFan(mesh, vf, v) ? 1 : 0;
+  });
   return good;
 }
 
@@ -190,27 +193,83 @@ bool gridCandidates(const std::vector<Box>& boxes, const Skip& skip, int threads
   return true;
 }
 
-}  // namespace
+/// The boxes of @p changed faces (the first @p changedCount of @p boxes) and the others that may overlap one of
+/// them: those entering a cell of a grid (cells the largest changed box's size) that a changed box enters. The
+/// others cannot meet a changed face. Keeps every box when the grid would be too fine for its keys.
+void keepNearChanged(std::vector<Box>& boxes, std::size_t changedCount) {
+  if (changedCount == 0 || changedCount == boxes.size()) return;
+  CGAL::Bbox_3 all;
+  double cell = 0;
+  for (std::size_t i = 0; i < boxes.size(); ++i) {
+    const CGAL::Bbox_3& b = boxes[i].bbox();
+    all += b;
+    if (i < changedCount) cell = std::max({cell, b.xmax() - b.xmin(), b.ymax() - b.ymin(), b.zmax() - b.zmin()});
+  }
+  constexpr double kMaxCells = 1 << 20;  // per axis: cell coordinates fit 21 bits
+  if (!(cell > 0)) return;
+  for (int d = 0; d < 3; ++d)
+    if ((all.max(d) - all.min(d)) / cell > kMaxCells) return;
+  auto coord = [&](double x, int d) { return static_cast<std::uint64_t>((x - all.min(d)) / cell); };
+  auto cells = [&](const CGAL::Bbox_3& b, auto&& visit) {
+    for (std::uint64_t x = coord(b.xmin(), 0); x <= coord(b.xmax(), 0); ++x)
+      for (std::uint64_t y = coord(b.ymin(), 1); y <= coord(b.ymax(), 1); ++y)
+        for (std::uint64_t z = coord(b.zmin(), 2); z <= coord(b.zmax(), 2); ++z)
+          if (!visit((x << 42) | (y << 21) | z)) return false;
+    return true;
+  };
+  std::vector<std::uint64_t> changedCells;
+  for (std::size_t i = 0; i < changedCount; ++i)
+    cells(boxes[i].bbox(), [&](std::uint64_t key) { return changedCells.push_back(key), true; });
+  std::sort(changedCells.begin(), changedCells.end());
+  std::size_t kept = changedCount;
+  for (std::size_t i = changedCount; i < boxes.size(); ++i) {
+    const bool near = !cells(boxes[i].bbox(), [&](std::uint64_t key) {
+      return !std::binary_search(changedCells.begin(), changedCells.end(), key);
+    });
+    if (near) boxes[kept++] = boxes[i];
+  }
+  boxes.resize(kept);
+}
 
-std::vector<std::pair<std::size_t, std::size_t>> selfIntersections(const TriangleMesh& mesh, int threads) {
+/// selfIntersections() of every face pair, or (@p changed given) of the pairs with a changed face.
+std::vector<std::pair<std::size_t, std::size_t>> intersectingPairs(const TriangleMesh& mesh, int threads,
+                                                                   const std::vector<char>* changed) {
   std::vector<Point> p;
   p.reserve(mesh.vertices.size());
   for (const auto& v : mesh.vertices) p.emplace_back(v.x(), v.y(), v.z());
   const auto& faces = mesh.triangles;
+  if (changed && changed->size() != faces.size())
+    throw std::invalid_argument("selfIntersections: one changed flag per face is needed");
+  auto isChanged = [&](std::size_t f) { return !changed || (*changed)[f]; };
   std::vector<Box> boxes;
   boxes.reserve(faces.size());
-  for (std::size_t f = 0; f < faces.size(); ++f) {
-    const auto& t = faces[f];
-    if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) continue;
-    const Point &a = p[static_cast<std::size_t>(t[0])], &b = p[static_cast<std::size_t>(t[1])],
-                &c = p[static_cast<std::size_t>(t[2])];
-    if (CGAL::collinear(a, b, c)) continue;  // degenerate: counted apart
-    boxes.emplace_back(a.bbox() + b.bbox() + c.bbox(), f);
+  for (const bool first : {true, false}) {  // the changed faces' boxes first
+    if (!changed && !first) break;
+    for (std::size_t f = 0; f < faces.size(); ++f) {
+      const auto& t = faces[f];
+      if (isChanged(f) != first || t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) continue;
+      const Point &a = p[static_cast<std::size_t>(t[0])], &b = p[static_cast<std::size_t>(t[1])],
+                  &c = p[static_cast<std::size_t>(t[2])];
+      if (CGAL::collinear(a, b, c)) continue;  // degenerate: counted apart
+      boxes.emplace_back(a.bbox() + b.bbox() + c.bbox(), f);
+    }
+  }
+  std::vector<char> fanVertices;  // the vertices a pair with a changed face can share
+  if (changed) {
+    std::size_t changedBoxes = 0;
+    while (changedBoxes < boxes.size() && (*changed)[boxes[changedBoxes].info()]) ++changedBoxes;
+    keepNearChanged(boxes, changedBoxes);
+    std::sort(boxes.begin(), boxes.end(), [](const Box& a, const Box& b) { return a.info() < b.info(); });
+    fanVertices.assign(mesh.vertices.size(), 0);
+    for (std::size_t f = 0; f < faces.size(); ++f)
+      if ((*changed)[f])
+        for (int c = 0; c < 3; ++c) fanVertices[static_cast<std::size_t>(faces[f][c])] = 1;
   }
   // Candidates from overlapping boxes, then the exact tests.
   // Faces with a common vertex whose fan is separated (separatedFans) need no test.
-  const std::vector<char> separated = separatedFans(mesh, threads);
+  const std::vector<char> separated = separatedFans(mesh, threads, changed ? &fanVertices : nullptr);
   auto skip = [&](std::size_t f, std::size_t g) {
+    if (!isChanged(f) && !isChanged(g)) return true;
     for (int i = 0; i < 3; ++i)
       for (int j = 0; j < 3; ++j)
         if (faces[f][i] == faces[g][j] && separated[static_cast<std::size_t>(faces[f][i])]) return true;
@@ -241,6 +300,44 @@ std::vector<std::pair<std::size_t, std::size_t>> selfIntersections(const Triangl
     if (hit[k]) pairs.push_back(candidates[k]);
   std::sort(pairs.begin(), pairs.end());
   return pairs;
+}
+
+}  // namespace
+
+std::vector<std::pair<std::size_t, std::size_t>> selfIntersections(const TriangleMesh& mesh, int threads) {
+  return intersectingPairs(mesh, threads, nullptr);
+}
+
+std::vector<std::pair<std::size_t, std::size_t>> selfIntersections(const TriangleMesh& mesh,
+                                                                   const std::vector<char>& changed, int threads) {
+  return intersectingPairs(mesh, threads, &changed);
+}
+
+std::vector<char> facesChangedSince(const TriangleMesh& before, const TriangleMesh& after) {
+  std::vector<char> changed(after.triangles.size(), 1);
+  constexpr std::size_t kMaxIndex = std::size_t{1} << 21;  // three indices in one 63-bit key
+  if (before.vertices.size() > kMaxIndex || after.vertices.size() > kMaxIndex) return changed;
+  // A vertex is the same where it exists in both at the same position.
+  std::vector<char> same(after.vertices.size(), 0);
+  for (std::size_t v = 0; v < std::min(before.vertices.size(), after.vertices.size()); ++v)
+    same[v] = before.vertices[v] == after.vertices[v];
+  auto key = [](const Eigen::Vector3i& t) {
+    std::array<std::uint64_t, 3> v{static_cast<std::uint64_t>(t[0]), static_cast<std::uint64_t>(t[1]),
+                                   static_cast<std::uint64_t>(t[2])};
+    std::sort(v.begin(), v.end());
+    return (v[0] << 42) | (v[1] << 21) | v[2];
+  };
+  std::vector<std::uint64_t> old;
+  old.reserve(before.triangles.size());
+  for (const auto& t : before.triangles) old.push_back(key(t));
+  std::sort(old.begin(), old.end());
+  for (std::size_t f = 0; f < after.triangles.size(); ++f) {
+    const auto& t = after.triangles[f];
+    const bool moved = !same[static_cast<std::size_t>(t[0])] || !same[static_cast<std::size_t>(t[1])] ||
+                       !same[static_cast<std::size_t>(t[2])];
+    changed[f] = moved || !std::binary_search(old.begin(), old.end(), key(t));
+  }
+  return changed;
 }
 
 std::vector<std::pair<std::size_t, std::size_t>> selfIntersectionsBruteForce(const TriangleMesh& mesh) {

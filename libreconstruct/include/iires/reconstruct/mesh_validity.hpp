@@ -48,8 +48,11 @@ struct ValidityReport {
 /// and their normals to @p normals (when it holds one per vertex). Faces keep their orientation; call
 /// orientConsistently() afterwards.
 /// @post no self-intersecting pair, no non-manifold edge or vertex (removing faces cannot create either).
+/// @param clean (optional) the mesh as it was when last free of self-intersections: then only the faces changed
+/// since (facesChangedSince()) are checked for them (the refills' checks are always local in this way)
 /// @note Deterministic for any thread count. Nothing is changed for a valid mesh (one check, O(F log F)).
 ValidityReport repairValidity(TriangleMesh& mesh, std::vector<Eigen::Vector3d>& normals,
-                              const ValidityParams& params = {}, const Execution& exec = {});
+                              const ValidityParams& params = {}, const Execution& exec = {},
+                              const TriangleMesh* clean = nullptr);
 
 }  // namespace iires

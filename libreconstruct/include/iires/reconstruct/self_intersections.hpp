@@ -25,6 +25,17 @@ namespace iires {
 /// similar triangles. The tests run in parallel on @p threads (0 = all cores); the result does not depend on it.
 std::vector<std::pair<std::size_t, std::size_t>> selfIntersections(const TriangleMesh& mesh, int threads = 0);
 
+/// @brief The pairs of selfIntersections() that hold a face flagged in @p changed (one flag per face of @p mesh):
+/// the check of a mesh that was free of them before a repair added or moved those faces (facesChangedSince()).
+/// The other faces are looked at only where their boxes come near a changed face's.
+/// @throws std::invalid_argument when @p changed does not hold one flag per face.
+std::vector<std::pair<std::size_t, std::size_t>> selfIntersections(const TriangleMesh& mesh,
+                                                                   const std::vector<char>& changed, int threads = 0);
+
+/// @brief One flag per face of @p after: 1 unless @p before has a face with the same three vertex indices, none of
+/// which moved (a face a repair added, or one whose vertex it moved). Every flag is 1 for meshes over 2²¹ vertices.
+std::vector<char> facesChangedSince(const TriangleMesh& before, const TriangleMesh& after);
+
 /// @brief The same pairs as selfIntersections() by testing every pair of faces: the oracle for small meshes.
 /// @note O(F²).
 std::vector<std::pair<std::size_t, std::size_t>> selfIntersectionsBruteForce(const TriangleMesh& mesh);
