@@ -283,6 +283,50 @@ TEST(MeshRepair, FillLargeHolesClosesACapWithNewVertices) {
 
 // A sample crowded onto its neighbour (slivers) is moved or removed; a spike (a vertex 5 l off its neighbours'
 // surface, thin triangles too) is kept: changing it would move the surface by more than 0.25 l — unless allowed.
+// Long loops: up to 250 edges CGAL's exhaustive search closes them (a flat cap of well-shaped triangles on the cut,
+// C⁰ fairing); longer ones are kept open.
+TEST(MeshRepair, FillLargeHolesClosesLoopsUpTo250Edges) {
+  for (const int segments : {200, 300}) {
+    TriangleMesh m = test::uvSphereMesh(100, segments);
+    std::vector<Eigen::Vector3i> kept;
+    for (const auto& t : m.triangles) {
+      bool cap = false;
+      for (int k = 0; k < 3; ++k) cap = cap || m.vertices[static_cast<std::size_t>(t[k])].z() < -0.8;
+      if (!cap) kept.push_back(t);
+    }
+    m.triangles = kept;
+    std::vector<Eigen::Vector3d> normals = m.vertices;  // outward on the unit sphere
+    ASSERT_EQ(evaluateMesh(m).boundaryEdges, static_cast<std::size_t>(segments));
+    const TriangleMesh cut = m;
+    const std::size_t nv = m.vertices.size();
+    const LargeHoleReport r = fillLargeHoles(m, normals);
+    if (segments > 250) {
+      EXPECT_EQ(r.kept, 1u);
+      EXPECT_EQ(m.triangles, cut.triangles);
+      continue;
+    }
+    EXPECT_EQ(r.filled, 1u);
+    EXPECT_GT(r.verticesAdded, 50u);
+    const MeshQuality after = evaluateMesh(m);
+    EXPECT_TRUE(after.closed);
+    EXPECT_EQ(after.selfIntersections, 0u);
+    EXPECT_EQ(after.genus, 0);
+    // The loop is the ring just above z = −0.8: the cap lies flat inside it.
+    const double ringZ = std::cos(M_PI * 79 / 100), ringRadius = std::sin(M_PI * 79 / 100);
+    for (std::size_t v = nv; v < m.vertices.size(); ++v) {
+      EXPECT_NEAR(m.vertices[v].z(), ringZ, 1e-3);
+      EXPECT_LT(m.vertices[v].head<2>().norm(), ringRadius);
+    }
+    double worst = 1;
+    for (const auto& t : m.triangles)
+      if (t[0] >= static_cast<int>(nv) || t[1] >= static_cast<int>(nv) || t[2] >= static_cast<int>(nv))
+        worst = std::min(worst, triangleQuality(m.vertices[static_cast<std::size_t>(t[0])],
+                                                m.vertices[static_cast<std::size_t>(t[1])],
+                                                m.vertices[static_cast<std::size_t>(t[2])]));
+    EXPECT_GT(worst, 0.2);
+  }
+}
+
 TEST(MeshRepair, RepairsCrowdedVertexKeepsSpike) {
   PointCloud c;
   TriangleMesh m = sphereMesh(c);

@@ -17,7 +17,6 @@
 #include <algorithm>
 #include <cmath>
 #include <iterator>
-#include <limits>
 #include <map>
 #include <unordered_map>
 #include <vector>
@@ -53,65 +52,11 @@ bool toSurfaceMesh(const TriangleMesh& mesh, Mesh& sm) {
 }
 
 /// Loops up to this many edges are triangulated by CGAL's exhaustive search (O(n³): 0.02 s at 100 edges, 0.27 s at
-/// 240); longer ones by clipEars(). CGAL's faster search in a 3-D Delaunay triangulation is not used: it orders
-/// cells by address, so its result changes with the heap's layout, i.e. with the thread count.
-constexpr std::size_t kExhaustiveEdges = 100;
-
-/// The hole at the border halfedge @p h closed by clipping ears: of the triangles (a, b, c) over two consecutive
-/// border edges, the one turning the loop's way (about its Newell normal) with the best shape is added, until the
-/// loop is a triangle. O(n²), deterministic. Returns false (nothing added) when an ear cannot be added (it would
-/// make an edge non-manifold) and no other can either.
-bool clipEars(Mesh& sm, HalfedgeIndex h, std::vector<FaceIndex>& faces) {
-  std::vector<VertexIndex> loop;
-  HalfedgeIndex g = h;
-  do {
-    loop.push_back(sm.source(g));
-    g = sm.next(g);
-  } while (g != h);
-  auto at = [&](VertexIndex v) { return toEigen(sm.point(v)); };
-  Eigen::Vector3d normal = Eigen::Vector3d::Zero();  // the loop's Newell normal: the side the new faces face
-  for (std::size_t i = 0; i < loop.size(); ++i) normal += at(loop[i]).cross(at(loop[(i + 1) % loop.size()]));
-  std::vector<FaceIndex> added;
-  std::vector<char> blocked;  // per loop position: its ear failed to be added (reset when the loop changes)
-  while (loop.size() > 3) {
-    const std::size_t n = loop.size();
-    blocked.assign(n, 0);
-    bool clipped = false;
-    while (!clipped) {
-      std::size_t best = n;
-      double bestScore = -std::numeric_limits<double>::infinity();
-      for (std::size_t i = 0; i < n; ++i) {
-        if (blocked[i]) continue;
-        const Eigen::Vector3d a = at(loop[(i + n - 1) % n]), b = at(loop[i]), c = at(loop[(i + 1) % n]);
-        const bool turnsTheLoopsWay = (b - a).cross(c - b).dot(normal) > 0;
-        const double score = triangleQuality(a, b, c) - (turnsTheLoopsWay ? 0.0 : 2.0);
-        if (score > bestScore) bestScore = score, best = i;
-      }
-      if (best == n) {
-        for (FaceIndex f : added) CGAL::Euler::remove_face(sm.halfedge(f), sm);
-        return false;
-      }
-      const VertexIndex a = loop[(best + n - 1) % n], b = loop[best], c = loop[(best + 1) % n];
-      const bool diagonalFree = sm.halfedge(a, c) == Mesh::null_halfedge() && sm.halfedge(c, a) == Mesh::null_halfedge();
-      const FaceIndex f = diagonalFree ? sm.add_face(a, b, c) : Mesh::null_face();
-      if (f == Mesh::null_face()) {
-        blocked[best] = 1;
-        continue;
-      }
-      added.push_back(f);
-      loop.erase(loop.begin() + static_cast<std::ptrdiff_t>(best));
-      clipped = true;
-    }
-  }
-  const FaceIndex last = sm.add_face(loop[0], loop[1], loop[2]);
-  if (last == Mesh::null_face()) {
-    for (FaceIndex f : added) CGAL::Euler::remove_face(sm.halfedge(f), sm);
-    return false;
-  }
-  added.push_back(last);
-  faces.insert(faces.end(), added.begin(), added.end());
-  return true;
-}
+/// 240); longer ones are kept open (an ear-clipped start would be a fan of slivers on a near-circular loop, which
+/// refining and fairing, with their cotangent weights, turn into faces outside the loop). CGAL's faster search in a
+/// 3-D Delaunay triangulation is not used: its fills change from run to run on two threads (3torus, loops of
+/// 124-240 edges).
+constexpr std::size_t kExhaustiveEdges = 250;
 
 }  // namespace
 
@@ -176,8 +121,6 @@ LargeHoleReport fillLargeHoles(TriangleMesh& mesh, std::vector<Eigen::Vector3d>&
     std::vector<FaceIndex> faces;
     if (edges <= kExhaustiveEdges)
       PMP::triangulate_hole(sm, h, std::back_inserter(faces), CGAL::parameters::use_delaunay_triangulation(false));
-    else
-      clipEars(sm, h, faces);
     if (faces.empty()) {
       ++report.kept;
       continue;

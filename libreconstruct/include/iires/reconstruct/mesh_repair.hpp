@@ -72,9 +72,9 @@ struct LargeHoleReport {
   bool skipped = false;           ///< the mesh was not an oriented 2-manifold: nothing was done
 };
 
-/// @brief Close the boundary loops whose bounding-box diagonal is at most params.maxRefinedExtent × that of their
-/// component (through shared vertices) with new vertices: CGAL's refined, faired hole filling (Liepa 2003: a
-/// minimal-area triangulation, refined to the loop's edge density, its new vertices faired with C⁰ continuity — a
+/// @brief Close the boundary loops of at most 250 edges whose bounding-box diagonal is at most
+/// params.maxRefinedExtent × that of their component (through shared vertices) with new vertices: CGAL's refined,
+/// faired hole filling (Liepa 2003: a minimal-area triangulation by exhaustive search, refined to the loop's edge density, its new vertices faired with C⁰ continuity — a
 /// membrane, flat for a planar loop, where C¹ would carry the surrounding walls into a dome), then params.refineIterations of isotropic remeshing of the patch at the loop's mean edge
 /// length (the loop's own edges and vertices unchanged). Meant for what fillSmallHoles() leaves: a gap of a scan
 /// wider than many mesh edges (e.g. an object's flat cap sampled only at its rim), while the boundary of an open
