@@ -564,14 +564,16 @@ void fillCreaseGaps(const PointCloud& cloud, const KnnIndex& index, double h, co
       if (blocks(q)) return true;
     return false;
   };
-  // A sample 0.5–1.6 steps behind e (away from f) within 20° (or 0.15 step) of the line e–f: the samples run on in
-  // line (up to the wobble of samples placed by biased fits).
+  // A sample of e's own chain 0.5–1.6 steps behind e (away from f) within 20° (or 0.15 step) of the line e–f: e's
+  // crease runs on in line (up to the wobble of samples placed by biased fits). Another chain's sample there
+  // says nothing about e's crease (a neighbouring crease may run in line by chance while e's bends away).
   const double kInLine = std::tan(20.0 * kDeg);
-  auto inLine = [&](const Eigen::Vector3d& e, const Eigen::Vector3d& f) {
-    const Eigen::Vector3d u = (f - e).normalized();
-    placed.radius(e, 1.6 * step, ci, cd2);
+  auto inLine = [&](std::size_t e, std::size_t f) {
+    const Eigen::Vector3d u = (out[f] - out[e]).normalized();
+    placed.radius(out[e], 1.6 * step, ci, cd2);
     for (std::uint32_t c : ci) {
-      const Eigen::Vector3d v = out[c] - e;
+      if (owner[c] != owner[e]) continue;
+      const Eigen::Vector3d v = out[c] - out[e];
       const double t = v.dot(u);
       if (-t >= 0.5 * step && (v - t * u).norm() <= std::max(0.15 * step, -t * kInLine)) return true;
     }
@@ -590,7 +592,7 @@ void fillCreaseGaps(const PointCloud& cloud, const KnnIndex& index, double h, co
       if (g <= 1.5 * step || g > 6.0 * step) continue;
       const Eigen::Vector3d m = 0.5 * (a + b), u = (b - a) / g;
       if (covered(m, 0.45 * g, u)) continue;
-      const bool lineA = inLine(a, b), lineB = inLine(b, a);
+      const bool lineA = inLine(i, j), lineB = inLine(j, i);
       const bool chord = g <= 4.5 * step ? (lineA || lineB) : (lineA && lineB);
       const int pieces = static_cast<int>(std::ceil(g / step - 1e-9));
       fill.clear();

@@ -106,9 +106,12 @@ void traceChainEnds(const PointCloud& cloud, const KnnIndex& index, double h, co
 ///    maxChainTurn, its point within 0.3 step of the chord), else
 ///  - on the fitted crease line of a or b where that line runs along a→b and passes within 0.1 step of the
 ///    chord point, else
-///  - on the chord itself where the samples run on in line through a and b: a sample 0.5–1.6 steps behind a
-///    (and one behind b) lies within 20° (or 0.15 step) of the line a–b (both for gaps over 4.5 steps; one of
-///    them suffices for shorter ones, as next to a corner, where the corner sample has no neighbour in line).
+///  - on the chord itself where the creases of a and b run on in line through them: a sample of a's own chain
+///    0.5–1.6 steps behind a (and one of b's behind b) lies within 20° (or 0.15 step) of the line a–b (both for
+///    gaps over 4.5 steps; one of them suffices for shorter ones, as next to a corner, where the corner sample
+///    has no neighbour in line). Another chain's sample in line proves nothing: where creases crowd (a faceted
+///    arc beside other creases, couplingdown) one may lie in line by chance while a's crease bends away, and
+///    the chord then cuts across the bend, up to 0.9 output spacings off the surface.
 ///    This fills the holes where no two-plane fit holds (a plane beside a small-radius cylinder, a corner's
 ///    neighbourhood), which the tracing cannot step through.
 /// A gap where one new sample has none of these is left open (two creases meeting, not one). Each new sample
