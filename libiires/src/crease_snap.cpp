@@ -497,8 +497,9 @@ void separateSamples(double h, std::vector<Eigen::Vector3d>& out, std::vector<st
 //     unlike both) fit a third plane: the corner is the three planes' intersection (refined by reassigning the
 //     points around it to the nearest plane, twice), the gap to it is filled, and the corner's two other creases
 //     (the third plane with each sheet, on the side where the sheet lies) are followed along those planes while
-//     the points around stay explained by them, handing over to the stepped fit once it holds. Traced
-//     branches get chain indices after the given ones. Sequential in a fixed order: deterministic.
+//     the points around stay explained by them and both sheets have points just ahead, handing over to the
+//     stepped fit once it holds. Traced branches get chain indices after the given ones. Sequential in a fixed
+//     order: deterministic.
 //  3b. Tips: two open ends whose crease lines (each the last fit that holds within 3 samples of the end,
 //     its planes refitted without the points off both) share a plane and converge at 8°–maxChainTurn,
 //     meeting ahead of both within 6·radius spacings, are continued on those lines to the tip: the common

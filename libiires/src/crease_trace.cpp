@@ -201,6 +201,23 @@ class CreaseTracer {
     (job.back ? run.pts : run.front).insert(job.back ? run.pts.end() : run.front.end(), tr.added.begin(), tr.added.end());
   }
 
+  /// Whether the input points just ahead of @p y (within 2 local spacings, on the side @p dir points to) include
+  /// points of both sheets of @p c (each within 3·maxResidual local spacings of its plane): a sample placed on a
+  /// line fitted elsewhere (along planes known from behind it) is on the crease only while both sheets go on
+  /// around it. Where one of them has ended (a corner or a tip passed), the line leaves the surface.
+  bool bothSheetsAhead(const Eigen::Vector3d& y, const Crease& c, const Eigen::Vector3d& dir) {
+    const double hl = localSpacing(index_, y, h_), tol = 3.0 * params_.maxResidual * hl;
+    index_.radius(y, 2.0 * hl, idx_, d2_);
+    bool onA = false, onB = false;
+    for (std::uint32_t j : idx_) {
+      const Eigen::Vector3d& q = cloud_.points[j];
+      if ((q - y).dot(dir) <= 0) continue;
+      const double da = std::abs(c.normalA.dot(q) - c.offsetA), db = std::abs(c.normalB.dot(q) - c.offsetB);
+      if (std::min(da, db) <= tol) (da <= db ? onA : onB) = true;
+    }
+    return onA && onB;
+  }
+
   /// A fit fails now and then on a random sampling (a lopsided neighbourhood): the crease goes on if the full
   /// fit holds one or two steps further; the skipped samples go on the straight line to it (@p y, @p c: the
   /// fit there). False when it does not.
@@ -426,6 +443,9 @@ class CreaseTracer {
             ++unexplained;
         }
         if (unexplained * 6 > bidx.size()) break;
+        Crease known;  // the branch: the sheet and the third plane
+        known.normalA = nS, known.offsetA = oS, known.normalB = n3, known.offsetB = o3;
+        if (!bothSheetsAhead(by, known, u)) break;
         Eigen::Vector3d fy = by;
         bool bOne = false;
         if (fitAt(fy, u, bc, bOne) && !bOne && (fy - by).norm() <= params_.maxLineDistance * hc) {

@@ -91,8 +91,10 @@ std::vector<FeatureChain> buildChains(const std::vector<Eigen::Vector3d>& x0,
 /// neither plane explains fit a third plane, the crease ends at a corner on it: the gap to the corner is filled,
 /// a corner sample placed, and the corner's two other creases (the third plane's intersections with the two
 /// sheets, on the side where each sheet lies) are followed as new runs: along the known planes while the points
-/// around stay explained by them, handing over to the stepped fit once it holds. Fills the stretches of a crease
-/// the detector missed, brings the ends into their corners and recovers short creases between corners.
+/// around stay explained by them and both planes' sheets have input points just ahead (a sheet that ends, as a
+/// short crease's, leaves the line off the surface), handing over to the stepped fit once it holds. Fills the
+/// stretches of a crease the detector missed, brings the ends into their corners and recovers short creases
+/// between corners.
 /// New runs get chain indices after the existing ones. Sequential in a fixed order (each trace sees the
 /// samples placed before it): deterministic.
 void traceChainEnds(const PointCloud& cloud, const KnnIndex& index, double h, const FeatureParams& params,
