@@ -13,6 +13,7 @@
 #include "iires/knn.hpp"
 #include "iires/normals.hpp"
 #include "iires/sampling.hpp"
+#include "../libiires/src/features_internal.hpp"  // fillCreaseGaps(): step 5 on its own
 #include "shapes.hpp"
 #include "test_util.hpp"
 
@@ -674,3 +675,33 @@ INSTANTIATE_TEST_SUITE_P(Cad, FeatureData,
                          [](const auto& info) { return std::string(info.param.name); });
 
 }  // namespace
+
+// Step 5 (fillCreaseGaps) on a crease that bends: chains 0 and 1 hold an arc of radius 4 h (a crease drawn on a
+// plane, so that no two-plane fit holds anywhere and only the chord can fill) with a gap of 4 steps between
+// a and b, where the arc turns 57°: neither chain runs on in line with the chord a–b. Chain 2 runs on straight
+// from b, in line with the chord by chance (a neighbouring crease, as where couplingdown's creases crowd). It
+// says nothing about the arc: the gap stays open, where a chord (before: chain 2 counted as b running on in
+// line) cut across the bend, up to 0.5 h off the arc.
+TEST(Features, GapOnABendIsNotBridgedByAnotherChainInLine) {
+  iires::PointCloud cloud = iires::test::planeCloud(20000);
+  cloud.normals.assign(cloud.points.size(), Eigen::Vector3d::UnitZ());
+  const double h = iires::estimateSpacing(cloud.points), r = 4.0 * h, s = h / r;  // s: one step of arc
+  const Eigen::Vector3d c(0.5, 0.5, 0.0);
+  auto arc = [&](double a) { return Eigen::Vector3d(c + r * Eigen::Vector3d(std::cos(a), std::sin(a), 0)); };
+  std::vector<Eigen::Vector3d> out;
+  std::vector<std::uint32_t> owner;
+  for (int k = -3; k <= 0; ++k) out.push_back(arc(k * s)), owner.push_back(0);     // ends at a = arc(0)
+  for (int k = 4; k <= 7; ++k) out.push_back(arc(k * s)), owner.push_back(1);      // starts at b = arc(4s)
+  const Eigen::Vector3d a = arc(0), b = arc(4 * s), u = (b - a).normalized();
+  for (int k = 1; k <= 3; ++k) out.push_back(b + k * h * u), owner.push_back(2);  // in line with a–b past b
+  const std::size_t given = out.size();
+  const iires::KnnIndex index(cloud.points);
+  iires::detail::fillCreaseGaps(cloud, index, h, FeatureParams{}, out, owner);
+  ASSERT_EQ(out.size(), owner.size());
+  for (std::size_t i = given; i < out.size(); ++i) {
+    const double offArc = std::abs((out[i] - c).norm() - r);
+    const double offLine = ((out[i] - b) - u * (out[i] - b).dot(u)).norm();
+    EXPECT_TRUE(offArc <= 0.25 * h || (offLine <= 0.25 * h && (out[i] - b).dot(u) >= 0))
+        << out[i].transpose() << ": " << offArc / h << " h off the arc";
+  }
+}

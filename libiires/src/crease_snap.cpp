@@ -497,8 +497,9 @@ void separateSamples(double h, std::vector<Eigen::Vector3d>& out, std::vector<st
 //     unlike both) fit a third plane: the corner is the three planes' intersection (refined by reassigning the
 //     points around it to the nearest plane, twice), the gap to it is filled, and the corner's two other creases
 //     (the third plane with each sheet, on the side where the sheet lies) are followed along those planes while
-//     the points around stay explained by them, handing over to the stepped fit once it holds. Traced
-//     branches get chain indices after the given ones. Sequential in a fixed order: deterministic.
+//     the points around stay explained by them and both sheets have points just ahead, handing over to the
+//     stepped fit once it holds. Traced branches get chain indices after the given ones. Sequential in a fixed
+//     order: deterministic.
 //  3b. Tips: two open ends whose crease lines (each the last fit that holds within 3 samples of the end,
 //     its planes refitted without the points off both) share a plane and converge at 8°–maxChainTurn,
 //     meeting ahead of both within 6·radius spacings, are continued on those lines to the tip: the common
@@ -512,8 +513,9 @@ void separateSamples(double h, std::vector<Eigen::Vector3d>& out, std::vector<st
 //  5. Gaps: two samples 1.5–6 × the chains' median spacing apart with no sample between them (within 0.45 × their
 //     distance of the midpoint and half a spacing of their line) get samples at ≤ that spacing between them: on
 //     the snap fit's crease where it runs along them and near their chord, else on the fitted crease line of
-//     either, else on the chord where the samples on either side run on in line with it (within 20°; one side
-//     suffices up to 4.5 spacings); a gap where none holds (two creases meeting) stays open.
+//     either, else on the chord where the chains on either side run on in line with it (a sample of the end's own
+//     chain within 20°; one side suffices up to 4.5 spacings); a gap where none holds (two creases meeting)
+//     stays open.
 //  6. Curved sheets: a plane fitted to a sheet that curves along the crease (a plate meeting a cylinder) lies
 //     off it, and so does the planes' line. Every sample whose looser snap fit (as in 1) puts the planes'
 //     line within maxLineDistance/2 local spacings of it moves to the crease of the two sheets fitted as

@@ -201,6 +201,23 @@ class CreaseTracer {
     (job.back ? run.pts : run.front).insert(job.back ? run.pts.end() : run.front.end(), tr.added.begin(), tr.added.end());
   }
 
+  /// Whether the input points just ahead of @p y (within 2 local spacings, on the side @p dir points to) include
+  /// points of both sheets of @p c (each within 3·maxResidual local spacings of its plane): a sample placed on a
+  /// line fitted elsewhere (along planes known from behind it) is on the crease only while both sheets go on
+  /// around it. Where one of them has ended (a corner or a tip passed), the line leaves the surface.
+  bool bothSheetsAhead(const Eigen::Vector3d& y, const Crease& c, const Eigen::Vector3d& dir) {
+    const double hl = localSpacing(index_, y, h_), tol = 3.0 * params_.maxResidual * hl;
+    index_.radius(y, 2.0 * hl, idx_, d2_);
+    bool onA = false, onB = false;
+    for (std::uint32_t j : idx_) {
+      const Eigen::Vector3d& q = cloud_.points[j];
+      if ((q - y).dot(dir) <= 0) continue;
+      const double da = std::abs(c.normalA.dot(q) - c.offsetA), db = std::abs(c.normalB.dot(q) - c.offsetB);
+      if (std::min(da, db) <= tol) (da <= db ? onA : onB) = true;
+    }
+    return onA && onB;
+  }
+
   /// A fit fails now and then on a random sampling (a lopsided neighbourhood): the crease goes on if the full
   /// fit holds one or two steps further; the skipped samples go on the straight line to it (@p y, @p c: the
   /// fit there). False when it does not.
@@ -426,6 +443,9 @@ class CreaseTracer {
             ++unexplained;
         }
         if (unexplained * 6 > bidx.size()) break;
+        Crease known;  // the branch: the sheet and the third plane
+        known.normalA = nS, known.offsetA = oS, known.normalB = n3, known.offsetB = o3;
+        if (!bothSheetsAhead(by, known, u)) break;
         Eigen::Vector3d fy = by;
         bool bOne = false;
         if (fitAt(fy, u, bc, bOne) && !bOne && (fy - by).norm() <= params_.maxLineDistance * hc) {
@@ -564,14 +584,16 @@ void fillCreaseGaps(const PointCloud& cloud, const KnnIndex& index, double h, co
       if (blocks(q)) return true;
     return false;
   };
-  // A sample 0.5–1.6 steps behind e (away from f) within 20° (or 0.15 step) of the line e–f: the samples run on in
-  // line (up to the wobble of samples placed by biased fits).
+  // A sample of e's own chain 0.5–1.6 steps behind e (away from f) within 20° (or 0.15 step) of the line e–f: e's
+  // crease runs on in line (up to the wobble of samples placed by biased fits). Another chain's sample there
+  // says nothing about e's crease (a neighbouring crease may run in line by chance while e's bends away).
   const double kInLine = std::tan(20.0 * kDeg);
-  auto inLine = [&](const Eigen::Vector3d& e, const Eigen::Vector3d& f) {
-    const Eigen::Vector3d u = (f - e).normalized();
-    placed.radius(e, 1.6 * step, ci, cd2);
+  auto inLine = [&](std::size_t e, std::size_t f) {
+    const Eigen::Vector3d u = (out[f] - out[e]).normalized();
+    placed.radius(out[e], 1.6 * step, ci, cd2);
     for (std::uint32_t c : ci) {
-      const Eigen::Vector3d v = out[c] - e;
+      if (owner[c] != owner[e]) continue;
+      const Eigen::Vector3d v = out[c] - out[e];
       const double t = v.dot(u);
       if (-t >= 0.5 * step && (v - t * u).norm() <= std::max(0.15 * step, -t * kInLine)) return true;
     }
@@ -590,7 +612,7 @@ void fillCreaseGaps(const PointCloud& cloud, const KnnIndex& index, double h, co
       if (g <= 1.5 * step || g > 6.0 * step) continue;
       const Eigen::Vector3d m = 0.5 * (a + b), u = (b - a) / g;
       if (covered(m, 0.45 * g, u)) continue;
-      const bool lineA = inLine(a, b), lineB = inLine(b, a);
+      const bool lineA = inLine(i, j), lineB = inLine(j, i);
       const bool chord = g <= 4.5 * step ? (lineA || lineB) : (lineA && lineB);
       const int pieces = static_cast<int>(std::ceil(g / step - 1e-9));
       fill.clear();

@@ -91,8 +91,10 @@ std::vector<FeatureChain> buildChains(const std::vector<Eigen::Vector3d>& x0,
 /// neither plane explains fit a third plane, the crease ends at a corner on it: the gap to the corner is filled,
 /// a corner sample placed, and the corner's two other creases (the third plane's intersections with the two
 /// sheets, on the side where each sheet lies) are followed as new runs: along the known planes while the points
-/// around stay explained by them, handing over to the stepped fit once it holds. Fills the stretches of a crease
-/// the detector missed, brings the ends into their corners and recovers short creases between corners.
+/// around stay explained by them and both planes' sheets have input points just ahead (a sheet that ends, as a
+/// short crease's, leaves the line off the surface), handing over to the stepped fit once it holds. Fills the
+/// stretches of a crease the detector missed, brings the ends into their corners and recovers short creases
+/// between corners.
 /// New runs get chain indices after the existing ones. Sequential in a fixed order (each trace sees the
 /// samples placed before it): deterministic.
 void traceChainEnds(const PointCloud& cloud, const KnnIndex& index, double h, const FeatureParams& params,
@@ -106,9 +108,12 @@ void traceChainEnds(const PointCloud& cloud, const KnnIndex& index, double h, co
 ///    maxChainTurn, its point within 0.3 step of the chord), else
 ///  - on the fitted crease line of a or b where that line runs along a→b and passes within 0.1 step of the
 ///    chord point, else
-///  - on the chord itself where the samples run on in line through a and b: a sample 0.5–1.6 steps behind a
-///    (and one behind b) lies within 20° (or 0.15 step) of the line a–b (both for gaps over 4.5 steps; one of
-///    them suffices for shorter ones, as next to a corner, where the corner sample has no neighbour in line).
+///  - on the chord itself where the creases of a and b run on in line through them: a sample of a's own chain
+///    0.5–1.6 steps behind a (and one of b's behind b) lies within 20° (or 0.15 step) of the line a–b (both for
+///    gaps over 4.5 steps; one of them suffices for shorter ones, as next to a corner, where the corner sample
+///    has no neighbour in line). Another chain's sample in line proves nothing: where creases crowd (a faceted
+///    arc beside other creases, couplingdown) one may lie in line by chance while a's crease bends away, and
+///    the chord then cuts across the bend, up to 0.9 output spacings off the surface.
 ///    This fills the holes where no two-plane fit holds (a plane beside a small-radius cylinder, a corner's
 ///    neighbourhood), which the tracing cannot step through.
 /// A gap where one new sample has none of these is left open (two creases meeting, not one). Each new sample
