@@ -97,9 +97,9 @@ std::size_t removeNonManifold(TriangleMesh& mesh, std::size_t minComponentFaces,
 void refill(TriangleMesh& mesh, std::vector<Eigen::Vector3d>& normals, const ValidityParams& params,
             int threads, ValidityReport& report) {
   const std::size_t faces = mesh.triangles.size(), vertices = mesh.vertices.size();
-  fillSmallHoles(mesh, normals, params.holes);
+  const std::size_t open = fillSmallHoles(mesh, normals, params.holes).kept;
   const std::size_t pinched = removeNonManifold(mesh, params.minComponentFaces, threads);
-  if (params.holes.maxRefinedExtent > 0) {
+  if (params.holes.maxRefinedExtent > 0 && (open > 0 || pinched > 0)) {  // else no loop is left for it
     orientConsistently(mesh, normals);  // fillLargeHoles needs an oriented 2-manifold
     fillLargeHoles(mesh, normals, params.holes);
   }

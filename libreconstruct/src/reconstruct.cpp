@@ -219,6 +219,15 @@ std::size_t closeHoles(const ReconstructParams& params, const Execution& exec, R
   return flipped;
 }
 
+/// Whether a face of @p mesh has a quality under @p q (remeshBadRegions() has work).
+bool anyFaceBelow(const TriangleMesh& mesh, double q) {
+  const auto& P = mesh.vertices;
+  return std::any_of(mesh.triangles.begin(), mesh.triangles.end(), [&](const Eigen::Vector3i& t) {
+    return triangleQuality(P[static_cast<std::size_t>(t[0])], P[static_cast<std::size_t>(t[1])],
+                           P[static_cast<std::size_t>(t[2])]) < q;
+  });
+}
+
 /// Self-intersecting faces and non-manifold parts removed (and refilled); the fills' poor triangles repaired,
 /// then checked again. Returns the faces flipped by the orientation passes remeshing needs first.
 std::size_t repairMeshValidity(const ReconstructParams& params, const Execution& exec, ReconstructResult& result,
@@ -236,7 +245,7 @@ std::size_t repairMeshValidity(const ReconstructParams& params, const Execution&
     const BadTriangleReport again = repairBadTriangles(result.mesh, normals, params.repairQuality, params.repairDeviation);
     result.badTriangles.moved += again.moved;
     result.badTriangles.removed += again.removed;
-    if (params.remeshBadRegions) {
+    if (params.remeshBadRegions && anyFaceBelow(result.mesh, params.repairQuality)) {
       flipped += orientConsistently(result.mesh, normals).facesFlipped;
       result.remeshedVertices += remeshBadRegions(result.mesh, normals, params.repairQuality);
     }

@@ -194,8 +194,9 @@ bool gridCandidates(const std::vector<Box>& boxes, const Skip& skip, int threads
 }
 
 /// The boxes of @p changed faces (the first @p changedCount of @p boxes) and the others that may overlap one of
-/// them: those entering a cell of a grid (cells the largest changed box's size) that a changed box enters. The
-/// others cannot meet a changed face. Keeps every box when the grid would be too fine for its keys.
+/// them: those entering a cell of a grid (cells the largest changed box's size) that a changed box enters, and
+/// those over more than 64 cells (kept unlooked-at). The others cannot meet a changed face. Keeps every box when
+/// the grid would be too fine for its keys.
 void keepNearChanged(std::vector<Box>& boxes, std::size_t changedCount) {
   if (changedCount == 0 || changedCount == boxes.size()) return;
   CGAL::Bbox_3 all;
@@ -222,8 +223,14 @@ void keepNearChanged(std::vector<Box>& boxes, std::size_t changedCount) {
     cells(boxes[i].bbox(), [&](std::uint64_t key) { return changedCells.push_back(key), true; });
   std::sort(changedCells.begin(), changedCells.end());
   std::size_t kept = changedCount;
+  auto span = [&](const CGAL::Bbox_3& b) {
+    std::uint64_t count = 1;
+    for (int d = 0; d < 3; ++d) count *= coord(b.max(d), d) - coord(b.min(d), d) + 1;
+    return count;
+  };
+  constexpr std::uint64_t kMaxLookedAt = 64;
   for (std::size_t i = changedCount; i < boxes.size(); ++i) {
-    const bool near = !cells(boxes[i].bbox(), [&](std::uint64_t key) {
+    const bool near = span(boxes[i].bbox()) > kMaxLookedAt || !cells(boxes[i].bbox(), [&](std::uint64_t key) {
       return !std::binary_search(changedCells.begin(), changedCells.end(), key);
     });
     if (near) boxes[kept++] = boxes[i];
