@@ -248,6 +248,7 @@ std::vector<std::pair<std::size_t, std::size_t>> intersectingPairs(const Triangl
   if (changed && changed->size() != faces.size())
     throw std::invalid_argument("selfIntersections: one changed flag per face is needed");
   auto isChanged = [&](std::size_t f) { return !changed || (*changed)[f]; };
+  if (changed && std::none_of(changed->begin(), changed->end(), [](char c) { return c != 0; })) return {};
   std::vector<Box> boxes;
   boxes.reserve(faces.size());
   for (const bool first : {true, false}) {  // the changed faces' boxes first
@@ -257,7 +258,6 @@ std::vector<std::pair<std::size_t, std::size_t>> intersectingPairs(const Triangl
       if (isChanged(f) != first || t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) continue;
       const Point &a = p[static_cast<std::size_t>(t[0])], &b = p[static_cast<std::size_t>(t[1])],
                   &c = p[static_cast<std::size_t>(t[2])];
-      if (CGAL::collinear(a, b, c)) continue;  // degenerate: counted apart
       boxes.emplace_back(a.bbox() + b.bbox() + c.bbox(), f);
     }
   }
@@ -272,6 +272,12 @@ std::vector<std::pair<std::size_t, std::size_t>> intersectingPairs(const Triangl
       if ((*changed)[f])
         for (int c = 0; c < 3; ++c) fanVertices[static_cast<std::size_t>(faces[f][c])] = 1;
   }
+  // Degenerate faces (collinear corners) are counted apart: tested only on the boxes kept.
+  boxes.erase(std::remove_if(boxes.begin(), boxes.end(), [&](const Box& b) {
+                const auto& t = faces[b.info()];
+                return CGAL::collinear(p[static_cast<std::size_t>(t[0])], p[static_cast<std::size_t>(t[1])],
+                                       p[static_cast<std::size_t>(t[2])]);
+              }), boxes.end());
   // Candidates from overlapping boxes, then the exact tests.
   // Faces with a common vertex whose fan is separated (separatedFans) need no test.
   const std::vector<char> separated = separatedFans(mesh, threads, changed ? &fanVertices : nullptr);
@@ -334,10 +340,12 @@ std::vector<char> facesChangedSince(const TriangleMesh& before, const TriangleMe
     std::sort(v.begin(), v.end());
     return (v[0] << 42) | (v[1] << 21) | v[2];
   };
-  std::vector<std::uint64_t> old;
-  old.reserve(before.triangles.size());
-  for (const auto& t : before.triangles) old.push_back(key(t));
-  std::sort(old.begin(), old.end());
+  std::vector<KeyedIndex> keyed;
+  keyed.reserve(before.triangles.size());
+  for (const auto& t : before.triangles) keyed.emplace_back(key(t), 0);
+  radixSort(keyed, 1);
+  std::vector<std::uint64_t> old(keyed.size());
+  for (std::size_t i = 0; i < keyed.size(); ++i) old[i] = keyed[i].first;
   for (std::size_t f = 0; f < after.triangles.size(); ++f) {
     const auto& t = after.triangles[f];
     const bool moved = !same[static_cast<std::size_t>(t[0])] || !same[static_cast<std::size_t>(t[1])] ||
