@@ -249,13 +249,15 @@ std::size_t repairMeshValidity(const ReconstructParams& params, const Execution&
       flipped += orientConsistently(result.mesh, normals).facesFlipped;
       result.remeshedVertices += remeshBadRegions(result.mesh, normals, params.repairQuality);
     }
-    vp.rounds = 1;
-    const ValidityReport check = repairValidity(result.mesh, normals, vp, exec, &clean);
-    result.validity.rounds += check.rounds;
-    result.validity.facesRemoved += check.facesRemoved;
-    result.validity.facesAdded += check.facesAdded;
-    result.validity.verticesAdded += check.verticesAdded;
-    result.validity.removedWithoutFill += check.removedWithoutFill;
+    if (result.mesh.triangles != clean.triangles || result.mesh.vertices != clean.vertices) {  // a repair ran
+      vp.rounds = 1;
+      const ValidityReport check = repairValidity(result.mesh, normals, vp, exec, &clean);
+      result.validity.rounds += check.rounds;
+      result.validity.facesRemoved += check.facesRemoved;
+      result.validity.facesAdded += check.facesAdded;
+      result.validity.verticesAdded += check.verticesAdded;
+      result.validity.removedWithoutFill += check.removedWithoutFill;
+    }
   }
   return flipped;
 }
