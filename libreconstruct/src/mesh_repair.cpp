@@ -16,7 +16,6 @@
 #include <unordered_set>
 
 #include "iires/detail/parallel.hpp"
-#include "iires/detail/radix_sort.hpp"
 #include "iires/reconstruct/mesh_quality.hpp"
 
 namespace iires {
@@ -684,17 +683,13 @@ OrientationReport orientConsistently(TriangleMesh& mesh, const std::vector<Eigen
   OrientationReport report;
   auto& T = mesh.triangles;
   const auto nf = static_cast<std::uint32_t>(T.size());
-  // The manifold edges' face pairs: the faces' edge uses sorted by edge (faces ascending within one edge).
-  std::vector<KeyedIndex> uses;
-  uses.reserve(3 * T.size());
-  for (std::uint32_t f = 0; f < nf; ++f)
-    for (int c = 0; c < 3; ++c) uses.emplace_back(undirectedKey(vtx(T[f], c), vtx(T[f], (c + 1) % 3)), f);
-  radixSort(uses, 1);
+  // The manifold edges' face pairs.
+  const std::vector<KeyedIndex> uses = detail::sortedEdgeUses(mesh);
   std::vector<std::pair<std::uint32_t, std::uint32_t>> manifold;  // (f, g), f < g
   for (std::size_t i = 0; i < uses.size();) {
     std::size_t j = i + 1;
     while (j < uses.size() && uses[j].first == uses[i].first) ++j;
-    if (j - i == 2) manifold.emplace_back(uses[i].second, uses[i + 1].second);
+    if (j - i == 2) manifold.emplace_back(uses[i].second / 2, uses[i + 1].second / 2);
     i = j;
   }
   // Face adjacency through manifold edges (CSR), each face's neighbours ascending.

@@ -2,13 +2,10 @@
 #include "iires/reconstruct/mesh_validity.hpp"
 
 #include <algorithm>
-#include <cstdio>
-#include <cstdlib>
 #include <cstdint>
 #include <stdexcept>
 #include <utility>
 
-#include "iires/detail/radix_sort.hpp"
 #include "iires/reconstruct/self_intersections.hpp"
 #include "mesh_edges.hpp"
 
@@ -29,18 +26,7 @@ std::size_t removeFaces(TriangleMesh& mesh, const std::vector<char>& drop) {
 /// At every edge with more than two faces keep the lowest-index face and the lowest-index one using the edge in
 /// the opposite direction (else the next one): the pair that can stay consistently oriented.
 std::size_t removeNonManifoldEdgeFaces(TriangleMesh& mesh, std::size_t* edgesFound) {
-  // Each face's use of an edge: (edge key, face · 2 + whether it runs from the lower vertex to the higher),
-  // sorted by edge, faces ascending within an edge (the sort is stable).
-  std::vector<KeyedIndex> uses;
-  uses.reserve(3 * mesh.triangles.size());
-  for (std::uint32_t f = 0; f < mesh.triangles.size(); ++f)
-    for (int c = 0; c < 3; ++c) {
-      const auto a = static_cast<std::uint32_t>(mesh.triangles[f][c]);
-      const auto b = static_cast<std::uint32_t>(mesh.triangles[f][(c + 1) % 3]);
-      if (a == b) continue;
-      uses.emplace_back(detail::undirectedKey(a, b), 2 * f + (a < b ? 1 : 0));
-    }
-  radixSort(uses, 1);
+  const std::vector<KeyedIndex> uses = detail::sortedEdgeUses(mesh);
   const auto face = [&](std::size_t k) { return uses[k].second / 2; };
   const auto forward = [&](std::size_t k) { return uses[k].second % 2; };
   std::vector<char> drop(mesh.triangles.size(), 0);
@@ -124,9 +110,6 @@ ValidityReport repairValidity(TriangleMesh& mesh, std::vector<Eigen::Vector3d>& 
   std::vector<std::pair<std::size_t, std::size_t>> pairs =
       clean ? selfIntersections(mesh, facesChangedSince(*clean, mesh), exec.threads) : selfIntersections(mesh, exec.threads);
   report.intersectingPairs = pairs.size();
-  if (getenv("DBG_SI") && clean) { auto full = selfIntersections(mesh, exec.threads); auto ch = facesChangedSince(*clean, mesh); std::size_t nch=0; for (char c: ch) nch+=c;
-      fprintf(stderr, "initial: local %zu full %zu changed %zu faces %zu\n", pairs.size(), full.size(), nch, mesh.triangles.size());
-      for (auto& [f,g] : full) if (!std::binary_search(pairs.begin(), pairs.end(), std::make_pair(f,g))) fprintf(stderr, "  missed %zu %zu changed %d %d\n", f, g, ch[f], ch[g]); }
   for (int round = 1; round <= params.rounds && !pairs.empty() && params.refill; ++round) {
     ++report.rounds;
     report.facesRemoved += removeFaces(mesh, grownRegion(mesh, pairs, round));
@@ -135,9 +118,6 @@ ValidityReport repairValidity(TriangleMesh& mesh, std::vector<Eigen::Vector3d>& 
     const TriangleMesh removed = mesh;  // free of intersections: every face of a pair went
     refill(mesh, normals, params, exec.threads, report);
     pairs = selfIntersections(mesh, facesChangedSince(removed, mesh), exec.threads);
-    if (getenv("DBG_SI")) { auto full = selfIntersections(mesh, exec.threads); auto ch = facesChangedSince(removed, mesh); std::size_t nch=0; for (char c: ch) nch+=c;
-      fprintf(stderr, "round %d: local %zu full %zu changed %zu faces %zu\n", round, pairs.size(), full.size(), nch, mesh.triangles.size());
-      for (auto& [f,g] : full) if (!std::binary_search(pairs.begin(), pairs.end(), std::make_pair(f,g))) fprintf(stderr, "  missed %zu %zu changed %d %d\n", f, g, ch[f], ch[g]); }
   }
   // What still intersects goes without a fill: removing faces creates no intersection, and removeNonManifold
   // only removes faces too.
