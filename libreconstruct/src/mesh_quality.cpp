@@ -40,7 +40,6 @@ struct HalfEdge {
   bool forward;  // a < b
 };
 
-using detail::undirectedKey;
 
 /// Area-uniform samples of a mesh plus its referenced vertices (the mesh side of a two-sided distance).
 std::vector<Eigen::Vector3d> meshSamplePoints(const TriangleMesh& mesh, std::size_t count, std::uint64_t seed) {
@@ -109,18 +108,10 @@ struct EdgeRun {
 };
 
 std::vector<HalfEdge> sortedHalfEdges(const TriangleMesh& mesh) {
+  const std::vector<KeyedIndex> uses = detail::sortedEdgeUses(mesh);  // by edge, faces ascending within one
   std::vector<HalfEdge> he;
-  he.reserve(3 * mesh.triangles.size());
-  for (std::uint32_t f = 0; f < mesh.triangles.size(); ++f)
-    for (int c = 0; c < 3; ++c) {
-      const auto a = static_cast<std::uint32_t>(mesh.triangles[f][c]);
-      const auto b = static_cast<std::uint32_t>(mesh.triangles[f][(c + 1) % 3]);
-      if (a == b) continue;  // degenerate face: no edge
-      he.push_back({undirectedKey(a, b), f, a < b});
-    }
-  std::sort(he.begin(), he.end(), [](const HalfEdge& x, const HalfEdge& y) {
-    return x.key != y.key ? x.key < y.key : x.face < y.face;
-  });
+  he.reserve(uses.size());
+  for (const auto& [key, use] : uses) he.push_back({key, use / 2, use % 2 == 1});
   return he;
 }
 
