@@ -31,22 +31,18 @@ std::size_t removeNonManifoldEdgeFaces(TriangleMesh& mesh, std::size_t* edgesFou
   const auto forward = [&](std::size_t k) { return uses[k].second % 2; };
   std::vector<char> drop(mesh.triangles.size(), 0);
   std::size_t found = 0;
-  for (std::size_t i = 0; i < uses.size();) {
-    std::size_t j = i;
-    while (j < uses.size() && uses[j].first == uses[i].first) ++j;
-    if (j - i > 2) {
-      ++found;
-      std::size_t second = i + 1;
-      for (std::size_t k = i + 1; k < j; ++k)
-        if (forward(k) != forward(i)) {
-          second = k;
-          break;
-        }
-      for (std::size_t k = i + 1; k < j; ++k)
-        if (k != second) drop[face(k)] = 1;
-    }
-    i = j;
-  }
+  detail::forEachEdge(uses, [&](std::size_t i, std::size_t j) {
+    if (j - i <= 2) return;
+    ++found;
+    std::size_t second = i + 1;
+    for (std::size_t k = i + 1; k < j; ++k)
+      if (forward(k) != forward(i)) {
+        second = k;
+        break;
+      }
+    for (std::size_t k = i + 1; k < j; ++k)
+      if (k != second) drop[face(k)] = 1;
+  });
   if (edgesFound) *edgesFound = found;
   return found ? removeFaces(mesh, drop) : 0;
 }
