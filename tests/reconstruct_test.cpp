@@ -484,6 +484,43 @@ TEST(MeshRepair, OrientsFlippedFacesOutward) {
   EXPECT_GT(signedVolume(m), 0);
 }
 
+// Pinched vertices made by removing faces: looking only at the removed faces' vertices finds what a look at
+// every vertex finds, and nothing is looked at where no vertex is flagged.
+TEST(MeshRepair, RemoveExtraFansOnlyWhereFlaggedFindsTheSame) {
+  TriangleMesh pinched = test::uvSphereMesh(24, 32);
+  std::vector<char> drop(pinched.triangles.size(), 0), touched(pinched.vertices.size(), 0);
+  std::mt19937 rng(20);
+  std::uniform_int_distribution<std::size_t> pick(0, pinched.vertices.size() - 1);
+  for (int k = 0; k < 30; ++k) {  // two opposite faces of a vertex's fan leave it two fans
+    const auto v = static_cast<int>(pick(rng));
+    std::vector<std::size_t> fan;
+    for (std::size_t f = 0; f < pinched.triangles.size(); ++f)
+      if ((pinched.triangles[f].array() == v).any()) fan.push_back(f);
+    if (fan.size() < 6) continue;
+    std::size_t opposite = fan[0];  // a face of the fan sharing only v with the first
+    for (std::size_t g : fan) {
+      int shared = 0;
+      for (int c = 0; c < 3; ++c) shared += (pinched.triangles[fan[0]].array() == pinched.triangles[g][c]).any();
+      if (shared == 1) opposite = g;
+    }
+    for (std::size_t f : {fan[0], opposite}) {
+      drop[f] = 1;
+      for (int c = 0; c < 3; ++c) touched[static_cast<std::size_t>(pinched.triangles[f][c])] = 1;
+    }
+  }
+  std::vector<Eigen::Vector3i> kept;
+  for (std::size_t f = 0; f < drop.size(); ++f)
+    if (!drop[f]) kept.push_back(pinched.triangles[f]);
+  pinched.triangles = kept;
+  TriangleMesh everywhere = pinched, flagged = pinched, none = pinched;
+  const std::size_t removed = removeExtraFans(everywhere, 2);
+  EXPECT_GT(removed, 10u);
+  EXPECT_EQ(removeExtraFans(flagged, 2, &touched), removed);
+  EXPECT_EQ(flagged.triangles, everywhere.triangles);
+  const std::vector<char> nothing(pinched.vertices.size(), 0);
+  EXPECT_EQ(removeExtraFans(none, 2, &nothing), 0u);
+}
+
 /// Two closed triangulated unit spheres, the second shifted by @p shift: they cut each other when |shift| < 2.
 TriangleMesh twoSpheres(const Eigen::Vector3d& shift) {
   PointCloud c;

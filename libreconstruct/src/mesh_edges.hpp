@@ -22,15 +22,16 @@ inline std::uint64_t directedKey(std::uint32_t a, std::uint32_t b) { return (sta
 
 /// Every face's use of each of its edges (a repeated vertex's edge left out): (undirectedKey, face · 2 + 1 when
 /// the face runs along it from the lower vertex index to the higher), sorted by edge, faces ascending within an
-/// edge. Faces sharing an edge are one run of equal keys.
-inline std::vector<KeyedIndex> sortedEdgeUses(const TriangleMesh& mesh) {
+/// edge. Faces sharing an edge are one run of equal keys. With @p only (a flag per vertex), only the edges with a
+/// flagged end.
+inline std::vector<KeyedIndex> sortedEdgeUses(const TriangleMesh& mesh, const std::vector<char>* only = nullptr) {
   std::vector<KeyedIndex> uses;
-  uses.reserve(3 * mesh.triangles.size());
+  if (!only) uses.reserve(3 * mesh.triangles.size());
   for (std::uint32_t f = 0; f < mesh.triangles.size(); ++f)
     for (int c = 0; c < 3; ++c) {
       const auto a = static_cast<std::uint32_t>(mesh.triangles[f][c]);
       const auto b = static_cast<std::uint32_t>(mesh.triangles[f][(c + 1) % 3]);
-      if (a != b) uses.emplace_back(undirectedKey(a, b), 2 * f + (a < b ? 1 : 0));
+      if (a != b && (!only || (*only)[a] || (*only)[b])) uses.emplace_back(undirectedKey(a, b), 2 * f + (a < b ? 1 : 0));
     }
   radixSort(uses, 1);  // stable: faces stay ascending within an edge
   return uses;

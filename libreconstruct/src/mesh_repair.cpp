@@ -199,7 +199,7 @@ struct Fans {
 
 }  // namespace
 
-std::size_t removeExtraFans(TriangleMesh& mesh, int threads) {
+std::size_t removeExtraFans(TriangleMesh& mesh, int threads, const std::vector<char>* only) {
   auto& T = mesh.triangles;
   const std::size_t nv = mesh.vertices.size();
   const detail::VertexFaces vf = detail::vertexFaces(mesh);
@@ -208,6 +208,7 @@ std::size_t removeExtraFans(TriangleMesh& mesh, int threads) {
   // and any vertex that lost a face to an earlier one.
   std::vector<char> several(nv, 0);
   parallelFor(nv, threads, [&](std::size_t v) {
+    if (only && !(*only)[v]) return;
     thread_local Fans fans;
     thread_local std::vector<std::uint32_t> faces;
     faces.assign(incident.begin() + start[v], incident.begin() + start[v + 1]);

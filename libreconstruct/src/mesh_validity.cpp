@@ -24,9 +24,10 @@ std::size_t removeFaces(TriangleMesh& mesh, const std::vector<char>& drop) {
 }
 
 /// At every edge with more than two faces keep the lowest-index face and the lowest-index one using the edge in
-/// the opposite direction (else the next one): the pair that can stay consistently oriented.
-std::size_t removeNonManifoldEdgeFaces(TriangleMesh& mesh, std::size_t* edgesFound) {
-  const std::vector<KeyedIndex> uses = detail::sortedEdgeUses(mesh);
+/// the opposite direction (else the next one): the pair that can stay consistently oriented. With @p only, the
+/// edges with an end it flags; the removed faces' vertices are flagged too (their removal can pinch them).
+std::size_t removeNonManifoldEdgeFaces(TriangleMesh& mesh, std::size_t* edgesFound, std::vector<char>* only) {
+  const std::vector<KeyedIndex> uses = detail::sortedEdgeUses(mesh, only);
   const auto face = [&](std::size_t k) { return uses[k].second / 2; };
   const auto forward = [&](std::size_t k) { return uses[k].second % 2; };
   std::vector<char> drop(mesh.triangles.size(), 0);
@@ -44,7 +45,12 @@ std::size_t removeNonManifoldEdgeFaces(TriangleMesh& mesh, std::size_t* edgesFou
       if (k != second) drop[face(k)] = 1;
   });
   if (edgesFound) *edgesFound = found;
-  return found ? removeFaces(mesh, drop) : 0;
+  if (!found) return 0;
+  if (only)
+    for (std::size_t f = 0; f < drop.size(); ++f)
+      if (drop[f])
+        for (int c = 0; c < 3; ++c) (*only)[static_cast<std::size_t>(mesh.triangles[f][c])] = 1;
+  return removeFaces(mesh, drop);
 }
 
 /// Flags the faces of @p pairs, grown by @p rings rings of faces through shared vertices.
@@ -64,11 +70,21 @@ std::vector<char> grownRegion(const TriangleMesh& mesh, const std::vector<std::p
   return in;
 }
 
-/// Make every edge and vertex manifold by removing faces; returns the faces removed.
+/// Flags the vertices of the faces @p faces flags.
+std::vector<char> verticesOf(const TriangleMesh& mesh, const std::vector<char>& faces) {
+  std::vector<char> in(mesh.vertices.size(), 0);
+  for (std::size_t f = 0; f < faces.size(); ++f)
+    if (faces[f])
+      for (int c = 0; c < 3; ++c) in[static_cast<std::size_t>(mesh.triangles[f][c])] = 1;
+  return in;
+}
+
+/// Make every edge and vertex manifold by removing faces; returns the faces removed. With @p only (a flag per
+/// vertex), only its vertices and the edges they end are looked at: where a removal or a fill changed the faces.
 std::size_t removeNonManifold(TriangleMesh& mesh, std::size_t minComponentFaces, int threads,
-                              std::size_t* edgesFound = nullptr) {
-  std::size_t removed = removeNonManifoldEdgeFaces(mesh, edgesFound);
-  if (const std::size_t fans = removeExtraFans(mesh, threads); fans > 0) {
+                              std::size_t* edgesFound = nullptr, std::vector<char>* only = nullptr) {
+  std::size_t removed = removeNonManifoldEdgeFaces(mesh, edgesFound, only);
+  if (const std::size_t fans = removeExtraFans(mesh, threads, only); fans > 0) {
     removed += fans;
     if (minComponentFaces > 1) removed += removeSmallComponents(mesh, minComponentFaces);
   }
@@ -79,8 +95,13 @@ std::size_t removeNonManifold(TriangleMesh& mesh, std::size_t minComponentFaces,
 void refill(TriangleMesh& mesh, std::vector<Eigen::Vector3d>& normals, const ValidityParams& params,
             int threads, ValidityReport& report) {
   const std::size_t faces = mesh.triangles.size(), vertices = mesh.vertices.size();
+  const std::vector<Eigen::Vector3i> before = mesh.triangles;
   const std::size_t open = fillSmallHoles(mesh, normals, params.holes).kept;
-  const std::size_t pinched = removeNonManifold(mesh, params.minComponentFaces, threads);
+  // The fills append faces and change a few in place (zips): only their vertices can be pinched.
+  std::vector<char> filled(mesh.triangles.size(), 1);
+  for (std::size_t f = 0; f < faces; ++f) filled[f] = mesh.triangles[f] != before[f];
+  std::vector<char> touched = verticesOf(mesh, filled);
+  const std::size_t pinched = removeNonManifold(mesh, params.minComponentFaces, threads, nullptr, &touched);
   if (params.holes.maxRefinedExtent > 0 && (open > 0 || pinched > 0)) {  // else no loop is left for it
     orientConsistently(mesh, normals);  // fillLargeHoles needs an oriented 2-manifold
     fillLargeHoles(mesh, normals, params.holes);
@@ -108,8 +129,10 @@ ValidityReport repairValidity(TriangleMesh& mesh, std::vector<Eigen::Vector3d>& 
   report.intersectingPairs = pairs.size();
   for (int round = 1; round <= params.rounds && !pairs.empty() && params.refill; ++round) {
     ++report.rounds;
-    report.facesRemoved += removeFaces(mesh, grownRegion(mesh, pairs, round));
-    report.facesRemoved += removeNonManifold(mesh, params.minComponentFaces, exec.threads);
+    const std::vector<char> drop = grownRegion(mesh, pairs, round);
+    std::vector<char> touched = verticesOf(mesh, drop);  // removing faces pinches only their vertices
+    report.facesRemoved += removeFaces(mesh, drop);
+    report.facesRemoved += removeNonManifold(mesh, params.minComponentFaces, exec.threads, nullptr, &touched);
     if (params.minComponentFaces > 1) report.facesRemoved += removeSmallComponents(mesh, params.minComponentFaces);
     const TriangleMesh removed = mesh;  // free of intersections: every face of a pair went
     refill(mesh, normals, params, exec.threads, report);

@@ -101,10 +101,11 @@ std::size_t remeshBadRegions(TriangleMesh& mesh, std::vector<Eigen::Vector3d>& n
 
 /// @brief Make every vertex manifold: where a vertex's faces form several fans (its link has several parts),
 /// keep the fan with the most faces (ties: the one with the lowest face index) and remove the others' faces.
-/// The holes this opens are for fillSmallHoles().
+/// The holes this opens are for fillSmallHoles(). With @p only (a flag per vertex), only the flagged vertices
+/// and those losing a face here are looked at: where a change to the faces can have pinched a vertex.
 /// @return number of faces removed.
 /// @note Vertices are visited in index order; deterministic for any @p threads (0 = all cores). O(F log F).
-std::size_t removeExtraFans(TriangleMesh& mesh, int threads = 0);
+std::size_t removeExtraFans(TriangleMesh& mesh, int threads = 0, const std::vector<char>* only = nullptr);
 
 /// @brief Remove the faces of connected components (through shared vertices) with fewer than @p minFaces faces:
 /// stray islands a local method leaves inside a hole. @return number of faces removed.
