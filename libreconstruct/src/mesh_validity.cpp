@@ -122,10 +122,20 @@ ValidityReport repairValidity(TriangleMesh& mesh, std::vector<Eigen::Vector3d>& 
                               const Execution& exec, const TriangleMesh* clean) {
   params.validate();
   ValidityReport report;
-  report.facesRemoved += removeNonManifold(mesh, params.minComponentFaces, exec.threads, &report.nonManifoldEdges);
-  // Removing faces creates no intersection: what a clean mesh can have is between changed faces and the rest.
+  // Since a clean mesh, only what changed can be non-manifold or intersect (the changed faces with the rest).
+  std::vector<char> changed, touched;
+  if (clean) {  // the vertices of the faces that are new, moved or gone
+    changed = facesChangedSince(*clean, mesh);
+    touched = verticesOf(mesh, changed);
+    const std::vector<char> gone = verticesOf(*clean, facesChangedSince(mesh, *clean));
+    for (std::size_t v = 0; v < gone.size() && v < touched.size(); ++v) touched[v] |= gone[v];
+  }
+  const std::size_t dropped = removeNonManifold(mesh, params.minComponentFaces, exec.threads, &report.nonManifoldEdges,
+                                                clean ? &touched : nullptr);
+  report.facesRemoved += dropped;
+  if (clean && dropped > 0) changed = facesChangedSince(*clean, mesh);  // removing faces creates no intersection
   std::vector<std::pair<std::size_t, std::size_t>> pairs =
-      clean ? selfIntersections(mesh, facesChangedSince(*clean, mesh), exec.threads) : selfIntersections(mesh, exec.threads);
+      clean ? selfIntersections(mesh, changed, exec.threads) : selfIntersections(mesh, exec.threads);
   report.intersectingPairs = pairs.size();
   for (int round = 1; round <= params.rounds && !pairs.empty() && params.refill; ++round) {
     ++report.rounds;

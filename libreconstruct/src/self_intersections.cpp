@@ -340,17 +340,22 @@ std::vector<char> facesChangedSince(const TriangleMesh& before, const TriangleMe
     std::sort(v.begin(), v.end());
     return (v[0] << 42) | (v[1] << 21) | v[2];
   };
-  std::vector<KeyedIndex> keyed;
-  keyed.reserve(before.triangles.size());
-  for (const auto& t : before.triangles) keyed.emplace_back(key(t), 0);
-  radixSort(keyed, 1);
-  std::vector<std::uint64_t> old(keyed.size());
-  for (std::size_t i = 0; i < keyed.size(); ++i) old[i] = keyed[i].first;
-  for (std::size_t f = 0; f < after.triangles.size(); ++f) {
+  // Both face lists sorted by key and merged: a face of after is new where before has no face of its key.
+  auto sortedKeys = [&](const std::vector<Eigen::Vector3i>& faces) {
+    std::vector<KeyedIndex> keyed;
+    keyed.reserve(faces.size());
+    for (std::uint32_t f = 0; f < faces.size(); ++f) keyed.emplace_back(key(faces[f]), f);
+    radixSort(keyed, 1);
+    return keyed;
+  };
+  const std::vector<KeyedIndex> old = sortedKeys(before.triangles), now = sortedKeys(after.triangles);
+  std::size_t i = 0;
+  for (const auto& [k, f] : now) {
+    while (i < old.size() && old[i].first < k) ++i;
     const auto& t = after.triangles[f];
     const bool moved = !same[static_cast<std::size_t>(t[0])] || !same[static_cast<std::size_t>(t[1])] ||
                        !same[static_cast<std::size_t>(t[2])];
-    changed[f] = moved || !std::binary_search(old.begin(), old.end(), key(t));
+    changed[f] = moved || i == old.size() || old[i].first != k;
   }
   return changed;
 }
