@@ -11,8 +11,6 @@
 #include <cmath>
 #include <limits>
 #include <map>
-#include <stdexcept>
-#include <string>
 #include <unordered_map>
 #include <unordered_set>
 
