@@ -3,7 +3,7 @@
 # Run the benchmark suite and write BENCHMARKS.md from its output (not part of CI).
 # Usage: bash bench/run_all.sh [quick|full|tables]
 #   quick (≈ 40 min on 2 cores): the tables below on a subset of the corpus;
-#   full: every model of the corpus, 50 registration trials, issue 20's reconstruction grid, the 5M-point grid;
+#   full: every model of the corpus, 50 registration trials, the 5M-point grid (and each runner's full mode);
 #   tables: no runs, BENCHMARKS.md again from the results of the last run.
 # Raw key=value lines, the plots and the generated file go to bench/results/; BENCHMARKS.md is that file.
 set -euo pipefail
@@ -126,18 +126,10 @@ run_benchmarks() {
 
   echo "reconstruction ..."
   : > "$out/reconstruct.txt"
-  if full; then
-    for r in 1 4; do
-      "$bin/reconstruct_bench" --models closed --dense 200000 --counts 10000,30000 --density-ratio "$r" --seed 1 \
-        --methods local,advancing-front,bpa,poisson,input-advancing-front >> "$out/reconstruct.txt" || true
-    done
-    "$bin/reconstruct_bench" --models none --points real --point-counts 5000 >> "$out/reconstruct.txt" || true
-  else
-    "$bin/reconstruct_bench" --models bunny00,fandisk,hand,knot1,eight,double-torus-example --dense 100000 \
-      --counts 10000 --seed 1 --methods local,advancing-front,bpa,poisson >> "$out/reconstruct.txt" || true
-    "$bin/reconstruct_bench" --models none --points kitten.xyz,hippo1.ply,building.ply --point-counts 5000 \
-      --methods local,advancing-front,bpa,poisson >> "$out/reconstruct.txt" || true
-  fi
+  "$bin/reconstruct_bench" --models bunny00,fandisk,hand,knot1,eight,double-torus-example --dense 100000 \
+    --counts 10000 --seed 1 --methods local,advancing-front,bpa,poisson >> "$out/reconstruct.txt" || true
+  "$bin/reconstruct_bench" --models none --points kitten.xyz,hippo1.ply,building.ply --point-counts 5000 \
+    --methods local,advancing-front,bpa,poisson >> "$out/reconstruct.txt" || true
 
   echo "sharp edges vs CGAL WLOP / EAR-style ..."
   : > "$out/sharp_edges.txt"
