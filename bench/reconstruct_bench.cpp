@@ -144,6 +144,7 @@ std::string runMethod(const ChildJob& job) {
     std::ostringstream extra;
     extra << " holes_filled=" << r.holes.filled << " holes_kept=" << r.holes.kept
           << " large_holes_filled=" << r.largeHoles.filled << " large_holes_kept=" << r.largeHoles.kept
+          << " large_holes_unsupported=" << r.largeHoles.unsupported
           << " validity_s=" << validity << " validity_pct_of_meshing="
           << (meshing > validity ? 100.0 * validity / (meshing - validity) : 0.0)
           << " si_found=" << r.validity.intersectingPairs << " repair_removed=" << r.validity.facesRemoved

@@ -140,7 +140,8 @@ int main(int argc, char** argv) {
       std::cout << "  " << std::left << std::setw(30) << "small holes closed / kept" << result.holes.filled << " / "
                 << result.holes.kept << "\n";
       std::cout << "  " << std::left << std::setw(30) << "large holes closed / kept" << result.largeHoles.filled
-                << " / " << result.largeHoles.kept << " (" << result.largeHoles.verticesAdded << " vertices added)\n";
+                << " / " << result.largeHoles.kept << " (" << result.largeHoles.verticesAdded << " vertices added; "
+                << result.largeHoles.unsupported << " kept open: the fill left the input)\n";
       std::cout << "  " << std::left << std::setw(30) << "Q<0.4 repairs moved / removed" << result.badTriangles.moved
                 << " / " << result.badTriangles.removed << "\n";
       std::cout << "  " << std::left << std::setw(30) << "vertices relaxed near rims" << result.boundaryRelaxed << "\n";

@@ -369,6 +369,9 @@ void HoleFillingParams::validate() const {
   if (!(maxRefinedExtent >= 0 && maxRefinedExtent <= 1))
     throw std::invalid_argument("hole filling: maxRefinedExtent must be in [0, 1]");
   if (refineIterations < 0) throw std::invalid_argument("hole filling: refineIterations must be non-negative");
+  if (!(supportDistance > 0)) throw std::invalid_argument("hole filling: supportDistance must be positive");
+  if (!(maxContinuedShare >= 0 && maxContinuedShare <= 1))
+    throw std::invalid_argument("hole filling: maxContinuedShare must be in [0, 1]");
 }
 
 HoleFillingReport fillSmallHoles(TriangleMesh& mesh, std::vector<Eigen::Vector3d>& normals,

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // fillLargeHoles(): boundary loops too long for fillSmallHoles() but small next to their component, closed with
-// new vertices (CGAL: refined and faired hole filling, then isotropic remeshing of the patch); remeshBadRegions():
+// new vertices (CGAL: refined and faired hole filling, then isotropic remeshing of the patch) where the fill lies on
+// the input or the input ends at the loop; remeshBadRegions():
 // isotropic remeshing around the triangles repairBadTriangles() could not raise. CGAL stays in this file.
 #ifndef CGAL_EIGEN3_ENABLED
 #define CGAL_EIGEN3_ENABLED 1  // fairing's sparse solver
@@ -12,16 +13,19 @@
 #include <CGAL/Polygon_mesh_processing/remesh.h>
 #include <CGAL/Polygon_mesh_processing/triangulate_hole.h>
 #include <CGAL/Surface_mesh.h>
+#include <CGAL/boost/graph/Euler_operations.h>
 
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <iterator>
 #include <map>
+#include <memory>
 #include <unordered_map>
 #include <vector>
 
 #include "iires/detail/disjoint_sets.hpp"
+#include "iires/knn.hpp"
 #include "iires/reconstruct/mesh_quality.hpp"
 #include "iires/reconstruct/mesh_repair.hpp"
 
@@ -58,6 +62,85 @@ bool toSurfaceMesh(const TriangleMesh& mesh, Mesh& sm) {
 /// 124-240 edges).
 constexpr std::size_t kExhaustiveEdges = 250;
 
+/// The input points (HoleFillingParams::inputPoints), indexed on first use: whether a loop's fill lies on the
+/// sampled surface, and whether the input goes on beyond the loop.
+class InputSupport {
+ public:
+  explicit InputSupport(const HoleFillingParams& params) : params_(params) {}
+  bool active() const { return params_.inputPoints && !params_.inputPoints->empty(); }
+
+  /// The unit u of the tests for the loop at @p h with mean edge @p l: the larger of l and the input's spacing
+  /// there (the median, over the loop's vertices, of the distance from the input point nearest to each to its
+  /// own nearest neighbour).
+  double unit(const Mesh& sm, HalfedgeIndex h, double l) {
+    std::vector<double> spacing;
+    HalfedgeIndex g = h;
+    do {
+      const std::int64_t q = index().nearest(toEigen(sm.point(sm.target(g))));
+      if (index().knn(points()[static_cast<std::size_t>(q)], 2, idx_, sq_) == 2)
+        spacing.push_back(std::sqrt(sq_[1]));
+      g = sm.next(g);
+    } while (g != h);
+    if (spacing.empty()) return l;
+    std::nth_element(spacing.begin(), spacing.begin() + static_cast<long>(spacing.size() / 2), spacing.end());
+    return std::max(l, spacing[spacing.size() / 2]);
+  }
+
+  /// Share of the loop's edges with an input point beyond them: within 2u of the edge's midpoint and more than u
+  /// past it towards the hole (along the edge's face's plane; any normal offset, so a crease counts too).
+  double continuedShare(const Mesh& sm, HalfedgeIndex h, double u) {
+    std::size_t edges = 0, continued = 0;
+    HalfedgeIndex g = h;
+    do {
+      const Eigen::Vector3d a = toEigen(sm.point(sm.source(g))), b = toEigen(sm.point(sm.target(g)));
+      const Eigen::Vector3d c = toEigen(sm.point(sm.target(sm.next(sm.opposite(g)))));  // the face's third vertex
+      const Eigen::Vector3d m = 0.5 * (a + b), e = (b - a).normalized();
+      const Eigen::Vector3d t = ((m - c) - (m - c).dot(e) * e).normalized();  // in the face's plane, into the hole
+      index().radius(m, 2 * u, idx_, sq_);
+      continued +=
+          std::any_of(idx_.begin(), idx_.end(), [&](std::uint32_t i) { return (points()[i] - m).dot(t) > u; });
+      ++edges;
+      g = sm.next(g);
+    } while (g != h);
+    return static_cast<double>(continued) / static_cast<double>(std::max<std::size_t>(edges, 1));
+  }
+
+  /// Whether every vertex of @p added lies within @p distance of an input point.
+  bool supports(const Mesh& sm, const std::vector<VertexIndex>& added, double distance) {
+    double sq = 0;
+    return std::all_of(added.begin(), added.end(), [&](VertexIndex v) {
+      return index().nearest(toEigen(sm.point(v)), &sq) >= 0 && sq <= distance * distance;
+    });
+  }
+
+ private:
+  const std::vector<Eigen::Vector3d>& points() const { return *params_.inputPoints; }
+  const KnnIndex& index() {
+    if (!index_) index_ = std::make_unique<KnnIndex>(points());
+    return *index_;
+  }
+  const HoleFillingParams& params_;
+  std::unique_ptr<KnnIndex> index_;
+  std::vector<std::uint32_t> idx_;
+  std::vector<double> sq_;
+};
+
+/// The border cycles of @p sm, each once (by its smallest halfedge index).
+std::vector<HalfedgeIndex> borderCycles(const Mesh& sm) {
+  std::vector<HalfedgeIndex> cycles;
+  std::vector<char> seen(sm.number_of_halfedges(), 0);
+  for (HalfedgeIndex h : sm.halfedges()) {
+    if (!sm.is_border(h) || seen[h]) continue;
+    HalfedgeIndex g = h;
+    do {
+      seen[g] = 1;
+      g = sm.next(g);
+    } while (g != h);
+    cycles.push_back(h);
+  }
+  return cycles;
+}
+
 }  // namespace
 
 LargeHoleReport fillLargeHoles(TriangleMesh& mesh, std::vector<Eigen::Vector3d>& normals,
@@ -79,24 +162,11 @@ LargeHoleReport fillLargeHoles(TriangleMesh& mesh, std::vector<Eigen::Vector3d>&
     report.skipped = true;  // not an oriented 2-manifold: leave the mesh alone
     return report;
   }
-  // The border cycles, each once (by its smallest halfedge index).
-  std::vector<HalfedgeIndex> cycles;
-  {
-    std::vector<char> seen(sm.number_of_halfedges(), 0);
-    for (HalfedgeIndex h : sm.halfedges()) {
-      if (!sm.is_border(h) || seen[h]) continue;
-      HalfedgeIndex g = h;
-      do {
-        seen[g] = 1;
-        g = sm.next(g);
-      } while (g != h);
-      cycles.push_back(h);
-    }
-  }
+  const std::vector<HalfedgeIndex> cycles = borderCycles(sm);
   double edgeSum = 0;
   for (auto e : sm.edges()) edgeSum += std::sqrt(CGAL::squared_distance(sm.point(sm.source(sm.halfedge(e))), sm.point(sm.target(sm.halfedge(e)))));
   const double meanEdge = edgeSum / static_cast<double>(std::max<std::size_t>(sm.number_of_edges(), 1));
-  std::vector<FaceIndex> patch;
+  InputSupport input(params);
   for (HalfedgeIndex h : cycles) {
     ++report.loops;
     Eigen::AlignedBox3d box;
@@ -115,6 +185,12 @@ LargeHoleReport fillLargeHoles(TriangleMesh& mesh, std::vector<Eigen::Vector3d>&
       ++report.kept;
       continue;
     }
+    // The input's spacing there (u) and how much of it goes on beyond the loop, measured on the open loop.
+    double u = 0, continued = 0;
+    if (input.active()) {
+      u = input.unit(sm, h, perimeter / static_cast<double>(edges));
+      continued = input.continuedShare(sm, h, u);
+    }
     // Triangulated, refined (new vertices inside, CGAL's density control), then faired: C⁰ fairing (a membrane)
     // gives a planar loop a flat cap; C¹ would carry the walls' tangents into a dome (measured on the sparse
     // hand's wrist: Hausdorff 9.0 % of the diagonal with C¹, 3.4 % with C⁰).
@@ -128,6 +204,13 @@ LargeHoleReport fillLargeHoles(TriangleMesh& mesh, std::vector<Eigen::Vector3d>&
     std::vector<VertexIndex> added;
     PMP::refine(sm, std::vector<FaceIndex>(faces), std::back_inserter(faces), std::back_inserter(added));
     PMP::fair(sm, added, CGAL::parameters::fairing_continuity(0));
+    // On the sampled surface, or across a gap in the data; else undone (the loop is a border again).
+    if (input.active() && continued >= params.maxContinuedShare &&
+        !input.supports(sm, added, params.supportDistance * u)) {
+      for (FaceIndex f : faces) CGAL::Euler::remove_face(sm.halfedge(f), sm);
+      ++report.kept, ++report.unsupported;
+      continue;
+    }
     // Even out the patch: isotropic remeshing of its faces at the loop's spacing; the loop itself (the patch's
     // border) is neither split, collapsed nor moved. The target keeps every loop edge under twice it.
     const double target = std::max(perimeter / static_cast<double>(edges), std::max(meanEdge, longest / 1.9));

@@ -90,7 +90,7 @@ std::string ReconstructResult::toJson() const {
   holeCounts("holes", holes);
   j.endObject();
   holeCounts("large_holes", largeHoles);
-  j.member("skipped", largeHoles.skipped).endObject();
+  j.member("unsupported", largeHoles.unsupported).member("skipped", largeHoles.skipped).endObject();
   j.key("validity_repair").beginObject().member("intersecting_pairs_found", validity.intersectingPairs);
   j.member("non_manifold_edges_found", validity.nonManifoldEdges).member("rounds", validity.rounds);
   j.member("faces_removed", validity.facesRemoved).member("faces_added", validity.facesAdded);
@@ -178,6 +178,16 @@ void triangulateSamples(const ReconstructParams& params, const Execution& exec, 
   }
 }
 
+/// params.holes, with the resampler's working cloud (the dense input its geodesic coordinates hold) as the input
+/// large-hole fills must lie on, when the input was resampled and params.holes names no input of its own.
+HoleFillingParams holeParams(const ReconstructParams& params, const ReconstructResult& result) {
+  HoleFillingParams holes = params.holes;
+  if (!holes.inputPoints && result.resampling.geodesic)  // the dense cloud, owned by its geodesic coordinates
+    holes.inputPoints = std::shared_ptr<const std::vector<Eigen::Vector3d>>(result.resampling.geodesic,
+                                                                             &result.resampling.geodesic->points());
+  return holes;
+}
+
 /// Small components removed, small holes closed (again after removing the fans a fill pinched together), large
 /// holes closed, edges flipped back to Delaunay, bad triangles repaired, the band along open boundaries relaxed.
 /// Returns the faces flipped by the orientation passes that large holes and remeshing need first.
@@ -201,7 +211,7 @@ std::size_t closeHoles(const ReconstructParams& params, const Execution& exec, R
     if (params.holes.maxRefinedExtent > 0 && result.holes.kept > 0) {
       // What is left open: a gap small next to its part gets a refined fill (it needs an oriented 2-manifold).
       flipped += orientConsistently(result.mesh, normals).facesFlipped;
-      result.largeHoles = fillLargeHoles(result.mesh, normals, params.holes);
+      result.largeHoles = fillLargeHoles(result.mesh, normals, holeParams(params, result));
     }
     if (params.method == ReconstructMethod::kLocal && params.local.flipMaxDihedral > 0 &&
         (result.holes.facesAdded || result.largeHoles.filled))
@@ -234,7 +244,7 @@ std::size_t repairMeshValidity(const ReconstructParams& params, const Execution&
                                std::vector<Eigen::Vector3d>& normals) {
   std::size_t flipped = 0;
   ValidityParams vp = params.validity;
-  vp.holes = params.holes;
+  vp.holes = holeParams(params, result);
   vp.refill = params.fillHoles && vp.refill;
   vp.minComponentFaces = params.minComponentFaces;
   result.validity = repairValidity(result.mesh, normals, vp, exec);

@@ -6,6 +6,7 @@
 
 #include <Eigen/Core>
 #include <cstddef>
+#include <memory>
 #include <vector>
 
 #include "iires/types.hpp"
@@ -29,6 +30,16 @@ struct HoleFillingParams {
   /// of its height: 0.86); 0 = off (0–1)
   double maxRefinedExtent = 0.6;
   int refineIterations = 3;  ///< isotropic remeshing iterations over a large hole's patch (≥ 0)
+  /// fillLargeHoles(): the points the mesh was made from (null = no test), so that a fill stays on the sampled
+  /// surface: when a new vertex of a loop's fill lies farther than supportDistance × u from every input point
+  /// (u: the larger of the loop's mean edge and the input's spacing there), the fill is kept only across a gap in
+  /// the data — where the input ends at the loop (fewer than maxContinuedShare of its edges have an input point
+  /// within 2u of their midpoint and more than u past them, towards the hole) — and otherwise undone, the loop left
+  /// open: a membrane that leaves the data where the data goes on spans empty space (between two tubes, across a
+  /// wedge) where the triangulation rightly did not link. reconstruct() sets the resampler's working cloud here.
+  std::shared_ptr<const std::vector<Eigen::Vector3d>> inputPoints;
+  double supportDistance = 3.0;     ///< see inputPoints, in units u (> 0)
+  double maxContinuedShare = 0.25;  ///< see inputPoints (0–1)
 
   /// @throws std::invalid_argument when a field is out of range.
   void validate() const;
@@ -66,7 +77,9 @@ HoleFillingReport fillSmallHoles(TriangleMesh& mesh, std::vector<Eigen::Vector3d
 struct LargeHoleReport {
   std::size_t loops = 0;          ///< boundary loops found
   std::size_t filled = 0;         ///< loops closed
-  std::size_t kept = 0;           ///< loops left open (too large next to their component, or no fill found)
+  std::size_t kept = 0;           ///< loops left open (too large next to their component, no fill found, or
+                                  ///< unsupported)
+  std::size_t unsupported = 0;    ///< of those, loops whose fill left the input where it goes on (undone)
   std::size_t facesAdded = 0;     ///< net triangles added
   std::size_t verticesAdded = 0;  ///< vertices added inside the holes
   bool skipped = false;           ///< the mesh was not an oriented 2-manifold: nothing was done
@@ -78,11 +91,13 @@ struct LargeHoleReport {
 /// membrane, flat for a planar loop, where C¹ would carry the surrounding walls into a dome), then params.refineIterations of isotropic remeshing of the patch at the loop's mean edge
 /// length (the loop's own edges and vertices unchanged). Meant for what fillSmallHoles() leaves: a gap of a scan
 /// wider than many mesh edges (e.g. an object's flat cap sampled only at its rim), while the boundary of an open
-/// surface, spanning most of it, is kept. New vertices are appended to the mesh, and their normals (of the
-/// incident faces) to @p normals when it holds one per vertex; the faces are rebuilt (old faces first, in order).
+/// surface, spanning most of it, is kept. With params.inputPoints, a fill that leaves the input where the input
+/// goes on beyond the loop is undone and the loop kept (report.unsupported; see HoleFillingParams::inputPoints).
+/// New vertices are appended to the mesh, and their normals (of the incident faces) to @p normals when it holds
+/// one per vertex; the faces are rebuilt (old faces first, in order).
 /// @pre @p mesh is consistently oriented (orientConsistently()); otherwise, or when it is not a 2-manifold,
 /// nothing is done (report.skipped).
-/// @note Deterministic.
+/// @note Deterministic. With params.inputPoints, a k-d tree over them is built once a loop is to be filled.
 LargeHoleReport fillLargeHoles(TriangleMesh& mesh, std::vector<Eigen::Vector3d>& normals,
                                const HoleFillingParams& params = {});
 
