@@ -523,7 +523,10 @@ void separateSamples(double h, std::vector<Eigen::Vector3d>& out, std::vector<st
 //     on the 40 nearest input points (each to the nearer sheet; points over 3·maxResidual off both left out,
 //     the others weighted down by their distance), if both fit within maxResidual, under 10 % of the points
 //     are left out (more: a third sheet, as at a corner) and the move is at most maxLineDistance local spacings.
-//  7. Separation once more (step 6 moved samples).
+//  6b. Off the surface: a sample that the steps above left off it (a chord across a bend, a line followed past
+//     the end of a sheet, a biased fit next to a corner) moves onto the input's sheets around it, modelled as
+//     one, two or three planes, each bounded by the lines where it meets the others (ontoSheets).
+//  7. Separation once more (steps 6 and 6b moved samples).
 std::vector<Eigen::Vector3d> snapToCreases(const PointCloud& cloud, const std::vector<Eigen::Vector3d>& samples,
                                            const std::vector<std::uint32_t>& chainOfSample, double spacing,
                                            const FeatureParams& params, const Execution& exec,
@@ -617,6 +620,7 @@ std::vector<Eigen::Vector3d> snapToCreases(const PointCloud& cloud, const std::v
   separateSamples(h, out, owner);
   fillCreaseGaps(cloud, index, h, params, out, owner);
   refineOnCurvedSheets(cloud, index, h, params, out, exec.threads);
+  ontoSheets(cloud, index, h, params, out, exec.threads);  // 6b.
   separateSamples(h, out, owner);
   if (chainOut) *chainOut = std::move(owner);
   return out;
