@@ -420,7 +420,7 @@ void addCorners(const KnnIndex& index, double h, const FeatureParams& params, st
       Eigen::Vector3d corner = 0.5 * (pa + pb);
       double nearest = 0;
       index.nearest(corner, &nearest);
-      if (std::sqrt(nearest) > params.maxOffCrease * h) continue;  // the lines meet off the surface
+      if (std::sqrt(nearest) > params.maxOffCrease * localSpacing(index, corner, h)) continue;  // off the surface
       // A corner the tracing already placed (or any sample there): nothing to add.
       bool taken = false;
       for (const auto& q : out)
@@ -506,9 +506,11 @@ void separateSamples(double h, std::vector<Eigen::Vector3d>& out, std::vector<st
 //     point of the shared plane and the two other sheets' planes, refitted on the points around it (a step
 //     in a surface fading out, as fandisk's wedge: two creases end at one point without a third crease).
 //  4. Where two chains' end lines (at least 13° apart), continued, meet within 3·radius spacings of both ends and within
-//     params.maxOffCrease spacings of an input point, and no sample is within half a spacing of it (tracing
-//     placed most corners already), a corner sample is added there, and the gap from each of those chain ends
-//     to the corner gets samples at the chain's spacing on the straight line.
+//     params.maxOffCrease local spacings of an input point (the local spacing there: the nearest input point is
+//     farther from a convex corner than from an edge, and farther still in a sparse part), and no sample is
+//     within half a spacing of it (tracing placed most corners already), a corner sample is added there, and
+//     the gap from each of those chain ends to the corner gets samples at the chain's spacing on the straight
+//     line.
 //  4b. Separation: a sample closer than half the chains' median step to an earlier one is dropped (separateSamples).
 //  5. Gaps: two samples 1.5–6 × the chains' median spacing apart with no sample between them (within 0.45 × their
 //     distance of the midpoint and half a spacing of their line) get samples at ≤ that spacing between them: on
@@ -523,7 +525,10 @@ void separateSamples(double h, std::vector<Eigen::Vector3d>& out, std::vector<st
 //     on the 40 nearest input points (each to the nearer sheet; points over 3·maxResidual off both left out,
 //     the others weighted down by their distance), if both fit within maxResidual, under 10 % of the points
 //     are left out (more: a third sheet, as at a corner) and the move is at most maxLineDistance local spacings.
-//  7. Separation once more (step 6 moved samples).
+//  6b. Off the surface: a sample that the steps above left off it (a chord across a bend, a line followed past
+//     the end of a sheet, a biased fit next to a corner) moves onto the input's sheets around it, modelled as
+//     one, two or three planes, each bounded by the lines where it meets the others (ontoSheets).
+//  7. Separation once more (steps 6 and 6b moved samples).
 std::vector<Eigen::Vector3d> snapToCreases(const PointCloud& cloud, const std::vector<Eigen::Vector3d>& samples,
                                            const std::vector<std::uint32_t>& chainOfSample, double spacing,
                                            const FeatureParams& params, const Execution& exec,
@@ -617,6 +622,7 @@ std::vector<Eigen::Vector3d> snapToCreases(const PointCloud& cloud, const std::v
   separateSamples(h, out, owner);
   fillCreaseGaps(cloud, index, h, params, out, owner);
   refineOnCurvedSheets(cloud, index, h, params, out, exec.threads);
+  ontoSheets(cloud, index, h, params, out, exec.threads);  // 6b.
   separateSamples(h, out, owner);
   if (chainOut) *chainOut = std::move(owner);
   return out;

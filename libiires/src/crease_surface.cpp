@@ -1,0 +1,215 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// Held samples onto the surface: the input around a sample as up to three planar sheets, each bounded by the
+// lines where it meets the others, and the sample moved to the nearest point of them when it is off.
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include "features_internal.hpp"
+#include "iires/detail/parallel.hpp"
+#include "iires/knn.hpp"
+
+namespace iires::detail {
+
+namespace {
+
+constexpr int kMaxSheets = 3;
+constexpr std::size_t kMinModelPoints = 40;  // the sheets are fitted on at least this many input points
+
+/// A planar sheet of the neighbourhood: its plane and, in it, the lines where it meets the other sheets (up
+/// to two), which cut the plane into cells (the sign of w·(x − at) per line); the sheet covers the cells its
+/// points lie in (a half-plane at a crease, a quarter at a convex corner, three quarters at a concave one).
+struct Sheet {
+  Eigen::Vector3d n = Eigen::Vector3d::Zero();
+  double o = 0;
+  std::vector<std::uint32_t> pts;
+  int lines = 0;
+  Eigen::Vector3d w[kMaxSheets - 1], at[kMaxSheets - 1], dir[kMaxSheets - 1];
+  bool covered[1 << (kMaxSheets - 1)] = {};
+  int cell(const Eigen::Vector3d& x) const {
+    int c = 0;
+    for (int b = 0; b < lines; ++b) c |= (w[b].dot(x - at[b]) > 0 ? 1 : 0) << b;
+    return c;
+  }
+};
+
+/// The seeds of the normals' clustering in @p nbr: the normal farthest from the mean; the one farthest from
+/// it, if by the detector's angle (else one sheet); and a third sheet's, the normal farthest out of the plane
+/// of the first two if by that angle (the normals of the points on a crease between two sheets lie between
+/// theirs; a third sheet meeting them at a corner has its normal out of their plane).
+std::vector<Eigen::Vector3d> normalSeeds(const std::vector<Eigen::Vector3d>& nrm,
+                                         const std::vector<std::uint32_t>& nbr, const FeatureParams& params) {
+  const std::size_t m = nbr.size();
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (std::uint32_t j : nbr) mean += nrm[j];
+  if (m == 0 || mean.norm() < 1e-12) return {};
+  mean.normalize();
+  std::vector<Eigen::Vector3d> seed;
+  std::size_t a = 0, b = 0, c = 0;
+  for (std::size_t t = 1; t < m; ++t)
+    if (nrm[nbr[t]].dot(mean) < nrm[nbr[a]].dot(mean)) a = t;
+  seed.push_back(nrm[nbr[a]]);
+  for (std::size_t t = 1; t < m; ++t)
+    if (nrm[nbr[t]].dot(seed[0]) < nrm[nbr[b]].dot(seed[0])) b = t;
+  if (nrm[nbr[b]].dot(seed[0]) > std::cos(params.angle * kDeg)) return seed;
+  seed.push_back(nrm[nbr[b]]);
+  const Eigen::Vector3d across = seed[0].cross(seed[1]).normalized();
+  for (std::size_t t = 1; t < m; ++t)
+    if (std::abs(nrm[nbr[t]].dot(across)) > std::abs(nrm[nbr[c]].dot(across))) c = t;
+  if (std::abs(nrm[nbr[c]].dot(across)) > std::sin(params.angle * kDeg)) seed.push_back(nrm[nbr[c]]);
+  return seed;
+}
+
+/// The neighbourhood @p nbr of @p y as one planar sheet per normal in @p seed: the input normals clustered
+/// around the seeds (k-means), a plane fitted to each cluster and the points reassigned to the nearest plane,
+/// three times. False unless every sheet keeps 5 points and fits within maxResidual local spacings @p hl,
+/// 90 % of the points lie within 3·maxResidual of a sheet (else more sheets, or curved ones, than the model
+/// has), no two sheets are within the detector's angle and a third one crosses the first two's line.
+bool fitSheets(const PointCloud& cloud, const std::vector<std::uint32_t>& nbr, const Eigen::Vector3d& y,
+               double hl, const FeatureParams& params, std::vector<Eigen::Vector3d> seed,
+               std::vector<Sheet>& sheets) {
+  const std::size_t m = nbr.size();
+  const auto& nrm = cloud.normals;
+  const double cosSharp = std::cos(params.angle * kDeg);
+  const int k = static_cast<int>(seed.size());
+  std::vector<int> side(m, 0);
+  for (int it = 0; it < 5; ++it) {  // 2-/3-means on the normals
+    std::vector<Eigen::Vector3d> sum(k, Eigen::Vector3d::Zero());
+    for (std::size_t t = 0; t < m; ++t) {
+      int best = 0;
+      for (int s = 1; s < k; ++s)
+        if (nrm[nbr[t]].dot(seed[s]) > nrm[nbr[t]].dot(seed[best])) best = s;
+      side[t] = best;
+      sum[best] += nrm[nbr[t]];
+    }
+    for (int s = 0; s < k; ++s) {
+      if (sum[s].squaredNorm() == 0) return false;
+      seed[s] = sum[s].normalized();
+    }
+  }
+  const double sigma = params.snapSigma * hl, tol = 3.0 * params.maxResidual * hl;
+  sheets.assign(k, Sheet{});
+  std::size_t explained = 0;
+  for (int it = 0; it < 3; ++it) {
+    for (auto& s : sheets) s.pts.clear();
+    for (std::size_t t = 0; t < m; ++t)
+      if (side[t] >= 0) sheets[side[t]].pts.push_back(nbr[t]);
+    for (int s = 0; s < k; ++s) {
+      if (sheets[s].pts.size() < 5) return false;
+      const double r = fitPlane(cloud.points, sheets[s].pts, y, sigma, seed[s], sheets[s].n, sheets[s].o);
+      if (it == 2 && r > params.maxResidual * hl) return false;
+    }
+    explained = 0;
+    for (std::size_t t = 0; t < m; ++t) {
+      int best = 0;
+      double bd = std::numeric_limits<double>::infinity();
+      for (int s = 0; s < k; ++s) {
+        const double d = std::abs(sheets[s].n.dot(cloud.points[nbr[t]]) - sheets[s].o);
+        if (d < bd) bd = d, best = s;
+      }
+      side[t] = bd <= tol ? best : -1;
+      explained += bd <= tol;
+    }
+  }
+  if (10 * explained < 9 * m) return false;
+  for (int s = 0; s < k; ++s)
+    for (int s2 = 0; s2 < k; ++s2)
+      if (s2 != s && std::abs(sheets[s].n.dot(sheets[s2].n)) > cosSharp) return false;  // two of one sheet
+  if (k == 3 && std::abs(sheets[2].n.dot(sheets[0].n.cross(sheets[1].n).normalized())) <= 0.3) return false;
+  // Each sheet's lines and the cells its points cover (those a local spacing or more from every line).
+  for (int s = 0; s < k; ++s) {
+    Sheet& sh = sheets[s];
+    for (int s2 = 0; s2 < k; ++s2) {
+      if (s2 == s) continue;
+      sh.dir[sh.lines] = sh.n.cross(sheets[s2].n).normalized();
+      sh.w[sh.lines] = sh.dir[sh.lines].cross(sh.n);
+      sh.at[sh.lines] = lineNearest(sh.n, sh.o, sheets[s2].n, sheets[s2].o, y);
+      ++sh.lines;
+    }
+    for (std::uint32_t j : sh.pts) {
+      if ((cloud.points[j] - y).norm() > params.radius * hl)
+        continue;         // along a curved crease the lines bend
+      bool clear = true;  // a point near a line may be the other sheet's, within the tolerance of this one
+      for (int b = 0; b < sh.lines; ++b)
+        clear = clear && std::abs(sh.w[b].dot(cloud.points[j] - sh.at[b])) >= hl;
+      if (clear) sh.covered[sh.cell(cloud.points[j])] = true;
+    }
+  }
+  return true;
+}
+
+/// The point of @p sh (the cells it covers of its plane) nearest @p q: q's foot on the plane if that is in a
+/// covered cell, else the nearest point of a line on a covered cell's border, or the lines' crossing.
+Eigen::Vector3d nearestOnSheet(const Sheet& sh, const Eigen::Vector3d& q) {
+  const Eigen::Vector3d x = q - sh.n * (sh.n.dot(q) - sh.o);
+  if (sh.covered[sh.cell(x)]) return x;
+  Eigen::Vector3d best = x;
+  double bd = std::numeric_limits<double>::infinity();
+  for (int b = 0; b < sh.lines; ++b) {
+    const Eigen::Vector3d e = sh.at[b] + sh.dir[b] * (x - sh.at[b]).dot(sh.dir[b]);
+    const int c = sh.cell(e) & ~(1 << b);  // e lies on line b: either side of it
+    if ((sh.covered[c] || sh.covered[c | (1 << b)]) && (e - q).norm() < bd) bd = (e - q).norm(), best = e;
+  }
+  if (sh.lines == 2) {  // the crossing of the two lines borders every cell
+    const double c = sh.dir[0].dot(sh.dir[1]);
+    if (1.0 - c * c > 1e-9) {
+      const Eigen::Vector3d r = sh.at[0] - sh.at[1];
+      const double t = (c * sh.dir[1].dot(r) - sh.dir[0].dot(r)) / (1.0 - c * c);
+      const Eigen::Vector3d v = sh.at[0] + t * sh.dir[0];
+      if ((v - q).norm() < bd) bd = (v - q).norm(), best = v;
+    }
+  }
+  return best;
+}
+
+/// The mean distance from @p y to its 6 nearest input points.
+double meanNearest(const KnnIndex& index, const Eigen::Vector3d& y) {
+  std::vector<std::uint32_t> idx;
+  std::vector<double> d2;
+  const std::size_t k = index.knn(y, 6, idx, d2);
+  double sum = 0;
+  for (std::size_t t = 0; t < k; ++t) sum += std::sqrt(d2[t]);
+  return k > 0 ? sum / static_cast<double>(k) : 0.0;
+}
+
+}  // namespace
+
+void ontoSheets(const PointCloud& cloud, const KnnIndex& index, double h, const FeatureParams& params,
+                std::vector<Eigen::Vector3d>& out, int threads) {
+  constexpr double kOff = 0.3;  // local spacings: a sample farther than this from the sheets moves
+  constexpr double kMove =
+      2.0;  // local spacings: and by at most this much (farther: the model is not its own)
+  parallelFor(out.size(), threads, [&](std::size_t i) {
+    std::vector<std::uint32_t> idx;
+    std::vector<double> d2;
+    std::vector<Sheet> sheets;
+    const Eigen::Vector3d q = out[i];
+    const double hl = localSpacing(index, q, h);
+    index.radius(q, params.radius * hl, idx, d2);
+    if (idx.size() > kMaxFitPoints) idx.resize(kMaxFitPoints);
+    if (idx.size() < kMinModelPoints)
+      index.knn(q, kMinModelPoints, idx, d2);  // a sparse part: fits need points
+    if (idx.size() < 12) return;
+    // Three sheets where the normals say so, else (or where those do not fit) two; one only where the normals
+    // see no second.
+    const std::vector<Eigen::Vector3d> seed = normalSeeds(cloud.normals, idx, params);
+    bool fitted = false;
+    for (std::size_t k = seed.size(); k >= 1 && !fitted && !(k == 1 && seed.size() > 1); --k)
+      fitted =
+          fitSheets(cloud, idx, q, hl, params, {seed.begin(), seed.begin() + static_cast<long>(k)}, sheets);
+    if (!fitted) return;
+    Eigen::Vector3d best = q;
+    double bd = std::numeric_limits<double>::infinity();
+    for (const Sheet& sh : sheets) {
+      const Eigen::Vector3d x = nearestOnSheet(sh, q);
+      if ((x - q).norm() < bd) bd = (x - q).norm(), best = x;
+    }
+    // A move onto the surface brings the sample nearer the input; one away from it (a model biased by a sheet
+    // it leaves out, as next to a corner) does not.
+    if (bd > kOff * hl && bd <= kMove * hl && meanNearest(index, best) < meanNearest(index, q)) out[i] = best;
+  });
+}
+
+}  // namespace iires::detail
