@@ -140,9 +140,9 @@ ValidityReport repairValidity(TriangleMesh& mesh, std::vector<Eigen::Vector3d>& 
   for (int round = 1; round <= params.rounds && !pairs.empty() && params.refill; ++round) {
     ++report.rounds;
     const std::vector<char> drop = grownRegion(mesh, pairs, round);
-    std::vector<char> touched = verticesOf(mesh, drop);  // removing faces pinches only their vertices
+    std::vector<char> pinchable = verticesOf(mesh, drop);  // removing faces pinches only their vertices
     report.facesRemoved += removeFaces(mesh, drop);
-    report.facesRemoved += removeNonManifold(mesh, params.minComponentFaces, exec.threads, nullptr, &touched);
+    report.facesRemoved += removeNonManifold(mesh, params.minComponentFaces, exec.threads, nullptr, &pinchable);
     if (params.minComponentFaces > 1) report.facesRemoved += removeSmallComponents(mesh, params.minComponentFaces);
     const TriangleMesh removed = mesh;  // free of intersections: every face of a pair went
     refill(mesh, normals, params, exec.threads, report);
