@@ -21,14 +21,9 @@ TriangleMesh sphereWithoutCap(std::vector<Eigen::Vector3d>& normals) {
   PointCloud c;
   c.points = test::fibonacciSphere(3000);
   c.normals = c.points;
-  TriangleMesh m = triangulateLocal(c).mesh;
-  std::vector<Eigen::Vector3i> kept;
-  for (const auto& t : m.triangles) {
-    bool cap = false;
-    for (int k = 0; k < 3; ++k) cap = cap || m.vertices[static_cast<std::size_t>(t[k])].z() < -0.8;
-    if (!cap) kept.push_back(t);
-  }
-  m.triangles = kept;
+  const TriangleMesh whole = triangulateLocal(c).mesh;
+  TriangleMesh m =
+      test::withoutFaces(whole, [&](const Eigen::Vector3i& t) { return test::hasCornerBelow(whole, t, -0.8); });
   normals = c.normals;
   return m;
 }

@@ -96,14 +96,9 @@ TEST(MeshRepair, FillsSmallHoleKeepsLargeOne) {
   PointCloud c;
   TriangleMesh m = sphereMesh(c);
   // Punch a small hole (the faces of one vertex) near the north pole, a large one (a cap) at the south pole.
-  std::vector<Eigen::Vector3i> kept;
-  for (const auto& t : m.triangles) {
-    const bool small = t[0] == 10 || t[1] == 10 || t[2] == 10;
-    bool cap = false;
-    for (int k = 0; k < 3; ++k) cap = cap || m.vertices[t[k]].z() < -0.8;
-    if (!small && !cap) kept.push_back(t);
-  }
-  m.triangles = kept;
+  m = test::withoutFaces(m, [&](const Eigen::Vector3i& t) {
+    return t[0] == 10 || t[1] == 10 || t[2] == 10 || test::hasCornerBelow(m, t, -0.8);
+  });
   const MeshQuality before = evaluateMesh(m);
   EXPECT_EQ(before.boundaryLoops, 2u);
   std::vector<Eigen::Vector3d> normals = c.normals;
@@ -122,14 +117,10 @@ TEST(MeshRepair, ClosesSlightlyLargerHoleWhenTheFillIsGood) {
   PointCloud c;
   TriangleMesh m = sphereMesh(c);
   // The hole: a strip about one edge wide along the equator (as at a sharp rim), about 9 edges long.
-  std::vector<Eigen::Vector3i> kept;
-  for (const auto& t : m.triangles) {
+  m = test::withoutFaces(m, [&](const Eigen::Vector3i& t) {
     const Eigen::Vector3d centre = (m.vertices[t[0]] + m.vertices[t[1]] + m.vertices[t[2]]) / 3.0;
-    bool cap = false;
-    for (int k = 0; k < 3; ++k) cap = cap || m.vertices[t[k]].z() < -0.8;
-    if (!(std::abs(centre.z()) < 0.05 && centre.x() > 0.95) && !cap) kept.push_back(t);
-  }
-  m.triangles = kept;
+    return (std::abs(centre.z()) < 0.05 && centre.x() > 0.95) || test::hasCornerBelow(m, t, -0.8);
+  });
   const MeshQuality before = evaluateMesh(m);
   ASSERT_EQ(before.boundaryLoops, 2u);
   TriangleMesh strict = m;
@@ -200,14 +191,8 @@ TEST(MeshRepair, ZipsSliverHoleAlongAnEdge) {
 TEST(MeshRepair, FillLargeHolesClosesACapWithNewVertices) {
   PointCloud c;
   const TriangleMesh sphere = sphereMesh(c);
-  TriangleMesh m = sphere;
-  std::vector<Eigen::Vector3i> kept;
-  for (const auto& t : m.triangles) {
-    bool cap = false;
-    for (int k = 0; k < 3; ++k) cap = cap || m.vertices[t[k]].z() < -0.8;
-    if (!cap) kept.push_back(t);
-  }
-  m.triangles = kept;
+  TriangleMesh m =
+      test::withoutFaces(sphere, [&](const Eigen::Vector3i& t) { return test::hasCornerBelow(sphere, t, -0.8); });
   const MeshQuality before = evaluateMesh(m);
   ASSERT_EQ(before.boundaryLoops, 1u);
   ASSERT_GT(before.boundaryEdges, 40u);  // far over fillSmallHoles' limits (16 edges, 20 l; 24 / 30 l when good)
@@ -288,14 +273,9 @@ TEST(MeshRepair, FillLargeHolesClosesACapWithNewVertices) {
 // C⁰ fairing); longer ones are kept open.
 TEST(MeshRepair, FillLargeHolesClosesLoopsUpTo250Edges) {
   for (const int segments : {200, 300}) {
-    TriangleMesh m = test::uvSphereMesh(100, segments);
-    std::vector<Eigen::Vector3i> kept;
-    for (const auto& t : m.triangles) {
-      bool cap = false;
-      for (int k = 0; k < 3; ++k) cap = cap || m.vertices[static_cast<std::size_t>(t[k])].z() < -0.8;
-      if (!cap) kept.push_back(t);
-    }
-    m.triangles = kept;
+    const TriangleMesh sphere = test::uvSphereMesh(100, segments);
+    TriangleMesh m =
+        test::withoutFaces(sphere, [&](const Eigen::Vector3i& t) { return test::hasCornerBelow(sphere, t, -0.8); });
     std::vector<Eigen::Vector3d> normals = m.vertices;  // outward on the unit sphere
     ASSERT_EQ(evaluateMesh(m).boundaryEdges, static_cast<std::size_t>(segments));
     const TriangleMesh cut = m;

@@ -85,6 +85,23 @@ inline PointCloud uStrip(std::size_t perSquare, double gap, std::uint64_t seed) 
 // Used by the tests (small clouds) and by bench/thin_parts_bench (large ones).
 
 
+/// @p m without the faces @p drop(face) selects (a hole cut into a mesh).
+template <class Drop>
+TriangleMesh withoutFaces(TriangleMesh m, Drop drop) {
+  std::vector<Eigen::Vector3i> kept;
+  for (const auto& t : m.triangles)
+    if (!drop(t)) kept.push_back(t);
+  m.triangles = std::move(kept);
+  return m;
+}
+
+/// Whether face @p t of @p m has a corner below height @p z.
+inline bool hasCornerBelow(const TriangleMesh& m, const Eigen::Vector3i& t, double z) {
+  for (int k = 0; k < 3; ++k)
+    if (m.vertices[static_cast<std::size_t>(t[k])].z() < z) return true;
+  return false;
+}
+
 /// A closed UV sphere (no intersections by construction).
 inline TriangleMesh uvSphereMesh(int rings, int segments) {
   TriangleMesh m;

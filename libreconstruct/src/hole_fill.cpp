@@ -72,7 +72,8 @@ bool triangulatePolygon(const TriangleMesh& mesh, const std::vector<Eigen::Vecto
     stack.pop_back();
     if (k - i < 2) continue;
     const int j = split[static_cast<std::size_t>(i)][static_cast<std::size_t>(k)];
-    out.emplace_back(static_cast<int>(loop[static_cast<std::size_t>(i)]), static_cast<int>(loop[static_cast<std::size_t>(j)]),
+    out.emplace_back(static_cast<int>(loop[static_cast<std::size_t>(i)]),
+                     static_cast<int>(loop[static_cast<std::size_t>(j)]),
                      static_cast<int>(loop[static_cast<std::size_t>(k)]));
     stack.emplace_back(i, j);
     stack.emplace_back(j, k);
