@@ -86,6 +86,11 @@ bool IntrinsicRule::accept(std::size_t i, std::size_t j) const {
          !acrossGap(pos_[i], nrm_[i], pos_[j], nrm_[j], minGap_ + kGapSlope * d, kGapParallelCos);
 }
 
+bool IntrinsicRule::acceptMove(std::size_t i, const Eigen::Vector3d& from, const Eigen::Vector3d& to) const {
+  if (i >= near_.size() || !near_[i]) return true;
+  return acceptPoints(from, to);
+}
+
 bool IntrinsicRule::acceptPoints(const Eigen::Vector3d& p, const Eigen::Vector3d& q) const {
   const std::int64_t a = geo_->nearest(p), b = geo_->nearest(q);
   if (a < 0 || b < 0 || geo_->component(static_cast<std::size_t>(a)) != geo_->component(static_cast<std::size_t>(b)))

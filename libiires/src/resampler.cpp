@@ -315,8 +315,9 @@ double Resampler::relax(Samples& s, double l, int iterations, Relaxation& state,
             surface_.project(target, &nn, &off, &s.nrm[i], &s.cache[i], projectionSteps, &out);
         // A boundary sample never ends farther out than it was (the projection itself may push it there,
         // where the MLS surface only extrapolates past the last input points) and stays closer to the cloud.
+        // Nor does the projection carry it onto another sheet a gap away (its neighbours would not follow).
         if (off <= (r.outward[i].isZero() ? kOffSurfaceLimit : 0.5 * kOffSurfaceLimit) && out <= kBeyondLimit &&
-            (p - s.pos[i]).dot(r.outward[i]) <= 0) {
+            (p - s.pos[i]).dot(r.outward[i]) <= 0 && rule_.acceptMove(i, s.pos[i], p)) {
           pos[i] = p;
           nrm[i] = nn;
           return;

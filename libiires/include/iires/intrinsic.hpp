@@ -62,6 +62,9 @@ class IntrinsicRule final : public NeighbourRule {
   void update(const std::vector<Eigen::Vector3d>& samples, const std::vector<Eigen::Vector3d>& normals) override;
   /// @brief Whether samples @p i and @p j (of the last update()) may be neighbours.
   bool accept(std::size_t i, std::size_t j) const override;
+  /// @brief Where another sheet is near sample @p i (the gap test's samples), acceptPoints(from, to): a step
+  /// that the projection carried onto the other sheet is refused. Elsewhere every step is accepted.
+  bool acceptMove(std::size_t i, const Eigen::Vector3d& from, const Eigen::Vector3d& to) const override;
 
   /// @brief The same test for two arbitrary points (each mapped to its nearest dense point), independent of
   /// update(); uses the Euclidean bound of the last update() (none before the first).

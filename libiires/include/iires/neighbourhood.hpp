@@ -23,6 +23,14 @@ class NeighbourRule {
   /// @brief Whether candidate @p j (one of sample @p i's Euclidean nearest neighbours) is a neighbour of @p i.
   /// @note Must be symmetric and thread-safe (called concurrently).
   virtual bool accept(std::size_t i, std::size_t j) const = 0;
+  /// @brief Whether sample @p i may move from @p from to @p to (a relaxation step projected onto the surface):
+  /// false where the step left its sheet for another one a gap away. Thread-safe.
+  virtual bool acceptMove(std::size_t i, const Eigen::Vector3d& from, const Eigen::Vector3d& to) const {
+    (void)i;
+    (void)from;
+    (void)to;
+    return true;
+  }
 };
 
 /// @brief Plain Euclidean neighbourhoods: every candidate is accepted.
