@@ -88,6 +88,11 @@ bool IntrinsicRule::accept(std::size_t i, std::size_t j) const {
 
 bool IntrinsicRule::acceptMove(std::size_t i, const Eigen::Vector3d& from, const Eigen::Vector3d& to) const {
   if (i >= near_.size() || !near_[i]) return true;
+  // A step along the sheet keeps to its tangent plane; one onto the other sheet is offset along the normal by
+  // the gap (the samples' gap test: minGap_ plus the normals' error over the step), and the geodesic
+  // coordinates (noisy where a noisy gap is bridged) must confirm it.
+  const Eigen::Vector3d d = to - from;
+  if (std::abs(nrm_[i].dot(d)) < minGap_ + kGapSlope * d.norm()) return true;
   return acceptPoints(from, to);
 }
 

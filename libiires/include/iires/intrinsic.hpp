@@ -62,8 +62,9 @@ class IntrinsicRule final : public NeighbourRule {
   void update(const std::vector<Eigen::Vector3d>& samples, const std::vector<Eigen::Vector3d>& normals) override;
   /// @brief Whether samples @p i and @p j (of the last update()) may be neighbours.
   bool accept(std::size_t i, std::size_t j) const override;
-  /// @brief Where another sheet is near sample @p i (the gap test's samples), acceptPoints(from, to): a step
-  /// that the projection carried onto the other sheet is refused. Elsewhere every step is accepted.
+  /// @brief Where another sheet is near sample @p i (the gap test's samples), a step offset along its normal
+  /// by the gap test's distance that acceptPoints(from, to) refuses: the projection carried it onto the other
+  /// sheet. Elsewhere every step is accepted.
   bool acceptMove(std::size_t i, const Eigen::Vector3d& from, const Eigen::Vector3d& to) const override;
 
   /// @brief The same test for two arbitrary points (each mapped to its nearest dense point), independent of
