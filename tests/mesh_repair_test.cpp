@@ -77,7 +77,8 @@ TEST(MeshRepair, FillLargeHolesStaysOnTheSampledSurface) {
     TriangleMesh m = cut;
     std::vector<Eigen::Vector3d> n = normals;
     HoleFillingParams p;
-    p.inputPoints = std::make_shared<const std::vector<Eigen::Vector3d>>(pipe ? ballAndPipe : ball);
+    p.inputPoints = std::make_shared<const SampledPoints>(
+        std::make_shared<const std::vector<Eigen::Vector3d>>(pipe ? ballAndPipe : ball));
     const LargeHoleReport r = fillLargeHoles(m, n, p);
     EXPECT_EQ(r.loops, 1u) << "pipe " << pipe;
     const MeshQuality q = evaluateMesh(m);
@@ -106,7 +107,8 @@ TEST(MeshRepair, FillLargeHolesStaysOnTheSampledSurface) {
     for (double x = -radius; x <= radius; x += 0.5 * l)
       for (double y = -radius; y <= radius; y += 0.5 * l)
         if (std::hypot(x, y) < radius + l) flat.emplace_back(x, y, z);
-    p.inputPoints = std::make_shared<const std::vector<Eigen::Vector3d>>(flat);
+    p.inputPoints =
+        std::make_shared<const SampledPoints>(std::make_shared<const std::vector<Eigen::Vector3d>>(flat));
     const LargeHoleReport r = fillLargeHoles(m, n, p);
     EXPECT_EQ(r.filled, 1u);
     EXPECT_EQ(r.unsupported, 0u);

@@ -62,12 +62,12 @@ bool toSurfaceMesh(const TriangleMesh& mesh, Mesh& sm) {
 /// 124-240 edges).
 constexpr std::size_t kExhaustiveEdges = 250;
 
-/// The input points (HoleFillingParams::inputPoints), indexed on first use: whether a loop's fill lies on the
-/// sampled surface, and whether the input goes on beyond the loop.
+/// The input points (HoleFillingParams::inputPoints): whether a loop's fill lies on the sampled surface, and
+/// whether the input goes on beyond the loop.
 class InputSupport {
  public:
   explicit InputSupport(const HoleFillingParams& params) : params_(params) {}
-  bool active() const { return params_.inputPoints && !params_.inputPoints->empty(); }
+  bool active() const { return params_.inputPoints && !params_.inputPoints->points().empty(); }
 
   /// The unit u of the tests for the loop at @p h with mean edge @p l: the larger of l and the input's spacing
   /// there (the median, over the loop's vertices, of the distance from the input point nearest to each to its
@@ -114,13 +114,9 @@ class InputSupport {
   }
 
  private:
-  const std::vector<Eigen::Vector3d>& points() const { return *params_.inputPoints; }
-  const KnnIndex& index() {
-    if (!index_) index_ = std::make_unique<KnnIndex>(points());
-    return *index_;
-  }
+  const std::vector<Eigen::Vector3d>& points() const { return params_.inputPoints->points(); }
+  const KnnIndex& index() const { return params_.inputPoints->index(); }
   const HoleFillingParams& params_;
-  std::unique_ptr<KnnIndex> index_;
   std::vector<std::uint32_t> idx_;
   std::vector<double> sq_;
 };

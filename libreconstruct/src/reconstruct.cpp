@@ -183,16 +183,17 @@ void triangulateSamples(const ReconstructParams& params, const Execution& exec, 
 HoleFillingParams holeParams(const ReconstructParams& params, const ReconstructResult& result) {
   HoleFillingParams holes = params.holes;
   if (!holes.inputPoints && result.resampling.geodesic)  // the dense cloud, owned by its geodesic coordinates
-    holes.inputPoints = std::shared_ptr<const std::vector<Eigen::Vector3d>>(result.resampling.geodesic,
-                                                                             &result.resampling.geodesic->points());
+    holes.inputPoints = std::make_shared<const SampledPoints>(std::shared_ptr<const std::vector<Eigen::Vector3d>>(
+        result.resampling.geodesic, &result.resampling.geodesic->points()));
   return holes;
 }
 
 /// Small components removed, small holes closed (again after removing the fans a fill pinched together), large
-/// holes closed, edges flipped back to Delaunay, bad triangles repaired, the band along open boundaries relaxed.
-/// Returns the faces flipped by the orientation passes that large holes and remeshing need first.
-std::size_t closeHoles(const ReconstructParams& params, const Execution& exec, ReconstructResult& result,
-                       std::vector<Eigen::Vector3d>& normals) {
+/// holes closed (@p holes: params.holes with the input, see holeParams), edges flipped back to Delaunay, bad
+/// triangles repaired, the band along open boundaries relaxed. Returns the faces flipped by the orientation passes
+/// that large holes and remeshing need first.
+std::size_t closeHoles(const ReconstructParams& params, const HoleFillingParams& holes, const Execution& exec,
+                       ReconstructResult& result, std::vector<Eigen::Vector3d>& normals) {
   std::size_t flipped = 0;
   if (params.minComponentFaces > 1) result.smallComponentFaces = removeSmallComponents(result.mesh, params.minComponentFaces);
   if (params.fillHoles) {
@@ -211,7 +212,7 @@ std::size_t closeHoles(const ReconstructParams& params, const Execution& exec, R
     if (params.holes.maxRefinedExtent > 0 && result.holes.kept > 0) {
       // What is left open: a gap small next to its part gets a refined fill (it needs an oriented 2-manifold).
       flipped += orientConsistently(result.mesh, normals).facesFlipped;
-      result.largeHoles = fillLargeHoles(result.mesh, normals, holeParams(params, result));
+      result.largeHoles = fillLargeHoles(result.mesh, normals, holes);
     }
     if (params.method == ReconstructMethod::kLocal && params.local.flipMaxDihedral > 0 &&
         (result.holes.facesAdded || result.largeHoles.filled))
@@ -240,11 +241,11 @@ bool anyFaceBelow(const TriangleMesh& mesh, double q) {
 
 /// Self-intersecting faces and non-manifold parts removed (and refilled); the fills' poor triangles repaired,
 /// then checked again. Returns the faces flipped by the orientation passes remeshing needs first.
-std::size_t repairMeshValidity(const ReconstructParams& params, const Execution& exec, ReconstructResult& result,
-                               std::vector<Eigen::Vector3d>& normals) {
+std::size_t repairMeshValidity(const ReconstructParams& params, const HoleFillingParams& holes, const Execution& exec,
+                               ReconstructResult& result, std::vector<Eigen::Vector3d>& normals) {
   std::size_t flipped = 0;
   ValidityParams vp = params.validity;
-  vp.holes = holeParams(params, result);
+  vp.holes = holes;
   vp.refill = params.fillHoles && vp.refill;
   vp.minComponentFaces = params.minComponentFaces;
   result.validity = repairValidity(result.mesh, normals, vp, exec);
@@ -314,12 +315,13 @@ ReconstructResult reconstruct(const PointCloud& input, const ReconstructParams& 
 
   t = clock.begin("holes");
   std::vector<Eigen::Vector3d> normals = result.samples.normals;  // grows with any vertex hole filling adds
-  std::size_t flippedEarlier = closeHoles(params, exec, result, normals);  // by orientation passes needed first
+  const HoleFillingParams holes = holeParams(params, result);  // one input index for every pass
+  std::size_t flippedEarlier = closeHoles(params, holes, exec, result, normals);  // by orientation passes needed first
   clock.end("holes", t);
 
   if (params.repairValidity) {
     t = clock.begin("validity");
-    flippedEarlier += repairMeshValidity(params, exec, result, normals);
+    flippedEarlier += repairMeshValidity(params, holes, exec, result, normals);
     clock.end("validity", t);
   }
 

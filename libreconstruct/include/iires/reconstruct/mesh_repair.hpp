@@ -7,11 +7,31 @@
 #include <Eigen/Core>
 #include <cstddef>
 #include <memory>
+#include <mutex>
 #include <vector>
 
+#include "iires/knn.hpp"
 #include "iires/types.hpp"
 
 namespace iires {
+
+/// @brief The points a mesh was made from, with a k-d tree over them built on first use and kept, so that every
+/// fill tested against them (fillLargeHoles() in each hole-filling and repair pass) shares one.
+class SampledPoints {
+ public:
+  explicit SampledPoints(std::shared_ptr<const std::vector<Eigen::Vector3d>> points) : points_(std::move(points)) {}
+  const std::vector<Eigen::Vector3d>& points() const { return *points_; }
+  /// @brief The k-d tree over points(); built by the first call (thread-safe).
+  const KnnIndex& index() const {
+    std::call_once(built_, [this] { index_ = std::make_unique<KnnIndex>(*points_); });
+    return *index_;
+  }
+
+ private:
+  std::shared_ptr<const std::vector<Eigen::Vector3d>> points_;
+  mutable std::once_flag built_;
+  mutable std::unique_ptr<KnnIndex> index_;
+};
 
 /// @brief Which boundary loops fillSmallHoles() closes. A loop is closed only when it is short in both senses,
 /// so the real boundary of an open surface (long loops) is kept.
@@ -37,7 +57,7 @@ struct HoleFillingParams {
   /// within 2u of their midpoint and more than u past them, towards the hole) — and otherwise undone, the loop left
   /// open: a membrane that leaves the data where the data goes on spans empty space (between two tubes, across a
   /// wedge) where the triangulation rightly did not link. reconstruct() sets the resampler's working cloud here.
-  std::shared_ptr<const std::vector<Eigen::Vector3d>> inputPoints;
+  std::shared_ptr<const SampledPoints> inputPoints;
   double supportDistance = 3.0;     ///< see inputPoints, in units u (> 0)
   double maxContinuedShare = 0.25;  ///< see inputPoints (0–1)
 
@@ -97,7 +117,7 @@ struct LargeHoleReport {
 /// one per vertex; the faces are rebuilt (old faces first, in order).
 /// @pre @p mesh is consistently oriented (orientConsistently()); otherwise, or when it is not a 2-manifold,
 /// nothing is done (report.skipped).
-/// @note Deterministic. With params.inputPoints, a k-d tree over them is built once a loop is to be filled.
+/// @note Deterministic. With params.inputPoints, their k-d tree is built when a loop is first to be filled.
 LargeHoleReport fillLargeHoles(TriangleMesh& mesh, std::vector<Eigen::Vector3d>& normals,
                                const HoleFillingParams& params = {});
 
