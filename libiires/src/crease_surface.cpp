@@ -164,23 +164,12 @@ Eigen::Vector3d nearestOnSheet(const Sheet& sh, const Eigen::Vector3d& q) {
   return best;
 }
 
-/// The mean distance from @p y to its 6 nearest input points.
-double meanNearest(const KnnIndex& index, const Eigen::Vector3d& y) {
-  std::vector<std::uint32_t> idx;
-  std::vector<double> d2;
-  const std::size_t k = index.knn(y, 6, idx, d2);
-  double sum = 0;
-  for (std::size_t t = 0; t < k; ++t) sum += std::sqrt(d2[t]);
-  return k > 0 ? sum / static_cast<double>(k) : 0.0;
-}
-
 }  // namespace
 
 void ontoSheets(const PointCloud& cloud, const KnnIndex& index, double h, const FeatureParams& params,
                 std::vector<Eigen::Vector3d>& out, int threads) {
   constexpr double kOff = 0.3;  // local spacings: a sample farther than this from the sheets moves
-  constexpr double kMove =
-      2.0;  // local spacings: and by at most this much (farther: the model is not its own)
+  constexpr double kMove = 2.0;  // local spacings: and by at most this much (farther: the model is not its own)
   parallelFor(out.size(), threads, [&](std::size_t i) {
     std::vector<std::uint32_t> idx;
     std::vector<double> d2;
@@ -208,7 +197,8 @@ void ontoSheets(const PointCloud& cloud, const KnnIndex& index, double h, const 
     }
     // A move onto the surface brings the sample nearer the input; one away from it (a model biased by a sheet
     // it leaves out, as next to a corner) does not.
-    if (bd > kOff * hl && bd <= kMove * hl && meanNearest(index, best) < meanNearest(index, q)) out[i] = best;
+    // (localSpacing with no floor: the mean distance to the 6 nearest input points.)
+    if (bd > kOff * hl && bd <= kMove * hl && localSpacing(index, best, 0) < localSpacing(index, q, 0)) out[i] = best;
   });
 }
 
