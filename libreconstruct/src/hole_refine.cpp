@@ -1,25 +1,21 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // fillLargeHoles(): boundary loops too long for fillSmallHoles() but small next to their component, closed with
 // new vertices (CGAL: refined and faired hole filling, then isotropic remeshing of the patch) where the fill lies on
-// the input or the input ends at the loop; remeshBadRegions():
-// isotropic remeshing around the triangles repairBadTriangles() could not raise. CGAL stays in this file.
+// the input or the input ends at the loop.
 #ifndef CGAL_EIGEN3_ENABLED
 #define CGAL_EIGEN3_ENABLED 1  // fairing's sparse solver
 #endif
-#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Polygon_mesh_processing/compute_normal.h>
 #include <CGAL/Polygon_mesh_processing/fair.h>
 #include <CGAL/Polygon_mesh_processing/refine.h>
 #include <CGAL/Polygon_mesh_processing/remesh.h>
 #include <CGAL/Polygon_mesh_processing/triangulate_hole.h>
-#include <CGAL/Surface_mesh.h>
 #include <CGAL/boost/graph/Euler_operations.h>
 
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <iterator>
-#include <map>
 #include <memory>
 #include <unordered_map>
 #include <vector>
@@ -28,32 +24,19 @@
 #include "iires/knn.hpp"
 #include "iires/reconstruct/mesh_quality.hpp"
 #include "iires/reconstruct/mesh_repair.hpp"
+#include "surface_mesh.hpp"
 
 namespace iires {
 namespace {
 
-using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
-using Mesh = CGAL::Surface_mesh<Kernel::Point_3>;
-using VertexIndex = Mesh::Vertex_index;
-using FaceIndex = Mesh::Face_index;
-using HalfedgeIndex = Mesh::Halfedge_index;
+using detail::FaceIndex;
+using detail::HalfedgeIndex;
+using detail::Kernel;
+using detail::Mesh;
+using detail::toEigen;
+using detail::toSurfaceMesh;
+using detail::VertexIndex;
 namespace PMP = CGAL::Polygon_mesh_processing;
-
-Eigen::Vector3d toEigen(const Kernel::Point_3& p) { return {p.x(), p.y(), p.z()}; }
-
-/// @p mesh as a Surface_mesh with the same vertex and face indices; false when it is not an oriented
-/// 2-manifold (a face CGAL cannot add).
-bool toSurfaceMesh(const TriangleMesh& mesh, Mesh& sm) {
-  sm.reserve(static_cast<Mesh::size_type>(mesh.vertices.size()),
-             static_cast<Mesh::size_type>(3 * mesh.triangles.size() / 2),
-             static_cast<Mesh::size_type>(mesh.triangles.size()));
-  for (const auto& p : mesh.vertices) sm.add_vertex(Kernel::Point_3(p.x(), p.y(), p.z()));
-  for (const auto& t : mesh.triangles)
-    if (sm.add_face(VertexIndex(static_cast<Mesh::size_type>(t[0])), VertexIndex(static_cast<Mesh::size_type>(t[1])),
-                    VertexIndex(static_cast<Mesh::size_type>(t[2]))) == Mesh::null_face())
-      return false;
-  return true;
-}
 
 /// Loops up to this many edges are triangulated by CGAL's exhaustive search (O(n³): 0.02 s at 100 edges, 0.27 s at
 /// 240); longer ones are kept open (an ear-clipped start would be a fan of slivers on a near-circular loop, which
@@ -244,118 +227,6 @@ LargeHoleReport fillLargeHoles(TriangleMesh& mesh, std::vector<Eigen::Vector3d>&
   }
   report.facesAdded = mesh.triangles.size() - before;
   return report;
-}
-
-std::size_t remeshBadRegions(TriangleMesh& mesh, std::vector<Eigen::Vector3d>& normals, double minQuality,
-                             int rings, int iterations) {
-  if (!(minQuality > 0) || rings < 0 || iterations <= 0 || mesh.triangles.empty()) return 0;
-  auto quality = [&](const Eigen::Vector3i& t) {
-    return triangleQuality(mesh.vertices[static_cast<std::size_t>(t[0])], mesh.vertices[static_cast<std::size_t>(t[1])],
-                           mesh.vertices[static_cast<std::size_t>(t[2])]);
-  };
-  std::vector<char> selected(mesh.triangles.size(), 0);
-  bool any = false;
-  for (std::size_t f = 0; f < mesh.triangles.size(); ++f)
-    if (quality(mesh.triangles[f]) < minQuality) selected[f] = 1, any = true;
-  if (!any) return 0;
-  const bool haveNormals = normals.size() == mesh.vertices.size();
-  // The bad faces grown by `rings` rings of faces (through shared vertices), split into regions (connected
-  // through shared vertices), each remeshed and kept or dropped on its own.
-  for (int r = 0; r < rings; ++r) {
-    std::vector<char> vertex(mesh.vertices.size(), 0);
-    for (std::size_t f = 0; f < selected.size(); ++f)
-      if (selected[f])
-        for (int c = 0; c < 3; ++c) vertex[static_cast<std::size_t>(mesh.triangles[f][c])] = 1;
-    for (std::size_t f = 0; f < selected.size(); ++f)
-      for (int c = 0; c < 3; ++c) selected[f] = selected[f] || vertex[static_cast<std::size_t>(mesh.triangles[f][c])];
-  }
-  std::vector<std::vector<std::size_t>> regions;
-  {
-    DisjointSets linked(mesh.vertices.size());
-    for (std::size_t f = 0; f < selected.size(); ++f)
-      if (selected[f])
-        for (int c = 1; c < 3; ++c)
-          linked.unite(static_cast<std::uint32_t>(mesh.triangles[f][0]), static_cast<std::uint32_t>(mesh.triangles[f][c]));
-    std::map<std::uint32_t, std::size_t> id;
-    for (std::size_t f = 0; f < selected.size(); ++f)
-      if (selected[f]) {
-        const auto [it, fresh] =
-            id.emplace(linked.find(static_cast<std::uint32_t>(mesh.triangles[f][0])), regions.size());
-        if (fresh) regions.emplace_back();
-        regions[it->second].push_back(f);
-      }
-  }
-  std::size_t changed = 0;
-  for (std::size_t r = 0; r < regions.size(); ++r) {
-    const std::vector<std::size_t>& region = regions[r];
-    if (region.empty()) continue;
-    const std::size_t nv = mesh.vertices.size(), oldFaces = mesh.triangles.size();
-    Mesh sm;
-    if (!toSurfaceMesh(mesh, sm)) return changed;  // not an oriented 2-manifold
-    std::vector<char> inRegion(oldFaces, 0);
-    std::vector<FaceIndex> faces;
-    double before = 1, edgeSum = 0;
-    for (std::size_t f : region) {
-      inRegion[f] = 1;
-      faces.emplace_back(static_cast<Mesh::size_type>(f));
-      before = std::min(before, quality(mesh.triangles[f]));
-      for (int c = 0; c < 3; ++c)
-        edgeSum += (mesh.vertices[static_cast<std::size_t>(mesh.triangles[f][c])] -
-                    mesh.vertices[static_cast<std::size_t>(mesh.triangles[f][(c + 1) % 3])]).norm();
-    }
-    const double target = edgeSum / static_cast<double>(3 * region.size());
-    PMP::isotropic_remeshing(faces, target, sm,
-                             CGAL::parameters::number_of_iterations(static_cast<unsigned>(iterations)).protect_constraints(true));
-    // The region's faces now: every face but the old ones outside it (those keep their index).
-    double after = 1;
-    for (FaceIndex f : sm.faces()) {
-      if (static_cast<std::size_t>(f) < oldFaces && !inRegion[f]) continue;
-      Eigen::Vector3d p[3];
-      int c = 0;
-      for (VertexIndex v : CGAL::vertices_around_face(sm.halfedge(f), sm)) p[c++] = toEigen(sm.point(v));
-      after = std::min(after, triangleQuality(p[0], p[1], p[2]));
-    }
-    if (!(after > before)) continue;  // no better: this region stays as it was
-    // Keep it: moved vertices keep their index, removed ones stay in the list unused, new ones are appended.
-    std::vector<std::uint32_t> index(sm.number_of_vertices() + sm.number_of_removed_vertices(), 0);
-    for (VertexIndex v : sm.vertices()) {
-      const Eigen::Vector3d x = toEigen(sm.point(v));
-      const bool old = static_cast<std::size_t>(v) < nv;
-      if (old && x == mesh.vertices[v]) {
-        index[v] = static_cast<std::uint32_t>(static_cast<std::size_t>(v));
-        continue;
-      }
-      index[v] = old ? static_cast<std::uint32_t>(static_cast<std::size_t>(v)) : static_cast<std::uint32_t>(mesh.vertices.size());
-      if (old)
-        mesh.vertices[v] = x;
-      else
-        mesh.vertices.push_back(x);
-      if (haveNormals) {
-        const Kernel::Vector_3 n = PMP::compute_vertex_normal(v, sm);
-        if (old)
-          normals[v] = Eigen::Vector3d(n.x(), n.y(), n.z());
-        else
-          normals.emplace_back(n.x(), n.y(), n.z());
-      }
-      ++changed;
-    }
-    std::vector<long long> remap(oldFaces, -1);
-    mesh.triangles.clear();
-    for (FaceIndex f : sm.faces()) {
-      if (static_cast<std::size_t>(f) < oldFaces && !inRegion[f]) remap[f] = static_cast<long long>(mesh.triangles.size());
-      Eigen::Vector3i t;
-      int c = 0;
-      for (VertexIndex v : CGAL::vertices_around_face(sm.halfedge(f), sm)) t[c++] = static_cast<int>(index[v]);
-      mesh.triangles.push_back(t);
-    }
-    for (std::size_t s = r + 1; s < regions.size(); ++s) {
-      std::vector<std::size_t> moved;
-      for (std::size_t f : regions[s])
-        if (remap[f] >= 0) moved.push_back(static_cast<std::size_t>(remap[f]));
-      regions[s] = moved.size() == regions[s].size() ? moved : std::vector<std::size_t>{};
-    }
-  }
-  return changed;
 }
 
 }  // namespace iires

@@ -126,9 +126,11 @@ LargeHoleReport fillLargeHoles(TriangleMesh& mesh, std::vector<Eigen::Vector3d>&
 /// length, vertices projected onto the region's old surface, the region's border unchanged. The result is kept only
 /// when the region's worst Q rises (else the mesh is left as it was). Moved vertices keep their index (and get the
 /// normal of their new faces in @p normals when it holds one per vertex), removed ones stay in the list unused,
-/// new ones are appended; the faces are rebuilt (faces outside the regions first, in order).
+/// new ones are appended; the faces outside the remeshed regions keep their order, the regions' new faces follow.
+/// Each region is remeshed as a mesh of its own (its faces and the ring around them): a region where that is not
+/// an oriented 2-manifold is left as it is.
 /// @return vertices moved, removed or added (0: nothing changed, including when no face is below @p minQuality —
-/// then nothing at all is done — or @p mesh is not an oriented 2-manifold).
+/// then nothing at all is done).
 /// @pre @p mesh is consistently oriented (orientConsistently()).
 /// @note Deterministic.
 std::size_t remeshBadRegions(TriangleMesh& mesh, std::vector<Eigen::Vector3d>& normals, double minQuality,
