@@ -359,28 +359,59 @@ TEST(Sheets, ReconstructKeepsNearSurfacesApart) {
 }
 
 // iires-reconstruct on a thin closed plate (a box 3 input spacings thick, every face sampled) whose two big faces
-// lie a third of an output spacing apart: no face joins them. The geodesic coordinates cannot
-// part them (the satellites sit at the corners, as far from one face as from the other), and where the normals'
-// orientation carried across the rim leaves both faces facing the same way the normals cannot either: the
-// 1-rings drop the candidates the sheet rule's pair test puts across the gap (before: 3,092 of 3,845 faces
-// joined the two faces).
-TEST(Sheets, ReconstructedPlateFacesStayApart) {
+// lie a sixth of an output spacing apart: no face joins them across the gap, and the mesh is one closed genus-0
+// surface. The geodesic coordinates cannot part the faces (the satellites sit at the corners, as far from one face
+// as from the other), and where the normals' orientation carried across the rim leaves both faces facing the same
+// way the normals cannot either: the 1-rings drop the candidates the sheet rule's pair test puts across the gap
+// (before: 3,092 of 3,845 faces joined the two faces). The rim, thinner than the edges, is closed by a band
+// between the two faces' boundary loops (before: two open parts facing the same way, 240 boundary edges).
+TEST(Sheets, ReconstructedPlateIsClosedWithFacesApart) {
   const ThinCase t = test::thinPlate(100000, 3.0, 0.0, 19);
   ReconstructParams params;
   params.targetCount = 2000;
   const ReconstructResult r = reconstruct(positionsOnly(t), params);
-  std::size_t joining = 0;  // faces with corners on both big faces (the rim excepted)
+  const double edge = r.quality.meanEdgeLength;
+  // Faces with corners on both big faces away from the rim (the band's corners, each face's outermost vertices,
+  // lie up to about two edges in from it).
+  std::size_t joining = 0;
   for (const auto& f : r.mesh.triangles) {
     bool side[2] = {false, false};
-    for (int c = 0; c < 3; ++c)
+    Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+    for (int c = 0; c < 3; ++c) {
+      centre += r.mesh.vertices[f[c]] / 3;
       if (const int s = t.side(r.mesh.vertices[f[c]]); s >= 0) side[s] = true;
-    joining += side[0] && side[1];
+    }
+    const double toRim = std::min({centre.x(), t.size - centre.x(), centre.y(), t.size - centre.y()});
+    joining += side[0] && side[1] && toRim > 2 * edge;
   }
-  std::printf("  %zu faces, components %zu, genus %lld, closed %d, boundary edges %zu, faces joining the faces %zu\n",
+  std::printf("  %zu faces, components %zu, genus %lld, closed %d, boundary edges %zu, faces joining the faces %zu, "
+              "rim bands %zu (%zu faces, %zu parts turned over)\n",
               r.mesh.triangles.size(), r.quality.components, r.quality.genus, r.quality.closed ? 1 : 0,
-              r.quality.boundaryEdges, joining);
+              r.quality.boundaryEdges, joining, r.rimBands.bands, r.rimBands.facesAdded, r.rimBands.partsTurned);
   EXPECT_EQ(joining, 0u);
   EXPECT_GT(r.mesh.triangles.size(), 3500u);  // both faces meshed (a closed mesh of 2,000 vertices has 3,996)
+  EXPECT_EQ(r.quality.components, 1u);
+  EXPECT_TRUE(r.quality.closed);
+  EXPECT_EQ(r.quality.genus, 0);
+  EXPECT_EQ(r.quality.selfIntersections, 0u);
+}
+
+// Two parallel open squares a fifth of an output spacing apart with no rim between them (the folded sheets without
+// the fold): their boundary loops run side by side all along, but no path on the sampled surface joins them, so no
+// band closes them into one part.
+TEST(Sheets, SheetsWithoutARimStayOpen) {
+  ThinCase t = test::foldedSheets(60000, 2.5, 0.0, 20);
+  PointCloud squares;
+  for (const auto& p : t.cloud.points)
+    if (p.x() <= 1.0) squares.points.push_back(p);
+  ReconstructParams params;
+  params.targetCount = 2000;
+  const ReconstructResult r = reconstruct(squares, params);
+  std::printf("  components %zu, closed %d, boundary loops %zu, rim bands %zu\n", r.quality.components,
+              r.quality.closed ? 1 : 0, r.quality.boundaryLoops, r.rimBands.bands);
+  EXPECT_EQ(r.rimBands.bands, 0u);
+  EXPECT_EQ(r.quality.components, 2u);
+  EXPECT_FALSE(r.quality.closed);
 }
 
 }  // namespace

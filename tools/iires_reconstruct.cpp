@@ -139,6 +139,8 @@ int main(int argc, char** argv) {
                 << " samples in no triangle, " << result.smallComponentFaces << " faces of small parts removed\n";
       std::cout << "  " << std::left << std::setw(30) << "small holes closed / kept" << result.holes.filled << " / "
                 << result.holes.kept << "\n";
+      std::cout << "  " << std::left << std::setw(30) << "thin rims closed by bands" << result.rimBands.bands << " ("
+                << result.rimBands.facesAdded << " faces; " << result.rimBands.partsTurned << " parts turned over)\n";
       std::cout << "  " << std::left << std::setw(30) << "large holes closed / kept" << result.largeHoles.filled
                 << " / " << result.largeHoles.kept << " (" << result.largeHoles.verticesAdded << " vertices added; "
                 << result.largeHoles.unsupported << " kept open: the fill left the input)\n";

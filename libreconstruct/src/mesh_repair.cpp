@@ -36,6 +36,20 @@ double cornerAngle(const Eigen::Vector3d& o, const Eigen::Vector3d& x, const Eig
 
 }  // namespace
 
+const SampledPoints::Adjacency& SampledPoints::adjacency() const {
+  std::call_once(adjacencyBuilt_, [this] {
+    if (!graph_) return;
+    const Edges edges = graph_();
+    adjacency_.start.assign(points_->size() + 1, 0);
+    for (const auto& e : edges) ++adjacency_.start[e[0] + 1], ++adjacency_.start[e[1] + 1];
+    for (std::size_t i = 0; i < points_->size(); ++i) adjacency_.start[i + 1] += adjacency_.start[i];
+    adjacency_.neighbours.resize(adjacency_.start.back());
+    std::vector<std::uint32_t> fill(adjacency_.start.begin(), adjacency_.start.end() - 1);
+    for (const auto& e : edges) adjacency_.neighbours[fill[e[0]]++] = e[1], adjacency_.neighbours[fill[e[1]]++] = e[0];
+  });
+  return adjacency_;
+}
+
 BadTriangleReport repairBadTriangles(TriangleMesh& mesh, const std::vector<Eigen::Vector3d>& normals,
                                      double minQuality, double maxDeviation) {
   BadTriangleReport report;

@@ -89,6 +89,8 @@ std::string ReconstructResult::toJson() const {
   };
   holeCounts("holes", holes);
   j.endObject();
+  j.key("rim_bands").beginObject().member("bands", rimBands.bands).member("faces_added", rimBands.facesAdded);
+  j.member("parts_turned", rimBands.partsTurned).endObject();
   holeCounts("large_holes", largeHoles);
   j.member("unsupported", largeHoles.unsupported).member("skipped", largeHoles.skipped).endObject();
   j.key("validity_repair").beginObject().member("intersecting_pairs_found", validity.intersectingPairs);
@@ -182,9 +184,11 @@ void triangulateSamples(const ReconstructParams& params, const Execution& exec, 
 /// large-hole fills must lie on, when the input was resampled and params.holes names no input of its own.
 HoleFillingParams holeParams(const ReconstructParams& params, const ReconstructResult& result) {
   HoleFillingParams holes = params.holes;
-  if (!holes.inputPoints && result.resampling.geodesic)  // the dense cloud, owned by its geodesic coordinates
-    holes.inputPoints = std::make_shared<const SampledPoints>(std::shared_ptr<const std::vector<Eigen::Vector3d>>(
-        result.resampling.geodesic, &result.resampling.geodesic->points()));
+  if (!holes.inputPoints && result.resampling.geodesic) {  // the dense cloud, owned by its geodesic coordinates
+    const std::shared_ptr<const GeodesicCoordinates> geo = result.resampling.geodesic;
+    holes.inputPoints = std::make_shared<const SampledPoints>(
+        std::shared_ptr<const std::vector<Eigen::Vector3d>>(geo, &geo->points()), [geo] { return geo->edges(); });
+  }
   return holes;
 }
 
@@ -209,13 +213,15 @@ std::size_t closeHoles(const ReconstructParams& params, const HoleFillingParams&
       result.holes.facesAdded += again.facesAdded;
       result.holes.verticesAdded += again.verticesAdded;
     }
-    if (params.holes.maxRefinedExtent > 0 && result.holes.kept > 0) {
-      // What is left open: a gap small next to its part gets a refined fill (it needs an oriented 2-manifold).
+    if (result.holes.kept > 0 && (holes.inputPoints || params.holes.maxRefinedExtent > 0)) {
+      // What is left open: the rims of parts thinner than the edges get bands, and a gap small next to its part
+      // a refined fill (both need an oriented 2-manifold).
       flipped += orientConsistently(result.mesh, normals).facesFlipped;
-      result.largeHoles = fillLargeHoles(result.mesh, normals, holes);
+      result.rimBands = closeRimBands(result.mesh, normals, holes);
+      if (params.holes.maxRefinedExtent > 0) result.largeHoles = fillLargeHoles(result.mesh, normals, holes);
     }
     if (params.method == ReconstructMethod::kLocal && params.local.flipMaxDihedral > 0 &&
-        (result.holes.facesAdded || result.largeHoles.filled))
+        (result.holes.facesAdded || result.rimBands.bands || result.largeHoles.filled))
       result.flipsAfterFilling = flipToDelaunay(result.mesh, params.local.flipMaxDihedral, params.local.maxFlipSweeps);
   }
   if (params.repairQuality > 0) {

@@ -5,7 +5,10 @@
 /// consistent orientation, dropping unused vertices.
 
 #include <Eigen/Core>
+#include <array>
 #include <cstddef>
+#include <cstdint>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <vector>
@@ -16,21 +19,34 @@
 namespace iires {
 
 /// @brief The points a mesh was made from, with a k-d tree over them built on first use and kept, so that every
-/// fill tested against them (fillLargeHoles() in each hole-filling and repair pass) shares one.
+/// fill tested against them (fillLargeHoles() in each hole-filling and repair pass) shares one; and, when given,
+/// their surface graph (edges between neighbours on one sheet, e.g. GeodesicCoordinates::edges(): it does not
+/// cross thin gaps), for paths along the sampled surface.
 class SampledPoints {
  public:
-  explicit SampledPoints(std::shared_ptr<const std::vector<Eigen::Vector3d>> points) : points_(std::move(points)) {}
+  using Edges = std::vector<std::array<std::uint32_t, 2>>;
+  explicit SampledPoints(std::shared_ptr<const std::vector<Eigen::Vector3d>> points, std::function<Edges()> graph = {})
+      : points_(std::move(points)), graph_(std::move(graph)) {}
   const std::vector<Eigen::Vector3d>& points() const { return *points_; }
   /// @brief The k-d tree over points(); built by the first call (thread-safe).
   const KnnIndex& index() const {
     std::call_once(built_, [this] { index_ = std::make_unique<KnnIndex>(*points_); });
     return *index_;
   }
+  bool hasGraph() const { return static_cast<bool>(graph_); }
+  /// @brief Point i's graph neighbours: neighbours[start[i]] … neighbours[start[i + 1] − 1]; built by the first
+  /// call from the graph given (thread-safe); empty without one.
+  struct Adjacency {
+    std::vector<std::uint32_t> start, neighbours;
+  };
+  const Adjacency& adjacency() const;
 
  private:
   std::shared_ptr<const std::vector<Eigen::Vector3d>> points_;
-  mutable std::once_flag built_;
+  std::function<Edges()> graph_;
+  mutable std::once_flag built_, adjacencyBuilt_;
   mutable std::unique_ptr<KnnIndex> index_;
+  mutable Adjacency adjacency_;
 };
 
 /// @brief Which boundary loops fillSmallHoles() closes. A loop is closed only when it is short in both senses,
@@ -104,6 +120,26 @@ struct LargeHoleReport {
   std::size_t verticesAdded = 0;  ///< vertices added inside the holes
   bool skipped = false;           ///< the mesh was not an oriented 2-manifold: nothing was done
 };
+
+/// @brief What closeRimBands() did.
+struct RimBandReport {
+  std::size_t bands = 0;        ///< loop pairs joined by a band
+  std::size_t facesAdded = 0;   ///< triangles in the bands
+  std::size_t partsTurned = 0;  ///< open parts turned over so that a band could join them
+};
+
+/// @brief Close the rim of a part thinner than the mesh's edges (a plate, a shell's lip): the resampling keeps
+/// samples on both faces and the triangulation does not link them across the gap, so the two faces end in two
+/// boundary loops running side by side along the rim. Two loops are joined by a band of triangles (zipped along
+/// them, each step taking the shorter edge across) when at least 90 % of each one's vertices have their nearest
+/// other-loop vertex, within 1.5 mean edges, on the other and at least 90 % of those pairs are joined along
+/// params.inputPoints' surface graph (a path at most 3 mean edges long): across a rim the input runs round it;
+/// two sheets facing each other across a gap are joined only round its far end, so their loops stay open. Two parts whose loops run the same way (each oriented on its own)
+/// are first made to agree: the second is turned over (faces and normals). Nothing is done without
+/// params.inputPoints and its graph.
+/// @pre @p mesh is consistently oriented per component (orientConsistently()).
+/// @note Deterministic.
+RimBandReport closeRimBands(TriangleMesh& mesh, std::vector<Eigen::Vector3d>& normals, const HoleFillingParams& params);
 
 /// @brief Close the boundary loops of at most 250 edges whose bounding-box diagonal is at most
 /// params.maxRefinedExtent × that of their component (through shared vertices) with new vertices: CGAL's refined,

@@ -90,6 +90,7 @@ struct ReconstructResult {
   TriangulateResult triangulation;   ///< the local method's diagnostics (its mesh is moved into mesh)
   std::size_t smallComponentFaces = 0;  ///< faces of small components removed
   HoleFillingReport holes;           ///< small holes closed / kept
+  RimBandReport rimBands;            ///< rims of thin parts closed by bands (closeRimBands)
   LargeHoleReport largeHoles;        ///< large holes closed with new vertices / kept (fillLargeHoles)
   std::size_t flipsAfterFilling = 0; ///< Delaunay flips after hole filling (local method)
   BadTriangleReport badTriangles;    ///< vertices moved / removed to raise the worst triangles (repairBadTriangles)

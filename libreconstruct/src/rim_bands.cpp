@@ -1,0 +1,250 @@
+// SPDX-License-Identifier: GPL-3.0-or-later
+// closeRimBands(): the rim of a part thinner than the mesh's edges closed by a band of triangles between the two
+// boundary loops that run side by side along it.
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <queue>
+#include <string>
+#include <unordered_map>
+#include <unordered_set>
+#include <vector>
+
+#include "iires/detail/disjoint_sets.hpp"
+#include "iires/reconstruct/mesh_quality.hpp"
+#include "iires/reconstruct/mesh_repair.hpp"
+#include "mesh_edges.hpp"
+
+namespace iires {
+namespace {
+
+using detail::undirectedKey;
+
+constexpr double kPartnerEdges = 1.5;  ///< a loop vertex's partner on the other loop: within this × the mean edge
+constexpr double kPathEdges = 3.0;     ///< ... and joined to it along the input by a path at most this long
+constexpr double kMatchedShare = 0.9;  ///< two loops run side by side: this share of each one's vertices matched
+constexpr double kMinBandQuality = 0.05;  ///< a band with a flatter triangle is not added
+constexpr int kMaxPasses = 8;             ///< passes (a pass that turns a component over starts the next)
+constexpr std::size_t kMaxVisited = 4096; ///< input points one path search visits at most
+
+/// Whether the input's surface graph joins @p a and @p b (through the input points nearest to them) by a path of
+/// at most @p maxPath, the gaps to the first and from the last point included: A* on the graph. Two sheets facing
+/// each other across a gap are joined only round the gap's end.
+bool joinedAlongInput(const SampledPoints& input, const Eigen::Vector3d& a, const Eigen::Vector3d& b, double maxPath) {
+  const std::vector<Eigen::Vector3d>& P = input.points();
+  const SampledPoints::Adjacency& graph = input.adjacency();
+  double sa = 0, sb = 0;
+  const std::int64_t from = input.index().nearest(a, &sa), to = input.index().nearest(b, &sb);
+  if (from < 0 || to < 0 || graph.start.empty()) return false;
+  const double budget = maxPath - std::sqrt(sa) - std::sqrt(sb);
+  const Eigen::Vector3d& goal = P[static_cast<std::size_t>(to)];
+  using Entry = std::pair<double, std::uint32_t>;  // (path so far + straight distance to the goal, point)
+  std::priority_queue<Entry, std::vector<Entry>, std::greater<>> open;
+  std::unordered_map<std::uint32_t, double> best{{static_cast<std::uint32_t>(from), 0.0}};
+  open.emplace((P[static_cast<std::size_t>(from)] - goal).norm(), static_cast<std::uint32_t>(from));
+  for (std::size_t visited = 0; !open.empty() && visited < kMaxVisited; ++visited) {
+    const auto [f, i] = open.top();
+    open.pop();
+    if (f > budget) return false;
+    if (i == static_cast<std::uint32_t>(to)) return true;
+    const double g = best[i];
+    if (f > g + (P[i] - goal).norm() + 1e-12) continue;  // a stale entry
+    for (std::uint32_t k = graph.start[i]; k < graph.start[i + 1]; ++k) {
+      const std::uint32_t j = graph.neighbours[k];
+      const double gj = g + (P[j] - P[i]).norm();
+      const auto [it, fresh] = best.emplace(j, gj);
+      if (!fresh && it->second <= gj) continue;
+      it->second = gj;
+      open.emplace(gj + (P[j] - goal).norm(), j);
+    }
+  }
+  return false;
+}
+
+/// The mesh's boundary: its simple loops (each a→b a face's edge, in the face's direction) and the mean edge.
+struct Boundary {
+  std::vector<std::vector<std::uint32_t>> loops;
+  double meanEdge = 0;
+};
+
+Boundary boundaryOf(const TriangleMesh& mesh) {
+  Boundary out;
+  const std::vector<KeyedIndex> uses = detail::sortedEdgeUses(mesh);
+  std::unordered_map<std::uint32_t, std::uint32_t> next;
+  std::unordered_set<std::uint32_t> branching;  // vertices with two boundary edges leaving them
+  double sum = 0;
+  std::size_t edges = 0;
+  detail::forEachEdge(uses, [&](std::size_t i, std::size_t j) {
+    const auto lo = static_cast<std::uint32_t>(uses[i].first >> 32), hi = static_cast<std::uint32_t>(uses[i].first);
+    sum += (mesh.vertices[lo] - mesh.vertices[hi]).norm(), ++edges;
+    if (j != i + 1) return;
+    const bool up = uses[i].second % 2;  // the face runs lo → hi
+    const std::uint32_t a = up ? lo : hi, b = up ? hi : lo;
+    if (!next.emplace(a, b).second) branching.insert(a);
+  });
+  out.meanEdge = edges ? sum / static_cast<double>(edges) : 0;
+  std::vector<std::uint32_t> starts;
+  for (const auto& [a, b] : next) starts.push_back(a);
+  std::sort(starts.begin(), starts.end());
+  std::unordered_set<std::uint32_t> seen;
+  for (std::uint32_t s : starts) {
+    if (seen.count(s)) continue;
+    std::vector<std::uint32_t> loop;
+    bool simple = true;
+    for (std::uint32_t v = s;;) {
+      simple = simple && !branching.count(v);
+      loop.push_back(v);
+      seen.insert(v);
+      const auto it = next.find(v);
+      if (it == next.end()) { simple = false; break; }
+      v = it->second;
+      if (v == s) break;
+      if (seen.count(v)) { simple = false; break; }
+    }
+    if (simple && loop.size() >= 3) out.loops.push_back(std::move(loop));
+  }
+  return out;
+}
+
+/// For each vertex of each loop, the nearest vertex of another loop within @p radius: (loop, position) or
+/// (npos, 0).
+std::vector<std::vector<std::pair<std::size_t, std::size_t>>> partners(const TriangleMesh& mesh, const Boundary& b,
+                                                                         double radius) {
+  std::vector<Eigen::Vector3d> points;
+  std::vector<std::pair<std::size_t, std::size_t>> owner;
+  for (std::size_t l = 0; l < b.loops.size(); ++l)
+    for (std::size_t p = 0; p < b.loops[l].size(); ++p) points.push_back(mesh.vertices[b.loops[l][p]]), owner.emplace_back(l, p);
+  const KnnIndex index(points);
+  std::vector<std::vector<std::pair<std::size_t, std::size_t>>> out(b.loops.size());
+  std::vector<std::uint32_t> idx;
+  std::vector<double> sq;
+  std::size_t k = 0;
+  for (std::size_t l = 0; l < b.loops.size(); ++l)
+    for (std::size_t p = 0; p < b.loops[l].size(); ++p, ++k) {
+      std::pair<std::size_t, std::size_t> found{std::string::npos, 0};
+      index.radius(points[k], radius, idx, sq);
+      for (std::uint32_t q : idx)  // nearest first
+        if (owner[q].first != l) {
+          found = owner[q];
+          break;
+        }
+      out[l].push_back(found);
+    }
+  return out;
+}
+
+/// The band between loops @p a and @p b (each in its faces' direction, running opposite ways along the rim),
+/// zipped from a's first vertex and its partner @p b0 in b: each step adds the triangle whose new edge across the
+/// band is shorter. Empty when a triangle would be nearly flat or an edge across the band exists already.
+std::vector<Eigen::Vector3i> zipBand(const TriangleMesh& mesh, const std::vector<std::uint32_t>& a,
+                                     const std::vector<std::uint32_t>& b, std::size_t b0,
+                                     const std::unordered_set<std::uint64_t>& edges) {
+  const std::size_t n = a.size(), m = b.size();
+  auto A = [&](std::size_t i) { return a[i % n]; };
+  auto B = [&](std::size_t j) { return b[(b0 + m - j % m) % m]; };  // b walked backwards: along the rim like a
+  auto dist = [&](std::uint32_t u, std::uint32_t v) { return (mesh.vertices[u] - mesh.vertices[v]).norm(); };
+  std::vector<Eigen::Vector3i> faces;
+  std::unordered_set<std::uint64_t> across{undirectedKey(A(0), B(0))};
+  for (std::size_t i = 0, j = 0; i < n || j < m;) {
+    const bool stepA = j == m || (i < n && dist(A(i + 1), B(j)) <= dist(A(i), B(j + 1)));
+    // a's edge A(i) → A(i+1) belongs to a face: the band's face runs it backwards; b's likewise.
+    const Eigen::Vector3i f = stepA ? Eigen::Vector3i(static_cast<int>(A(i + 1)), static_cast<int>(A(i)), static_cast<int>(B(j)))
+                                    : Eigen::Vector3i(static_cast<int>(B(j)), static_cast<int>(B(j + 1)), static_cast<int>(A(i)));
+    stepA ? ++i : ++j;
+    const std::uint64_t key = undirectedKey(A(i), B(j));
+    if ((i < n || j < m) && (edges.count(key) || !across.insert(key).second)) return {};
+    const auto& P = mesh.vertices;
+    if (triangleQuality(P[static_cast<std::size_t>(f[0])], P[static_cast<std::size_t>(f[1])], P[static_cast<std::size_t>(f[2])]) <
+        kMinBandQuality)
+      return {};
+    faces.push_back(f);
+  }
+  return faces;
+}
+
+/// One pass: the loop pairs found, their bands added; at most one component turned over (returns true then: the
+/// boundary must be found again).
+bool bandPass(TriangleMesh& mesh, std::vector<Eigen::Vector3d>& normals, const SampledPoints& input,
+              RimBandReport& report) {
+  const Boundary boundary = boundaryOf(mesh);
+  if (boundary.loops.size() < 2 || !(boundary.meanEdge > 0)) return false;
+  const auto partner = partners(mesh, boundary, kPartnerEdges * boundary.meanEdge);
+  const std::size_t nl = boundary.loops.size();
+  // Each loop's main partner loop (most of its vertices' partners).
+  std::vector<std::size_t> mainPartner(nl, std::string::npos);
+  for (std::size_t l = 0; l < nl; ++l) {
+    std::unordered_map<std::size_t, std::size_t> count;
+    for (const auto& p : partner[l])
+      if (p.first != std::string::npos) ++count[p.first];
+    for (const auto& [other, c] : count)
+      if (static_cast<double>(c) >= kMatchedShare * static_cast<double>(partner[l].size())) mainPartner[l] = other;
+  }
+  std::unordered_set<std::uint64_t> edges;
+  for (const auto& t : mesh.triangles)
+    for (int c = 0; c < 3; ++c) edges.insert(undirectedKey(static_cast<std::uint32_t>(t[c]), static_cast<std::uint32_t>(t[(c + 1) % 3])));
+  DisjointSets parts(mesh.vertices.size());
+  for (const auto& t : mesh.triangles)
+    for (int c = 1; c < 3; ++c) parts.unite(static_cast<std::uint32_t>(t[0]), static_cast<std::uint32_t>(t[c]));
+  std::vector<char> used(nl, 0);
+  for (std::size_t l = 0; l < nl; ++l) {
+    const std::size_t o = mainPartner[l];
+    if (o == std::string::npos || o <= l || mainPartner[o] != l || used[l] || used[o]) continue;
+    const auto& a = boundary.loops[l];
+    const auto& b = boundary.loops[o];
+    // Joined along the input where matched, and which way b runs against a.
+    std::size_t joined = 0, matched = 0;
+    long along = 0;
+    for (std::size_t i = 0; i < a.size(); ++i) {
+      const auto& p = partner[l][i];
+      const auto& q = partner[l][(i + 1) % a.size()];
+      if (p.first != o) continue;
+      ++matched;
+      joined += joinedAlongInput(input, mesh.vertices[a[i]], mesh.vertices[b[p.second]], kPathEdges * boundary.meanEdge);
+      if (q.first != o) continue;
+      const long d = (static_cast<long>(q.second) - static_cast<long>(p.second) + static_cast<long>(b.size())) %
+                     static_cast<long>(b.size());
+      along += d == 0 ? 0 : (2 * d < static_cast<long>(b.size()) ? 1 : -1);
+    }
+    if (static_cast<double>(joined) < kMatchedShare * static_cast<double>(matched)) continue;
+    if (along > 0) {
+      // Both loops run the same way: the band needs one part turned over (two open parts oriented apart).
+      const std::uint32_t pa = parts.find(a[0]), pb = parts.find(b[0]);
+      if (pa == pb) continue;
+      for (auto& t : mesh.triangles)
+        if (parts.find(static_cast<std::uint32_t>(t[0])) == pb) std::swap(t[1], t[2]);
+      if (normals.size() == mesh.vertices.size())
+        for (std::size_t v = 0; v < mesh.vertices.size(); ++v)
+          if (parts.find(static_cast<std::uint32_t>(v)) == pb) normals[v] = -normals[v];
+      ++report.partsTurned;
+      return true;
+    }
+    // Zipped from the first vertex of a with a partner in b.
+    std::size_t i0 = 0;
+    while (partner[l][i0].first != o) ++i0;
+    std::vector<std::uint32_t> from(a.begin() + static_cast<long>(i0), a.end());
+    from.insert(from.end(), a.begin(), a.begin() + static_cast<long>(i0));
+    const std::vector<Eigen::Vector3i> band = zipBand(mesh, from, b, partner[l][i0].second, edges);
+    if (band.empty()) continue;
+    used[l] = used[o] = 1;
+    for (const auto& f : band)
+      for (int c = 0; c < 3; ++c) edges.insert(undirectedKey(static_cast<std::uint32_t>(f[c]), static_cast<std::uint32_t>(f[(c + 1) % 3])));
+    mesh.triangles.insert(mesh.triangles.end(), band.begin(), band.end());
+    ++report.bands;
+    report.facesAdded += band.size();
+  }
+  return false;
+}
+
+}  // namespace
+
+RimBandReport closeRimBands(TriangleMesh& mesh, std::vector<Eigen::Vector3d>& normals, const HoleFillingParams& params) {
+  RimBandReport report;
+  if (!params.inputPoints || !params.inputPoints->hasGraph() || params.inputPoints->points().empty() ||
+      mesh.triangles.empty())
+    return report;
+  for (int pass = 0; pass < kMaxPasses && bandPass(mesh, normals, *params.inputPoints, report); ++pass) {
+  }
+  return report;
+}
+
+}  // namespace iires
