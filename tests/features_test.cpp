@@ -601,6 +601,31 @@ TEST(Features, NonUniformCubeEdgesFoundInTheSparsePart) {
   for (const auto& x : r.samples) EXPECT_LE(iires::distanceToSegments(x, edges), 0.4 * r.spacing) << x.transpose();
 }
 
+// A non-uniform cube (density ratio 5) where step 5 leaves a gap next to its own samples: it fills a gap on the
+// edge y = 1, z = 0 up to 1.9 steps short of the corner (0, 1, 0), and that stretch stays without a sample
+// unless the gaps are filled once more after steps 5–7 (step 8). Every edge point lies within 0.75 sample
+// spacings of a sample (0.83 without step 8).
+TEST(Features, GapsOpenedByTheLastMovesAreFilled) {
+  const auto mesh = cubeMesh();
+  iires::MeshSamplingParams sp;
+  sp.count = 60000;
+  sp.seed = 3;
+  sp.densityRatio = 5.0;
+  iires::PointCloud cloud = iires::sampleMesh(mesh, sp);
+  cloud.normals = iires::estimateNormals(cloud.points);
+  FeatureParams p;
+  p.sampleSpacing = 0.02;
+  const auto r = iires::detectFeatures(cloud, p, iires::Execution{2});
+  const iires::KnnIndex index(r.samples);
+  double worst = 0;
+  for (const auto& q : iires::sampleSegments(iires::sharpMeshEdges(mesh, 45.0), 0.002)) {
+    double d2 = 0;
+    index.nearest(q, &d2);
+    worst = std::max(worst, std::sqrt(d2));
+  }
+  EXPECT_LE(worst, 0.75 * p.sampleSpacing);
+}
+
 TEST(Features, SphereHasNoFeatures) {
   iires::PointCloud c;
   c.points = iires::test::fibonacciSphere(20000);

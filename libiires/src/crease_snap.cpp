@@ -441,6 +441,25 @@ void addCorners(const KnnIndex& index, double h, const FeatureParams& params, st
   out.insert(out.end(), corners.begin(), corners.end());
 }
 
+/// Step 8 of snapToCreases(): the gaps left next to the samples that steps 5–7 placed or moved, filled as in
+/// step 5, the new samples moved onto curved sheets' creases as in step 6. Step 5 sees only the gaps between the
+/// samples it started with: its own samples (a gap filled up to a point short of a corner), the moves of 6 and
+/// 6b (a corner sample placed off its corner and moved onto it) and the separation of 7 each leave a gap of
+/// about two steps. Longer gaps were there at step 5, which left them open (no fit holds and the chains do not
+/// run on in line: a bend, two creases meeting), and stay open. The new samples skip 6b: the fill keeps them
+/// within 1.5·maxOffCrease local spacings of the input, and next to a corner in a sparse part 6b's sheets can
+/// move a sample on the edge into the corner, which reopens the gap.
+void refillGaps(const PointCloud& cloud, const KnnIndex& index, double h, const FeatureParams& params,
+                std::vector<Eigen::Vector3d>& out, std::vector<std::uint32_t>& owner, int threads) {
+  constexpr double kOpenedGap = 2.5;  // steps: the longest gap a new, moved or dropped sample leaves
+  const std::size_t settled = out.size();
+  fillCreaseGaps(cloud, index, h, params, out, owner, kOpenedGap);
+  if (out.size() == settled) return;
+  std::vector<Eigen::Vector3d> added(out.begin() + static_cast<long>(settled), out.end());
+  refineOnCurvedSheets(cloud, index, h, params, added, threads);
+  std::copy(added.begin(), added.end(), out.begin() + static_cast<long>(settled));
+}
+
 /// Steps 4b and 7 of snapToCreases(): the held samples closer than half the chains' median step to an earlier one are
 /// dropped (in sample order: the chains' samples before the traced ones, tips and corners). Several samples may
 /// land on one spot — jumps onto the same crease, chain ends meeting at a corner, a chain doubling back under
@@ -529,6 +548,9 @@ void separateSamples(double h, std::vector<Eigen::Vector3d>& out, std::vector<st
 //     the end of a sheet, a biased fit next to a corner) moves onto the input's sheets around it, modelled as
 //     one, two or three planes, each bounded by the lines where it meets the others (ontoSheets).
 //  7. Separation once more (steps 6 and 6b moved samples).
+//  8. Gaps once more, as in 5, up to 2.5 steps long: step 5's own samples, the moves of 6 and 6b (a corner
+//     sample placed off its corner and moved onto it) and the separation of 7 may leave a gap of about two
+//     steps next to them. The new samples go through step 6 (refillGaps).
 std::vector<Eigen::Vector3d> snapToCreases(const PointCloud& cloud, const std::vector<Eigen::Vector3d>& samples,
                                            const std::vector<std::uint32_t>& chainOfSample, double spacing,
                                            const FeatureParams& params, const Execution& exec,
@@ -624,6 +646,7 @@ std::vector<Eigen::Vector3d> snapToCreases(const PointCloud& cloud, const std::v
   refineOnCurvedSheets(cloud, index, h, params, out, exec.threads);
   ontoSheets(cloud, index, h, params, out, exec.threads);  // 6b.
   separateSamples(h, out, owner);
+  refillGaps(cloud, index, h, params, out, owner, exec.threads);  // 8.
   if (chainOut) *chainOut = std::move(owner);
   return out;
 }

@@ -537,7 +537,7 @@ void traceChainEnds(const PointCloud& cloud, const KnnIndex& index, double h, co
 }
 
 void fillCreaseGaps(const PointCloud& cloud, const KnnIndex& index, double h, const FeatureParams& params,
-                    std::vector<Eigen::Vector3d>& out, std::vector<std::uint32_t>& owner) {
+                    std::vector<Eigen::Vector3d>& out, std::vector<std::uint32_t>& owner, double maxGap) {
   std::vector<double> gaps;
   for (std::size_t t = 1; t < out.size(); ++t)
     if (owner[t] == owner[t - 1]) gaps.push_back((out[t] - out[t - 1]).norm());
@@ -601,7 +601,7 @@ void fillCreaseGaps(const PointCloud& cloud, const KnnIndex& index, double h, co
   };
   std::vector<Eigen::Vector3d> fill;
   for (std::size_t i = 0; i < n0; ++i) {
-    placed.radius(out[i], 6.0 * step, near, nd2);
+    placed.radius(out[i], maxGap * step, near, nd2);
     std::vector<std::uint32_t> later;
     for (std::uint32_t j : near)
       if (j > i) later.push_back(j);
@@ -609,7 +609,7 @@ void fillCreaseGaps(const PointCloud& cloud, const KnnIndex& index, double h, co
     for (std::uint32_t j : later) {
       const Eigen::Vector3d &a = out[i], &b = out[j];
       const double g = (b - a).norm();
-      if (g <= 1.5 * step || g > 6.0 * step) continue;
+      if (g <= 1.5 * step || g > maxGap * step) continue;
       const Eigen::Vector3d m = 0.5 * (a + b), u = (b - a) / g;
       if (covered(m, 0.45 * g, u)) continue;
       const bool lineA = inLine(i, j), lineB = inLine(j, i);

@@ -101,9 +101,9 @@ void traceChainEnds(const PointCloud& cloud, const KnnIndex& index, double h, co
                     std::vector<Eigen::Vector3d>& out, std::vector<std::uint32_t>& owner);
 
 /// Step 5 of snapToCreases(): fill the gaps the tracing and the corners leave between neighbouring samples.
-/// Two samples a, b more than 1.5 × the chains' median spacing (`step`) and at most 6 steps apart, with no other
-/// sample within 0.45 × their distance of their midpoint and half a step of the line a–b (nothing lies between
-/// them), get samples at ≤ step on the crease between them, each
+/// Two samples a, b more than 1.5 × the chains' median spacing (`step`) and at most @p maxGap steps apart, with
+/// no other sample within 0.45 × their distance of their midpoint and half a step of the line a–b (nothing lies
+/// between them), get samples at ≤ step on the crease between them, each
 ///  - at the snap fit's crease point near its chord point (the fitted crease running along a→b within
 ///    maxChainTurn, its point within 0.3 step of the chord), else
 ///  - on the fitted crease line of a or b where that line runs along a→b and passes within 0.1 step of the
@@ -121,7 +121,7 @@ void traceChainEnds(const PointCloud& cloud, const KnnIndex& index, double h, co
 /// none within one spacing). Sequential in sample order, each gap seeing the samples added before it:
 /// deterministic. The new samples are appended, owned by a's chain.
 void fillCreaseGaps(const PointCloud& cloud, const KnnIndex& index, double h, const FeatureParams& params,
-                    std::vector<Eigen::Vector3d>& out, std::vector<std::uint32_t>& owner);
+                    std::vector<Eigen::Vector3d>& out, std::vector<std::uint32_t>& owner, double maxGap = 6.0);
 
 /// Step 6b of snapToCreases(): each held sample in @p out that lies off the surface moves onto it. The input
 /// points within params.radius local spacings of the sample (at least the 40 nearest) are modelled as one, two

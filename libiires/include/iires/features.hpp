@@ -112,7 +112,7 @@ std::vector<Eigen::Vector3d> sampleFeatureChains(const std::vector<FeatureChain>
 /// @param spacing the input spacing h (FeatureResult::spacing)
 /// @param[out] chainOut (optional) the chain index of each returned sample (a corner: one of its two chains)
 /// @return the kept, traced and tip samples, chain by chain in order, then the corners of step 4 and their gap
-/// samples, then the samples of step 5
+/// samples, then the samples of step 5, then those of step 8 (gaps the last moves opened)
 /// @note O(samples · m log n + ends² + traced · samples), m the neighbours in the radius. Deterministic for any
 /// thread count.
 std::vector<Eigen::Vector3d> snapToCreases(const PointCloud& cloud, const std::vector<Eigen::Vector3d>& samples,
