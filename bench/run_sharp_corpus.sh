@@ -1,0 +1,42 @@
+#!/bin/sh
+# SPDX-License-Identifier: GPL-3.0-or-later
+# title: Sharp edges over the CAD corpus (issue 22)
+# about: `bench/run_sharp_corpus.sh quick|full`: `sharp_edge_bench M.off 100000 10000 20000 --density-ratio R
+# about: --methods iires,iires_sharp --threads 2` on each CAD part of the corpus, R = 1 and 5; one row per
+# about: `--sharp-edges` run. edge = farthest point of a sharp edge (dihedral > 30° on the true mesh) from the output,
+# about: in output spacings; err_mean / err_max = distance of the output to the true mesh (% of the diagonal),
+# about: err_mean_iso / err_max_iso the isotropic run's; free_cv = spacing cv of the samples not held on a feature line; t_vs_iso =
+# about: time over the isotropic run's. misses = the bounds of issue 22 a row does not meet (edge ≤ 0.5, err_mean and
+# about: err_max not above the isotropic mode's, free_cv ≤ 0.08, t_vs_iso ≤ 1.5). quick: fandisk, cube, tripod;
+# about: full: the 13 CAD parts.
+# columns: model density_ratio N edge err_mean err_mean_iso err_max err_max_iso free_cv t_vs_iso misses
+cd "$(dirname "$0")/.."
+B=${BUILD:-build-bench}/bin/sharp_edge_bench
+if [ "${1:-quick}" = full ]; then
+  models="fandisk joint anchor couplingdown part dragknob spool cross tripod cube beam boeing mech-holes-shark"
+else
+  models="fandisk cube tripod"
+fi
+for m in $models; do
+  for r in 1 5; do
+    "$B" "datasets/cache/meshes/$m.off" 100000 10000 20000 --density-ratio $r --methods iires,iires_sharp --threads 2
+  done
+done | awk '
+  /^model=/ {
+    delete kv
+    for (i = 1; i <= NF; i++) { p = index($i, "="); if (p) kv[substr($i, 1, p - 1)] = substr($i, p + 1) }
+    key = kv["model"] " " kv["density_ratio"] " " kv["N"]
+    if (kv["method"] == "iires") { isoMean[key] = kv["err_mean_pct"]; isoMax[key] = kv["err_max_pct"]; isoTime[key] = kv["time_s"]; next }
+    if (kv["method"] != "iires_sharp" || !(key in isoTime)) next
+    t = isoTime[key] > 0 ? kv["time_s"] / isoTime[key] : 0
+    m = ""
+    if (kv["edge_max_per_spacing"] > 0.5) m = m ",edge"
+    if (kv["err_mean_pct"] > isoMean[key]) m = m ",err_mean"
+    if (kv["err_max_pct"] > isoMax[key]) m = m ",err_max"
+    if (kv["free_cv"] > 0.08) m = m ",free_cv"
+    if (t > 1.5) m = m ",time"
+    name = kv["model"]; sub(/\.off$/, "", name)
+    printf "model=%s density_ratio=%s N=%s edge=%s err_mean=%s err_mean_iso=%s err_max=%s err_max_iso=%s free_cv=%s t_vs_iso=%.2f misses=%s\n",
+      name, kv["density_ratio"], kv["N"], kv["edge_max_per_spacing"], kv["err_mean_pct"], isoMean[key], kv["err_max_pct"],
+      isoMax[key], kv["free_cv"], t, m == "" ? "none" : substr(m, 2)
+  }'
