@@ -34,12 +34,14 @@ iires::TriangleMesh cubeMesh(double size = 1.0) {
   return m;
 }
 
-/// Mesh sampled uniformly, normals estimated (PCA + MST orientation) as the resampler would have them.
+/// Mesh sampled (uniformly, or @p densityRatio × denser at one end), normals estimated (PCA + MST orientation) as
+/// the resampler would have them.
 iires::PointCloud sampledWithEstimatedNormals(const iires::TriangleMesh& mesh, std::size_t count,
-                                              std::uint64_t seed = 7) {
+                                              std::uint64_t seed = 7, double densityRatio = 1.0) {
   iires::MeshSamplingParams sp;
   sp.count = count;
   sp.seed = seed;
+  sp.densityRatio = densityRatio;
   iires::PointCloud c = iires::sampleMesh(mesh, sp);
   c.normals = iires::estimateNormals(c.points);
   return c;
@@ -552,12 +554,7 @@ TEST(Features, CreasesConvergingAtATipGetTheTip) {
 // than the median, so the sparse end's creases are found (and sampled) as well as the dense end's.
 TEST(Features, NonUniformCubeEdgesFoundInTheSparsePart) {
   const auto mesh = cubeMesh();
-  iires::MeshSamplingParams sp;
-  sp.count = 60000;
-  sp.seed = 7;
-  sp.densityRatio = 5.0;
-  iires::PointCloud cloud = iires::sampleMesh(mesh, sp);
-  cloud.normals = iires::estimateNormals(cloud.points);
+  const iires::PointCloud cloud = sampledWithEstimatedNormals(mesh, 60000, 7, 5.0);
   const auto edges = iires::sharpMeshEdges(mesh, 45.0);
   FeatureParams p;
   p.sampleSpacing = 0.04;
@@ -607,12 +604,7 @@ TEST(Features, NonUniformCubeEdgesFoundInTheSparsePart) {
 // spacings of a sample (0.83 without step 8).
 TEST(Features, GapsOpenedByTheLastMovesAreFilled) {
   const auto mesh = cubeMesh();
-  iires::MeshSamplingParams sp;
-  sp.count = 60000;
-  sp.seed = 3;
-  sp.densityRatio = 5.0;
-  iires::PointCloud cloud = iires::sampleMesh(mesh, sp);
-  cloud.normals = iires::estimateNormals(cloud.points);
+  const iires::PointCloud cloud = sampledWithEstimatedNormals(mesh, 60000, 3, 5.0);
   FeatureParams p;
   p.sampleSpacing = 0.02;
   const auto r = iires::detectFeatures(cloud, p, iires::Execution{2});
