@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include "iires/knn.hpp"
+#include "iires/sampling.hpp"
 
 #include "shapes.hpp"
 
@@ -78,6 +79,39 @@ TEST(Normals, RepairOrientationKeepsTheSideMostGivenNormalsHad) {
   const std::size_t turned = iires::repairOrientation(a.points, normals);
   EXPECT_NEAR(static_cast<double>(turned), a.size() / 3.0, 2.0);
   for (std::size_t i = 0; i < a.size(); ++i) EXPECT_GT(normals[i].dot(truth(i)), 0.99) << "point " << i;
+}
+
+// Per-face normals over creases sharper than 90° (the triangular ring's 41° rims, normals 139° apart, and its
+// hole's 300° edges, 120° apart), the hole's faces turned inward as propagation over the normals' dot product
+// leaves them: orientAcrossCreases makes every normal face out again (the given ones mostly do), over each
+// point's 8 nearest.
+TEST(Normals, OrientAcrossCreasesOverSharpEdges) {
+  iires::MeshSamplingParams sp;
+  sp.count = 6000;
+  sp.seed = 3;
+  const iires::PointCloud cloud = iires::sampleMesh(iires::test::triangularRing(), sp);
+  const std::size_t n = cloud.size(), stride = 9;
+  const iires::KnnIndex index(cloud.points);
+  std::vector<std::uint32_t> graph(n * stride);
+  std::vector<std::uint32_t> idx;
+  std::vector<double> d2;
+  for (std::size_t i = 0; i < n; ++i) {
+    index.knn(cloud.points[i], stride, idx, d2);
+    std::copy(idx.begin(), idx.end(), graph.begin() + static_cast<long>(i * stride));
+  }
+  auto inHole = [](const Eigen::Vector3d& p) { return p.head<2>().norm() < 0.45; };  // the hole's faces (r ≤ 0.4)
+  std::vector<Eigen::Vector3d> normals = cloud.normals;
+  std::size_t turned = 0;
+  for (std::size_t i = 0; i < n; ++i)
+    if (inHole(cloud.points[i]) && cloud.normals[i].head<2>().norm() > 0.99) normals[i] = -normals[i], ++turned;
+  ASSERT_GT(turned, n / 10);
+  for (int threads : {1, 2}) {
+    std::vector<Eigen::Vector3d> oriented = normals;
+    iires::orientAcrossCreases(cloud.points, oriented, graph, stride, stride, threads, &normals);
+    std::size_t wrong = 0;
+    for (std::size_t i = 0; i < n; ++i) wrong += oriented[i].dot(cloud.normals[i]) < 0;
+    EXPECT_LE(wrong, n / 500) << threads << " threads";  // points on a crease line can go either way (7)
+  }
 }
 
 }  // namespace

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <random>
@@ -618,6 +619,62 @@ TEST(Reconstruct, TorusCloudClosedGenus1) {
   EXPECT_GE(r.quality.qualityMean, 0.88);
 }
 
+// A polyhedron with creases sharper than 90° (the triangular ring: 41° rims, normals 139° apart; 300° hole edges,
+// 120° apart) sampled without normals, uniform and with a 4× density gradient: a closed mesh of genus 1 without
+// self-intersections. The normals estimated for the samples come out turned over past such creases, and a 1-ring
+// there used to see the far face folded back over its own: open strips along the creases, genus 9 and more.
+TEST(Reconstruct, SharpCreasesClosedWithTheirGenus) {
+  for (double ratio : {1.0, 4.0}) {
+    MeshSamplingParams sp;
+    sp.count = 20000;
+    sp.densityRatio = ratio;
+    sp.seed = 1;
+    PointCloud cloud = sampleMesh(test::triangularRing(), sp);
+    cloud.normals.clear();
+    ReconstructParams p;
+    p.targetCount = 2000;
+    const ReconstructResult r = reconstruct(cloud, p);
+    SCOPED_TRACE(ratio);
+    expectClosedGenus(r.quality, 0);
+    EXPECT_EQ(r.quality.genus, 1);
+    EXPECT_EQ(r.quality.selfIntersections, 0u);
+    EXPECT_GT(signedVolume(r.mesh), 0);
+    EXPECT_GE(r.quality.qualityMin, 0.4);
+  }
+}
+
+// The local triangulation alone, on blue-noise points of the triangular ring with exact per-face normals, the
+// hole's faces turned inward (as a propagation over the normals' dot product leaves them past a crease sharper
+// than 90°): the normals are turned back out, and the faces spanning the creases are proposed and kept — the
+// 1-rings unfold the far face about the crease line instead of folding it back over their own.
+TEST(Triangulate, LinksAcrossSharpCreases) {
+  MeshSamplingParams sp;
+  sp.count = 40000;
+  sp.seed = 2;
+  const PointCloud dense = sampleMesh(test::triangularRing(), sp);
+  PointCloud truth;  // the dense points thinned to at least 0.04 apart, in order (blue noise, as resampled)
+  for (std::size_t i = 0; i < dense.size(); ++i)
+    if (std::none_of(truth.points.begin(), truth.points.end(),
+                     [&](const Eigen::Vector3d& q) { return (q - dense.points[i]).squaredNorm() < 0.04 * 0.04; }))
+      truth.points.push_back(dense.points[i]), truth.normals.push_back(dense.normals[i]);
+  PointCloud cloud = truth;
+  for (std::size_t i = 0; i < cloud.size(); ++i)
+    if (cloud.points[i].head<2>().norm() < 0.45 && cloud.normals[i].head<2>().norm() > 0.99)
+      cloud.normals[i] = -cloud.normals[i];
+  const TriangulateResult r = triangulateLocal(cloud);
+  ASSERT_EQ(r.normals.size(), cloud.size());
+  std::size_t wrong = 0;
+  for (std::size_t i = 0; i < cloud.size(); ++i) wrong += r.normals[i].dot(truth.normals[i]) < 0;
+  EXPECT_LE(wrong, cloud.size() / 1000) << "normals left turned over";
+  const MeshQuality q = evaluateMesh(r.mesh, nullptr);
+  // Measured: 78 boundary edges of 1,721 points, all within 4 spacings of the corners where three creases meet
+  // (before the crease rules:
+  // 215 with the normals all outward, 319 with the hole's turned over).
+  EXPECT_LT(q.boundaryEdges, cloud.size() / 12) << "open strips along the creases (" << cloud.size() << " points)";
+  EXPECT_EQ(r.mesh.triangles, triangulateLocal(truth).mesh.triangles) << "the same mesh as from outward normals";
+  EXPECT_EQ(q.nonManifoldEdges, 0u);
+}
+
 TEST(Reconstruct, CroppedSphereKeepsItsBoundary) {
   PointCloud full = test::sphereCloud(20000), cropped;
   for (std::size_t i = 0; i < full.size(); ++i)
@@ -693,14 +750,24 @@ TEST(ReconstructRealData, LargeHolesFilledTheSameForAnyThreadCount) {
   sp.seed = 1;
   const std::string path = test::tempDir() + "/3torus.xyz";  // as iires-sample-mesh writes it for the CLI
   writePointCloud(path, sampleMesh(truth, sp));
-  const PointCloud c = readPointCloud(path);
+  // Four holes cut into the input, each a disc of radius 0.15 (about 3 spacings of the mesh: loops too long for
+  // fillSmallHoles).
+  const PointCloud read = readPointCloud(path);
+  const std::vector<Eigen::Vector3d> cuts = {read.points[1000], read.points[60000], read.points[120000],
+                                             read.points[180000]};
+  constexpr double kCut = 0.15;
+  auto inCut = [&](const Eigen::Vector3d& q, double margin) {
+    return std::any_of(cuts.begin(), cuts.end(), [&](const Eigen::Vector3d& x) { return (q - x).norm() < kCut + margin; });
+  };
+  PointCloud c;
+  for (const Eigen::Vector3d& q : read.points)
+    if (!inCut(q, 0)) c.points.push_back(q);
   ReconstructParams p;
   p.targetCount = 10000;
   p.evaluate = false;
   const ReconstructResult one = reconstruct(c, p, Execution{1});
-  ASSERT_GT(one.largeHoles.filled + one.largeHoles.unsupported, 0u);
-  EXPECT_GE(one.largeHoles.unsupported, 4u);
-  // No face farther than 2 mean edge lengths from the input (measured: at most 0.43).
+  ASSERT_GE(one.largeHoles.filled, 2u);  // measured: 3
+  // No face farther than 2 mean edge lengths from the input outside the cuts.
   double edges = 0;
   for (const auto& t : one.mesh.triangles)
     for (int k = 0; k < 3; ++k) edges += (one.mesh.vertices[t[k]] - one.mesh.vertices[t[(k + 1) % 3]]).norm();
@@ -709,8 +776,9 @@ TEST(ReconstructRealData, LargeHolesFilledTheSameForAnyThreadCount) {
   std::size_t far = 0;
   for (const auto& t : one.mesh.triangles) {
     double sq = 0;
-    input.nearest((one.mesh.vertices[t[0]] + one.mesh.vertices[t[1]] + one.mesh.vertices[t[2]]) / 3, &sq);
-    far += sq > 4 * l * l;
+    const Eigen::Vector3d centroid = (one.mesh.vertices[t[0]] + one.mesh.vertices[t[1]] + one.mesh.vertices[t[2]]) / 3;
+    input.nearest(centroid, &sq);
+    far += sq > 4 * l * l && !inCut(centroid, l);
   }
   EXPECT_EQ(far, 0u);
   for (int run = 0; run < 3; ++run) {

@@ -126,6 +126,32 @@ inline TriangleMesh uvSphereMesh(int rings, int segments) {
   return m;
 }
 
+/// A closed genus-1 polyhedron with sharp creases: a ring of triangular cross-section (outer corner at radius 1 in
+/// the plane z = 0, inner corners at radius 0.4 and z = ±h) swept around an equilateral triangle; 9 vertices, 9
+/// planar quads as 18 triangles, outward. The rims of its triangular hole are convex edges of 41° (the faces'
+/// normals differ by 139°), the hole's own edges concave ones of 300° (normals 120° apart), the rest 98° and flat.
+inline TriangleMesh triangularRing() {
+  const double h = std::tan(49.0 * M_PI / 180.0) * 0.3;  // the top faces rise 49° over the inradii's difference
+  TriangleMesh m;
+  for (int k = 0; k < 3; ++k) {
+    const double a = (90.0 + 120.0 * k) * M_PI / 180.0;
+    m.vertices.emplace_back(std::cos(a), std::sin(a), 0.0);               // outer
+    m.vertices.emplace_back(0.4 * std::cos(a), 0.4 * std::sin(a), h);     // inner top
+    m.vertices.emplace_back(0.4 * std::cos(a), 0.4 * std::sin(a), -h);    // inner bottom
+  }
+  auto quad = [&m](int a, int b, int c, int d) {
+    m.triangles.emplace_back(a, b, c);
+    m.triangles.emplace_back(a, c, d);
+  };
+  for (int k = 0; k < 3; ++k) {
+    const int o = 3 * k, t = o + 1, b = o + 2, o1 = 3 * ((k + 1) % 3), t1 = o1 + 1, b1 = o1 + 2;
+    quad(o, o1, t1, t);  // top
+    quad(o1, o, b, b1);  // bottom
+    quad(t, t1, b1, b);  // the hole
+  }
+  return m;
+}
+
 /// A generated thin case: the cloud (outward unit normals), its input spacing and gap, and the truth.
 struct ThinCase {
   std::string name;

@@ -137,6 +137,84 @@ void orientOverGraph(const std::vector<Eigen::Vector3d>& points, std::vector<Eig
     if (!done[root]) walk(root);
 }
 
+/// orientAcrossCreases: normals whose lines differ by more than asin(this) (15°) meet at a crease.
+const double kCreaseSin = std::sin(15.0 * M_PI / 180.0);
+/// orientAcrossCreases: a point lies on its plane when at least this share of its row is within kCreaseSin of its
+/// tangent plane; only such points grow a patch.
+constexpr double kPlanarShare = 0.75;
+/// orientAcrossCreases: a patch grows only over pairs whose agreement |n_i·n_j − (n_i·d̂)(n_j·d̂)| is at least this
+/// (a pair across a thin gap has about none).
+constexpr double kPatchAgreement = 0.5;
+/// orientAcrossCreases: |(n_i·d̂)(n_j·d̂)| below this does not tell the sides of a crease apart (a point on or next
+/// to the other's tangent plane).
+constexpr double kCreaseSides = 0.1;
+/// orientAcrossCreases: the weight of a pair whose normals' angle says the opposite of the sides' rule (a crease
+/// sharper than 90°, or two sheets one above the other, which two points alone do not tell apart).
+constexpr double kAmbiguous = 0.25;
+/// orientAcrossCreases: with given sides, patches of fewer points keep them.
+constexpr std::uint32_t kTrustedPatch = 8;
+
+/// Signs along the trees of a forest given as edges (a, b, agree): from each tree's root (its smallest index, the
+/// DisjointSets root), each node's sign is its parent's, turned over where the edge says the two disagree.
+std::vector<signed char> signsAlongTrees(std::size_t n, const std::vector<std::tuple<std::uint32_t, std::uint32_t, bool>>& tree,
+                                         DisjointSets& sets) {
+  std::vector<std::uint32_t> start(n + 1, 0), adjacent(2 * tree.size());
+  std::vector<char> agree(2 * tree.size());
+  for (const auto& [a, b, same] : tree) ++start[a + 1], ++start[b + 1];
+  for (std::size_t i = 0; i < n; ++i) start[i + 1] += start[i];
+  std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
+  for (const auto& [a, b, same] : tree) {
+    agree[fill[a]] = same, adjacent[fill[a]++] = b;
+    agree[fill[b]] = same, adjacent[fill[b]++] = a;
+  }
+  std::vector<signed char> sign(n, 0);
+  std::vector<std::uint32_t> queue;
+  for (std::uint32_t root = 0; root < n; ++root) {
+    if (sign[root] || sets.find(root) != root) continue;
+    sign[root] = 1;
+    queue.assign(1, root);
+    for (std::size_t q = 0; q < queue.size(); ++q) {
+      const std::uint32_t v = queue[q];
+      for (std::uint32_t e = start[v]; e < start[v + 1]; ++e)
+        if (const std::uint32_t t = adjacent[e]; !sign[t]) {
+          sign[t] = static_cast<signed char>(agree[e] ? sign[v] : -sign[v]);
+          queue.push_back(t);
+        }
+    }
+  }
+  return sign;
+}
+
+/// orientAcrossCreases' last step: a patch of fewer than kTrustedPatch points has too little evidence of its own
+/// (its links can be one pair of stacked sheets); each of its points keeps the side it was @p given, turned over
+/// like the nearest point of a larger patch on its plane (breadth first over the pairs whose normals' lines are
+/// within 15°, from the larger patches' points in index order), or as given where none is reached.
+void keepSmallPatchesAsGiven(std::vector<Eigen::Vector3d>& normals, const std::vector<Eigen::Vector3d>& given,
+                             const std::uint32_t* nbr, std::size_t stride, std::size_t k, DisjointSets& patches) {
+  const std::size_t n = normals.size();
+  std::vector<std::uint32_t> size(n, 0);
+  for (std::uint32_t i = 0; i < n; ++i) ++size[patches.find(i)];
+  std::vector<signed char> turned(n, 0);  // +1 turned from the given side, −1 kept, 0 not reached yet
+  std::vector<std::uint32_t> queue;
+  for (std::uint32_t i = 0; i < n; ++i)
+    if (size[patches.find(i)] >= kTrustedPatch) {
+      turned[i] = normals[i].dot(given[i]) < 0 ? 1 : -1;
+      queue.push_back(i);
+    }
+  for (std::size_t q = 0; q < queue.size(); ++q) {
+    const std::uint32_t i = queue[q];
+    for (std::size_t a = 0; a < k; ++a) {
+      const std::uint32_t j = nbr[i * stride + a];
+      if (turned[j] || normals[i].cross(normals[j]).norm() > kCreaseSin) continue;
+      turned[j] = turned[i];
+      queue.push_back(j);
+    }
+  }
+  for (std::uint32_t i = 0; i < n; ++i)
+    if (size[patches.find(i)] < kTrustedPatch && (normals[i].dot(given[i]) < 0) != (turned[i] > 0))
+      normals[i] = -normals[i];
+}
+
 }  // namespace
 
 std::vector<Eigen::Vector3d> estimateNormals(const std::vector<Eigen::Vector3d>& points,
@@ -171,6 +249,115 @@ void orientNormals(const std::vector<Eigen::Vector3d>& points, std::vector<Eigen
                    const std::vector<std::uint32_t>& neighbours, std::size_t stride, std::size_t k, int threads,
                    bool acrossEdge, const std::vector<Eigen::Vector3d>* sides) {
   orientOverGraph(points, normals, neighbours, stride, std::min(k, stride), threads, acrossEdge, sides);
+}
+
+void orientAcrossCreases(const std::vector<Eigen::Vector3d>& points, std::vector<Eigen::Vector3d>& normals,
+                         const std::vector<std::uint32_t>& neighbours, std::size_t stride, std::size_t k, int threads,
+                         const std::vector<Eigen::Vector3d>* sides) {
+  const std::size_t n = points.size();
+  if (n == 0) return;
+  k = std::min(k, stride);
+  const std::uint32_t* nbr = neighbours.data();
+  // How far each point's row lies on its tangent plane: next to a crease sharper than 90° a fitted normal can be
+  // neither face's (a fit across the wedge), and its pairs are weak evidence.
+  std::vector<double> planar(n, 0.0);
+  parallelFor(n, threads, [&](std::size_t i) {
+    int rows = 0, on = 0;
+    for (std::size_t a = 0; a < k; ++a) {
+      const std::uint32_t j = nbr[i * stride + a];
+      const Eigen::Vector3d d = points[j] - points[i];
+      if (j == i || d.squaredNorm() == 0) continue;
+      ++rows;
+      on += std::abs(normals[i].dot(d)) < kCreaseSin * d.norm();
+    }
+    planar[i] = rows > 0 ? static_cast<double>(on) / rows : 0.0;
+  });
+  auto listed = [&](std::uint32_t i, std::uint32_t j) { return std::find(nbr + i * stride, nbr + i * stride + k, j) != nbr + i * stride + k; };
+  std::vector<std::array<std::uint32_t, 2>> edges;  // each undirected edge once
+  for (std::uint32_t i = 0; i < n; ++i)
+    for (std::size_t a = 0; a < k; ++a)
+      if (const std::uint32_t j = nbr[i * stride + a]; j != i && (i < j || !listed(j, i))) edges.push_back({i, j});
+  auto across = [&](std::uint32_t i, std::uint32_t j) {  // (n_i·d̂)(n_j·d̂)
+    const Eigen::Vector3d d = points[j] - points[i];
+    const double d2 = d.squaredNorm();
+    return d2 > 0 ? normals[i].dot(d) * normals[j].dot(d) / d2 : 0.0;
+  };
+  // Whether the surface turns between the two points: their normals not within 15° of parallel (a crease of any
+  // angle, a thin part's two sides, a normal turned over).
+  auto turns = [&](std::uint32_t i, std::uint32_t j) {
+    return normals[i].dot(normals[j]) <= 0 || normals[i].cross(normals[j]).norm() > kCreaseSin;
+  };
+  // 1. Patches: a spanning forest over the pairs of points on their planes whose normals are within 15° of parallel
+  // and agree clearly (on the weights 1 − |n_i·n_j − (n_i·d̂)(n_j·d̂)|, ties by edge), each turned consistent along
+  // its tree.
+  std::vector<std::pair<double, std::uint32_t>> order;
+  for (std::uint32_t e = 0; e < edges.size(); ++e) {
+    const auto [i, j] = edges[e];
+    const double agree = std::abs(normals[i].dot(normals[j]) - across(i, j));
+    if (!turns(i, j) && std::min(planar[i], planar[j]) >= kPlanarShare && agree >= kPatchAgreement)
+      order.emplace_back(1.0 - agree, e);
+  }
+  std::sort(order.begin(), order.end());
+  DisjointSets patches(n);
+  std::vector<std::tuple<std::uint32_t, std::uint32_t, bool>> tree;
+  for (const auto& [w, e] : order) {
+    const auto [i, j] = edges[e];
+    if (patches.find(i) == patches.find(j)) continue;
+    patches.unite(i, j);
+    tree.emplace_back(i, j, normals[i].dot(normals[j]) - across(i, j) >= 0);
+  }
+  const std::vector<signed char> inPatch = signsAlongTrees(n, tree, patches);
+  for (std::size_t i = 0; i < n; ++i)
+    if (inPatch[i] < 0) normals[i] = -normals[i];
+  // 2. Between two patches, the evidence of all their pairs summed, each weighed by how far both points lie on
+  // their planes: where the surface turns between them the sides' rule (consistent normals have (n_i·d)(n_j·d) ≤ 0
+  // over a convex or a concave crease of any angle, where n_i·n_j has the wrong sign past 90°, and across a thin
+  // part), elsewhere the normals compared.
+  std::vector<std::tuple<std::uint32_t, std::uint32_t, double>> votes;
+  for (const auto& [i, j] : edges) {
+    const std::uint32_t pi = patches.find(i), pj = patches.find(j);
+    if (pi == pj) continue;
+    const double x = across(i, j), trust = std::min(planar[i], planar[j]);
+    const double c = normals[i].dot(normals[j]);
+    double vote = turns(i, j) ? (std::abs(x) >= kCreaseSides ? -x : 0.0) : c - x;
+    if (turns(i, j) && vote * c < 0) vote *= kAmbiguous;  // the normals say otherwise: a crease or stacked sheets
+    votes.emplace_back(std::min(pi, pj), std::max(pi, pj), trust * vote);
+  }
+  std::sort(votes.begin(), votes.end());
+  std::vector<std::tuple<double, std::uint32_t, std::uint32_t, double>> links;  // (−|sum|, patch, patch, sum)
+  for (std::size_t s = 0; s < votes.size();) {
+    std::size_t e = s;
+    double sum = 0;
+    for (; e < votes.size() && std::get<0>(votes[e]) == std::get<0>(votes[s]) && std::get<1>(votes[e]) == std::get<1>(votes[s]); ++e)
+      sum += std::get<2>(votes[e]);
+    if (sum != 0) links.emplace_back(-std::abs(sum), std::get<0>(votes[s]), std::get<1>(votes[s]), sum);
+    s = e;
+  }
+  // 3. The patches turned along a spanning forest of the strongest sums.
+  std::sort(links.begin(), links.end());
+  DisjointSets groups(n);
+  tree.clear();
+  for (const auto& [w, a, b, sum] : links) {
+    if (groups.find(a) == groups.find(b)) continue;
+    groups.unite(a, b);
+    tree.emplace_back(a, b, sum > 0);
+  }
+  const std::vector<signed char> patchSign = signsAlongTrees(n, tree, groups);
+  // 4. Each group of patches on the side most of @p sides are on, or with its point of largest x facing +x.
+  std::vector<long long> side(n, 0);
+  std::vector<std::uint32_t> extreme(n, std::numeric_limits<std::uint32_t>::max());
+  for (std::uint32_t i = 0; i < n; ++i) {
+    if (patchSign[patches.find(i)] < 0) normals[i] = -normals[i];
+    const std::uint32_t g = groups.find(patches.find(i));
+    if (sides) side[g] += normals[i].dot((*sides)[i]) < 0 ? -1 : 1;
+    if (extreme[g] == std::numeric_limits<std::uint32_t>::max() || points[i].x() > points[extreme[g]].x()) extreme[g] = i;
+  }
+  std::vector<char> turn(n, 0);
+  for (std::uint32_t g = 0; g < n; ++g)
+    if (extreme[g] != std::numeric_limits<std::uint32_t>::max()) turn[g] = sides ? side[g] < 0 : normals[extreme[g]].x() < 0;
+  for (std::uint32_t i = 0; i < n; ++i)
+    if (turn[groups.find(patches.find(i))]) normals[i] = -normals[i];
+  if (sides) keepSmallPatchesAsGiven(normals, *sides, nbr, stride, k, patches);
 }
 
 double orientationConflicts(const std::vector<Eigen::Vector3d>& points, const std::vector<Eigen::Vector3d>& normals,

@@ -78,6 +78,7 @@ std::string ReconstructResult::toJson() const {
     j.member("proposed_by_3", triangulation.proposedBy3).member("proposed_by_2", triangulation.proposedBy2);
     j.member("kept", triangulation.kept).member("rejected_conflicts", triangulation.rejectedConflicts);
     j.member("removed_fan_faces", triangulation.removedFans).member("flips", triangulation.flips);
+    j.member("normals_turned", triangulation.normalsTurned);
     j.member("flips_after_filling", flipsAfterFilling).endObject();
   }
   j.key("bad_triangles").beginObject().member("vertices_moved", badTriangles.moved);
@@ -175,6 +176,8 @@ void triangulateSamples(const ReconstructParams& params, const Execution& exec, 
     result.triangulation = triangulateLocal(result.samples, tp, exec);
     result.mesh = std::move(result.triangulation.mesh);
     result.triangulation.mesh = TriangleMesh{};
+    result.samples.normals = std::move(result.triangulation.normals);  // as the mesh is oriented
+    result.triangulation.normals.clear();
   } else {
     result.mesh = advancingFront(result.samples, params.advancingFront).mesh;
   }

@@ -44,6 +44,24 @@ void orientNormals(const std::vector<Eigen::Vector3d>& points, std::vector<Eigen
                    const std::vector<std::uint32_t>& neighbours, std::size_t stride, std::size_t k,
                    int threads = 0, bool acrossEdge = false, const std::vector<Eigen::Vector3d>* sides = nullptr);
 
+/// @brief Orient normals that turn at once over a crease (per-face fits, not PCA normals that blend the faces)
+/// over a caller's graph, for creases of any angle. A propagation over the normals' dot product turns a face over
+/// past a crease sharper than 90° (the faces' normals differ by more than 90°), and one pair alone cannot tell such
+/// a crease from two sheets one above the other. So: (1) patches grow over pairs of points on their planes (at least
+/// 3/4 of the row within 15° of the tangent plane) whose normals are within 15° of parallel; (2) between two
+/// patches all their pairs vote, summed: where the normals are not within 15° of parallel, the sides' rule —
+/// consistent normals have (nᵢ·d)(nⱼ·d) ≤ 0 for d = pⱼ − pᵢ, each point on the side of the other's tangent plane
+/// away from the other's normal or each towards it, over a convex or a concave crease of any angle and across a
+/// thin part (a quarter weight where the normals' dot product says otherwise), elsewhere the normals compared;
+/// (3) the patches are turned along a spanning forest of the strongest sums; (4) each connected group takes the
+/// side most of @p sides are on (else its point of largest x faces +x), and with @p sides, patches of fewer than
+/// 8 points keep their given side, turned like the nearest larger patch on their plane.
+/// @param neighbours, stride, k, threads, sides as orientNormals'
+/// @note O(n k log(n k)). Deterministic for any thread count.
+void orientAcrossCreases(const std::vector<Eigen::Vector3d>& points, std::vector<Eigen::Vector3d>& normals,
+                         const std::vector<std::uint32_t>& neighbours, std::size_t stride, std::size_t k,
+                         int threads = 0, const std::vector<Eigen::Vector3d>* sides = nullptr);
+
 /// Given normals are trusted to be oriented when at most this share of their neighbour pairs on one plane point
 /// opposite ways (orientationConflicts); above it (normals from a tool that does not orient them) only their
 /// directions are used.

@@ -21,7 +21,13 @@ struct TriangulateParams {
   double cellRadiusFactor = 2.0; ///< a point's Voronoi cell is cut at this × its mean distance to its 6 nearest
                                  ///< neighbours; a cell that reaches the cut is open there (a boundary)
   double minNormalDot = -0.5;    ///< candidates whose normal makes a larger angle than acos(this) with the
-                                 ///< point's normal are ignored (the far side of a thin part); in [−1, 1]
+                                 ///< point's normal are ignored (the far side of a thin part) unless their
+                                 ///< tangent planes meet between them (a crease: see triangulateLocal); in [−1, 1]
+  /// Turn the normals consistent over creases first (orientAcrossCreases over each point's 8 nearest that the
+  /// neighbour rule accepts, the given normals as its sides): normals propagated over a point graph come out
+  /// turned over past a crease sharper than 90° (the faces' normals there differ by more than 90°), and a 1-ring
+  /// needs its neighbours' normals on its own side
+  bool orientAcrossCreases = true;
   double minQuality = 0.25;      ///< proposals with a worse Q are dropped (their hole is filled better later)
   double minFaceNormalDot = -0.5; ///< proposals whose face normal makes a larger angle than acos(this) with any
                                  ///< of its vertex normals are dropped (faces bridging a gap); in [−1, 1]
@@ -55,12 +61,17 @@ struct TriangulateResult {
   std::size_t rejectedConflicts = 0;///< candidates with enough votes rejected because an edge was taken
   std::size_t removedFans = 0;      ///< faces removed from extra fans at non-manifold vertices
   std::size_t flips = 0;            ///< Delaunay edge flips applied
+  std::size_t normalsTurned = 0;    ///< normals turned over by orientAcrossCreases
+  std::vector<Eigen::Vector3d> normals;  ///< the unit normals the mesh is oriented by (one per point)
 };
 
 /// @brief Triangulate an oriented cloud from local tangent-plane Delaunay 1-rings.
 ///
-/// Per point: its candidates (accepted by the neighbour rule, normals compatible) are mapped to its tangent plane
-/// by a log-map approximation (tangent direction, 3-D length) and its Voronoi cell is clipped from a disc;
+/// The normals are first made consistent over creases (params.orientAcrossCreases). Per point: its candidates
+/// (accepted by the neighbour rule, normals compatible) are mapped to its tangent plane by a log-map approximation
+/// (tangent direction, 3-D length; a candidate whose normal differs by more than 15° is unfolded about the line
+/// where the two tangent planes meet, and then linked at any angle between the normals: the far side of a thin
+/// part has no such line near, the unfolded path is long) and its Voronoi cell is clipped from a disc;
 /// consecutive Voronoi neighbours (i, j, k) propose a triangle, oriented counter-clockwise about the normal.
 /// Triangles proposed by ≥ minVotes vertices are inserted greedily, most votes and best quality first, each only
 /// if none of its directed edges is already used — so every edge has at most two faces and they agree in
