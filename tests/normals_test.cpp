@@ -33,19 +33,24 @@ TEST(Normals, TwoSpheresEachOrientedOutward) {
   }
 }
 
+/// Each point's @p stride nearest (itself first), flat: the graph the orientation runs over.
+std::vector<std::uint32_t> knnGraph(const std::vector<Eigen::Vector3d>& points, std::size_t stride) {
+  const iires::KnnIndex index(points);
+  std::vector<std::uint32_t> graph(points.size() * stride), idx;
+  std::vector<double> d2;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    index.knn(points[i], stride, idx, d2);
+    std::copy(idx.begin(), idx.end(), graph.begin() + static_cast<long>(i * stride));
+  }
+  return graph;
+}
+
 TEST(Normals, OrientationOverAGivenGraphMakesASphereOutward) {
   // Radial normals with random signs, oriented over a k-NN graph given by the caller (no search of its own):
   // all must end up facing one way, outward (the root at the largest x faces +x).
   const auto cloud = iires::test::sphereCloud(5000, 1.0, 6);
   const std::size_t n = cloud.size(), stride = 10;
-  const iires::KnnIndex index(cloud.points);
-  std::vector<std::uint32_t> graph(n * stride);
-  std::vector<std::uint32_t> idx;
-  std::vector<double> d2;
-  for (std::size_t i = 0; i < n; ++i) {
-    index.knn(cloud.points[i], stride, idx, d2);
-    std::copy(idx.begin(), idx.end(), graph.begin() + static_cast<long>(i * stride));
-  }
+  const std::vector<std::uint32_t> graph = knnGraph(cloud.points, stride);
   std::vector<Eigen::Vector3d> normals(n);
   for (std::size_t i = 0; i < n; ++i) normals[i] = (i * 7919 % 3 == 0 ? -1.0 : 1.0) * cloud.points[i].normalized();
   iires::orientNormals(cloud.points, normals, graph, stride, 7);  // 6 neighbours + the point itself
@@ -91,14 +96,7 @@ TEST(Normals, OrientAcrossCreasesOverSharpEdges) {
   sp.seed = 3;
   const iires::PointCloud cloud = iires::sampleMesh(iires::test::triangularRing(), sp);
   const std::size_t n = cloud.size(), stride = 9;
-  const iires::KnnIndex index(cloud.points);
-  std::vector<std::uint32_t> graph(n * stride);
-  std::vector<std::uint32_t> idx;
-  std::vector<double> d2;
-  for (std::size_t i = 0; i < n; ++i) {
-    index.knn(cloud.points[i], stride, idx, d2);
-    std::copy(idx.begin(), idx.end(), graph.begin() + static_cast<long>(i * stride));
-  }
+  const std::vector<std::uint32_t> graph = knnGraph(cloud.points, stride);
   auto inHole = [](const Eigen::Vector3d& p) { return p.head<2>().norm() < 0.45; };  // the hole's faces (r ≤ 0.4)
   std::vector<Eigen::Vector3d> normals = cloud.normals;
   std::size_t turned = 0;
