@@ -138,7 +138,7 @@ void orientOverGraph(const std::vector<Eigen::Vector3d>& points, std::vector<Eig
 }
 
 /// orientAcrossCreases: normals whose lines differ by more than asin(this) (15°) meet at a crease.
-const double kCreaseSin = std::sin(15.0 * M_PI / 180.0);
+const double kCreaseSin = std::sin(kCreaseAngleDegrees * M_PI / 180.0);
 /// orientAcrossCreases: a point lies on its plane when at least this share of its row is within kCreaseSin of its
 /// tangent plane; only such points grow a patch.
 constexpr double kPlanarShare = 0.75;

@@ -23,8 +23,8 @@ namespace {
 constexpr std::uint32_t kNone = 0xffffffffu;
 constexpr int kDiscSides = 16;
 constexpr std::size_t kOrientRow = 9;  // the point and its 8 nearest: the graph the normals are oriented over
-/// Normals whose lines differ by more than this meet at a crease (orientAcrossCreases' threshold, 15°).
-constexpr double kCreaseAngle = 15.0 * M_PI / 180.0;
+/// Normals whose lines differ by more than this meet at a crease (orientAcrossCreases' threshold).
+constexpr double kCreaseAngle = kCreaseAngleDegrees * M_PI / 180.0;
 const double kCreaseSin = std::sin(kCreaseAngle);
 
 /// A proposed triangle, rotated so that its smallest vertex comes first (orientation kept).

@@ -44,6 +44,10 @@ void orientNormals(const std::vector<Eigen::Vector3d>& points, std::vector<Eigen
                    const std::vector<std::uint32_t>& neighbours, std::size_t stride, std::size_t k,
                    int threads = 0, bool acrossEdge = false, const std::vector<Eigen::Vector3d>* sides = nullptr);
 
+/// @brief Normals whose lines differ by more than this angle (degrees) meet at a crease: orientAcrossCreases()'s
+/// threshold, and the local triangulation's for unfolding a neighbour over a crease.
+inline constexpr double kCreaseAngleDegrees = 15.0;
+
 /// @brief Orient normals that turn at once over a crease (per-face fits, not PCA normals that blend the faces)
 /// over a caller's graph, for creases of any angle. A propagation over the normals' dot product turns a face over
 /// past a crease sharper than 90° (the faces' normals differ by more than 90°), and one pair alone cannot tell such
