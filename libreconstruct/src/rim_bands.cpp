@@ -61,15 +61,18 @@ bool joinedAlongInput(const SampledPoints& input, const Eigen::Vector3d& a, cons
   return false;
 }
 
-/// The mesh's boundary: its simple loops (each a→b a face's edge, in the face's direction) and the mean edge.
+/// The mesh's boundary: its simple loops (each a→b a face's edge, in the face's direction), the mean edge, and the
+/// mesh's edges (for the bands' edges across, which must be new).
 struct Boundary {
   std::vector<std::vector<std::uint32_t>> loops;
   double meanEdge = 0;
+  detail::EdgeCounts edges;
 };
 
 Boundary boundaryOf(const TriangleMesh& mesh) {
   Boundary out;
   const std::vector<KeyedIndex> uses = detail::sortedEdgeUses(mesh);
+  out.edges = detail::EdgeCounts(uses);
   std::unordered_map<std::uint32_t, std::uint32_t> next;
   std::unordered_set<std::uint32_t> branching;  // vertices with two boundary edges leaving them
   double sum = 0;
@@ -138,7 +141,7 @@ std::vector<std::vector<std::pair<std::size_t, std::size_t>>> partners(const Tri
 /// band is shorter. Empty when a triangle would be nearly flat or an edge across the band exists already.
 std::vector<Eigen::Vector3i> zipBand(const TriangleMesh& mesh, const std::vector<std::uint32_t>& a,
                                      const std::vector<std::uint32_t>& b, std::size_t b0,
-                                     const std::unordered_set<std::uint64_t>& edges) {
+                                     const detail::EdgeCounts& edges) {
   const std::size_t n = a.size(), m = b.size();
   auto A = [&](std::size_t i) { return a[i % n]; };
   auto B = [&](std::size_t j) { return b[(b0 + m - j % m) % m]; };  // b walked backwards: along the rim like a
@@ -152,7 +155,7 @@ std::vector<Eigen::Vector3i> zipBand(const TriangleMesh& mesh, const std::vector
                                     : Eigen::Vector3i(static_cast<int>(B(j)), static_cast<int>(B(j + 1)), static_cast<int>(A(i)));
     stepA ? ++i : ++j;
     const std::uint64_t key = undirectedKey(A(i), B(j));
-    if ((i < n || j < m) && (edges.count(key) || !across.insert(key).second)) return {};
+    if ((i < n || j < m) && (edges.has(key) || !across.insert(key).second)) return {};
     const auto& P = mesh.vertices;
     if (triangleQuality(P[static_cast<std::size_t>(f[0])], P[static_cast<std::size_t>(f[1])], P[static_cast<std::size_t>(f[2])]) <
         kMinBandQuality)
@@ -166,7 +169,7 @@ std::vector<Eigen::Vector3i> zipBand(const TriangleMesh& mesh, const std::vector
 /// boundary must be found again).
 bool bandPass(TriangleMesh& mesh, std::vector<Eigen::Vector3d>& normals, const SampledPoints& input,
               RimBandReport& report) {
-  const Boundary boundary = boundaryOf(mesh);
+  Boundary boundary = boundaryOf(mesh);
   if (boundary.loops.size() < 2 || !(boundary.meanEdge > 0)) return false;
   const auto partner = partners(mesh, boundary, kPartnerEdges * boundary.meanEdge);
   const std::size_t nl = boundary.loops.size();
@@ -179,9 +182,6 @@ bool bandPass(TriangleMesh& mesh, std::vector<Eigen::Vector3d>& normals, const S
     for (const auto& [other, c] : count)
       if (static_cast<double>(c) >= kMatchedShare * static_cast<double>(partner[l].size())) mainPartner[l] = other;
   }
-  std::unordered_set<std::uint64_t> edges;
-  for (const auto& t : mesh.triangles)
-    for (int c = 0; c < 3; ++c) edges.insert(undirectedKey(static_cast<std::uint32_t>(t[c]), static_cast<std::uint32_t>(t[(c + 1) % 3])));
   DisjointSets parts(mesh.vertices.size());
   for (const auto& t : mesh.triangles)
     for (int c = 1; c < 3; ++c) parts.unite(static_cast<std::uint32_t>(t[0]), static_cast<std::uint32_t>(t[c]));
@@ -223,11 +223,11 @@ bool bandPass(TriangleMesh& mesh, std::vector<Eigen::Vector3d>& normals, const S
     while (partner[l][i0].first != o) ++i0;
     std::vector<std::uint32_t> from(a.begin() + static_cast<long>(i0), a.end());
     from.insert(from.end(), a.begin(), a.begin() + static_cast<long>(i0));
-    const std::vector<Eigen::Vector3i> band = zipBand(mesh, from, b, partner[l][i0].second, edges);
+    const std::vector<Eigen::Vector3i> band = zipBand(mesh, from, b, partner[l][i0].second, boundary.edges);
     if (band.empty()) continue;
     used[l] = used[o] = 1;
     for (const auto& f : band)
-      for (int c = 0; c < 3; ++c) edges.insert(undirectedKey(static_cast<std::uint32_t>(f[c]), static_cast<std::uint32_t>(f[(c + 1) % 3])));
+      for (int c = 0; c < 3; ++c) boundary.edges.add(undirectedKey(static_cast<std::uint32_t>(f[c]), static_cast<std::uint32_t>(f[(c + 1) % 3])));
     mesh.triangles.insert(mesh.triangles.end(), band.begin(), band.end());
     ++report.bands;
     report.facesAdded += band.size();
