@@ -24,7 +24,7 @@ constexpr double kPartnerEdges = 1.5;  ///< a loop vertex's partner on the other
 constexpr double kPathEdges = 3.0;     ///< ... and joined to it along the input by a path at most this long
 constexpr double kMatchedShare = 0.9;  ///< two loops run side by side: this share of each one's vertices matched
 constexpr double kMinBandQuality = 0.05;  ///< a band with a flatter triangle is not added
-constexpr int kMaxPasses = 8;             ///< passes (a pass that turns a component over starts the next)
+constexpr int kMaxPasses = 8;             ///< passes (a pass that turns a part over starts the next)
 constexpr std::size_t kMaxVisited = 4096; ///< input points one path search visits at most
 
 /// Whether the input's surface graph joins @p a and @p b (through the input points nearest to them) by a path of
@@ -138,35 +138,40 @@ std::vector<std::vector<std::pair<std::size_t, std::size_t>>> partners(const Tri
 
 /// The band between loops @p a and @p b (each in its faces' direction, running opposite ways along the rim),
 /// zipped from a's first vertex and its partner @p b0 in b: each step adds the triangle whose new edge across the
-/// band is shorter. Empty when a triangle would be nearly flat or an edge across the band exists already.
+/// band is shorter, or the other one where that triangle would be nearly flat. Empty when both would be, or an edge
+/// across the band exists already.
 std::vector<Eigen::Vector3i> zipBand(const TriangleMesh& mesh, const std::vector<std::uint32_t>& a,
                                      const std::vector<std::uint32_t>& b, std::size_t b0,
                                      const detail::EdgeCounts& edges) {
   const std::size_t n = a.size(), m = b.size();
   auto A = [&](std::size_t i) { return a[i % n]; };
   auto B = [&](std::size_t j) { return b[(b0 + m - j % m) % m]; };  // b walked backwards: along the rim like a
-  auto dist = [&](std::uint32_t u, std::uint32_t v) { return (mesh.vertices[u] - mesh.vertices[v]).norm(); };
+  const auto& P = mesh.vertices;
+  auto dist = [&](std::uint32_t u, std::uint32_t v) { return (P[u] - P[v]).norm(); };
+  auto flat = [&](const Eigen::Vector3i& f) {
+    return triangleQuality(P[static_cast<std::size_t>(f[0])], P[static_cast<std::size_t>(f[1])],
+                           P[static_cast<std::size_t>(f[2])]) < kMinBandQuality;
+  };
   std::vector<Eigen::Vector3i> faces;
   std::unordered_set<std::uint64_t> across{undirectedKey(A(0), B(0))};
   for (std::size_t i = 0, j = 0; i < n || j < m;) {
-    const bool stepA = j == m || (i < n && dist(A(i + 1), B(j)) <= dist(A(i), B(j + 1)));
     // a's edge A(i) → A(i+1) belongs to a face: the band's face runs it backwards; b's likewise.
-    const Eigen::Vector3i f = stepA ? Eigen::Vector3i(static_cast<int>(A(i + 1)), static_cast<int>(A(i)), static_cast<int>(B(j)))
-                                    : Eigen::Vector3i(static_cast<int>(B(j)), static_cast<int>(B(j + 1)), static_cast<int>(A(i)));
+    const Eigen::Vector3i onA(static_cast<int>(A(i + 1)), static_cast<int>(A(i)), static_cast<int>(B(j)));
+    const Eigen::Vector3i onB(static_cast<int>(B(j)), static_cast<int>(B(j + 1)), static_cast<int>(A(i)));
+    bool stepA = j == m || (i < n && dist(A(i + 1), B(j)) <= dist(A(i), B(j + 1)));
+    if (i < n && j < m && flat(stepA ? onA : onB)) stepA = !stepA;
+    const Eigen::Vector3i& f = stepA ? onA : onB;
+    if (flat(f)) return {};
     stepA ? ++i : ++j;
     const std::uint64_t key = undirectedKey(A(i), B(j));
     if ((i < n || j < m) && (edges.has(key) || !across.insert(key).second)) return {};
-    const auto& P = mesh.vertices;
-    if (triangleQuality(P[static_cast<std::size_t>(f[0])], P[static_cast<std::size_t>(f[1])], P[static_cast<std::size_t>(f[2])]) <
-        kMinBandQuality)
-      return {};
     faces.push_back(f);
   }
   return faces;
 }
 
-/// One pass: the loop pairs found, their bands added; at most one component turned over (returns true then: the
-/// boundary must be found again).
+/// One pass: the loop pairs found, their bands added; at most one part turned over, only for the band it lets in
+/// (returns true then: the boundary must be found again).
 bool bandPass(TriangleMesh& mesh, std::vector<Eigen::Vector3d>& normals, const SampledPoints& input,
               RimBandReport& report) {
   Boundary boundary = boundaryOf(mesh);
@@ -206,31 +211,36 @@ bool bandPass(TriangleMesh& mesh, std::vector<Eigen::Vector3d>& normals, const S
       along += d == 0 ? 0 : (2 * d < static_cast<long>(b.size()) ? 1 : -1);
     }
     if (static_cast<double>(joined) < kMatchedShare * static_cast<double>(matched)) continue;
-    if (along > 0) {
-      // Both loops run the same way: the band needs one part turned over (two open parts oriented apart).
-      const std::uint32_t pa = parts.find(a[0]), pb = parts.find(b[0]);
-      if (pa == pb) continue;
-      for (auto& t : mesh.triangles)
-        if (parts.find(static_cast<std::uint32_t>(t[0])) == pb) std::swap(t[1], t[2]);
-      if (normals.size() == mesh.vertices.size())
-        for (std::size_t v = 0; v < mesh.vertices.size(); ++v)
-          if (parts.find(static_cast<std::uint32_t>(v)) == pb) normals[v] = -normals[v];
-      ++report.partsTurned;
-      return true;
-    }
+    // Both loops running the same way: two open parts oriented apart; the band needs b's part turned over, so it
+    // is zipped against b reversed (as b runs once turned), and the part is turned only when the band is made.
+    const bool turn = along > 0;
+    const std::uint32_t partB = parts.find(b[0]);
+    if (turn && parts.find(a[0]) == partB) continue;
+    std::vector<std::uint32_t> side(b);
+    if (turn) std::reverse(side.begin(), side.end());
     // Zipped from the first vertex of a with a partner in b.
     std::size_t i0 = 0;
     while (partner[l][i0].first != o) ++i0;
     std::vector<std::uint32_t> from(a.begin() + static_cast<long>(i0), a.end());
     from.insert(from.end(), a.begin(), a.begin() + static_cast<long>(i0));
-    const std::vector<Eigen::Vector3i> band = zipBand(mesh, from, b, partner[l][i0].second, boundary.edges);
+    const std::size_t b0 = turn ? b.size() - 1 - partner[l][i0].second : partner[l][i0].second;
+    const std::vector<Eigen::Vector3i> band = zipBand(mesh, from, side, b0, boundary.edges);
     if (band.empty()) continue;
+    if (turn) {
+      for (auto& t : mesh.triangles)
+        if (parts.find(static_cast<std::uint32_t>(t[0])) == partB) std::swap(t[1], t[2]);
+      if (normals.size() == mesh.vertices.size())
+        for (std::size_t v = 0; v < mesh.vertices.size(); ++v)
+          if (parts.find(static_cast<std::uint32_t>(v)) == partB) normals[v] = -normals[v];
+      ++report.partsTurned;
+    }
     used[l] = used[o] = 1;
     for (const auto& f : band)
       for (int c = 0; c < 3; ++c) boundary.edges.add(undirectedKey(static_cast<std::uint32_t>(f[c]), static_cast<std::uint32_t>(f[(c + 1) % 3])));
     mesh.triangles.insert(mesh.triangles.end(), band.begin(), band.end());
     ++report.bands;
     report.facesAdded += band.size();
+    if (turn) return true;  // the other loops of the part turned over run the other way now: find them again
   }
   return false;
 }
