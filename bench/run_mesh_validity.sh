@@ -8,8 +8,9 @@
 # about: loops = boundary loops, lt30 = % of angles under 30°, H→ / H← = Hausdorff distance mesh → truth / truth →
 # about: mesh in % of the diagonal (real sets: to the input), uncov = % of the input farther than 2 spacings from the
 # about: mesh, checks = the validity stage (checks and repairs) in % of the rest of the meshing time (local only).
-# about: misses = the bounds of issue 20 a row does not meet (si, nm, oriented, closed (meshes only), Q_avg ≥ 0.90,
-# about: Q_min ≥ 0.40, lt30 < 1 %; genus against the truth, which issue 19 owns). quick: 8 models, N = 10k, local
+# about: misses = the bounds of issue 20 a row does not meet (si, nm, oriented, closed where the true mesh is closed,
+# about: Q_avg ≥ 0.90, Q_min ≥ 0.40, lt30 < 1 %; genus against the truth, which issue 19 owns; boeing's true mesh is
+# about: 122 open pieces that intersect, so neither closure nor genus is asked of it). quick: 8 models, N = 10k, local
 # about: only; full: every closed model, N = 10k and 30k, with the peers.
 # columns: model density_ratio n method si nm genus_truth genus loops q_avg q_min lt30 h_to h_from uncov time_s checks misses
 cd "$(dirname "$0")/.."
@@ -34,7 +35,7 @@ fi
     if (kv["self_intersections"] > 0) m = m ",si"
     if (kv["nonmanifold_edges"] + kv["nonmanifold_vertices"] > 0) m = m ",nm"
     if (kv["oriented"] != 1) m = m ",oriented"
-    if (kv["density_ratio"] != "real" && kv["closed"] != 1) m = m ",closed"
+    if (kv["genus_truth"] != "na" && kv["closed"] != 1) m = m ",closed"
     if (kv["q_avg"] < 0.90) m = m ",q_avg"
     if (kv["q_min"] < 0.40) m = m ",q_min"
     if (kv["pct_angle_lt30"] >= 1) m = m ",lt30"

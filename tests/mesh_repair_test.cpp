@@ -433,7 +433,7 @@ TEST(MeshRepair, RemeshBadRegionsRaisesSlivers) {
   }
 }
 
-TEST(MeshRepair, RelaxNearBoundaryEvensTheRimBandAndKeepsTheRim) {
+TEST(MeshRepair, RelaxVerticesEvensJitterAndKeepsTheRim) {
   // A flat 12 × 12 grid of unit squares, each split in two; the vertices one edge in from the rim jittered by up
   // to 0.3 (in the plane), as Lloyd relaxation leaves samples next to a scan's rim. The band is relaxed, the
   // rim and the vertices farther in do not move, and no face gets worse than the worst before.
@@ -462,13 +462,13 @@ TEST(MeshRepair, RelaxNearBoundaryEvensTheRimBandAndKeepsTheRim) {
     }
     return std::make_pair(worst, sum / static_cast<double>(mesh.triangles.size()));
   };
-  const std::size_t moved = relaxNearBoundary(m, normals, 2, 3, 0.25);
+  const std::size_t moved = relaxVertices(m, normals, 3, 0.25);
   EXPECT_GT(moved, 20u);
   for (int y = 0; y <= n; ++y)
     for (int x = 0; x <= n; ++x) {
       const std::size_t v = static_cast<std::size_t>(y * (n + 1) + x);
-      if (std::min({x, y, n - x, n - y}) != 1 && std::min({x, y, n - x, n - y}) != 2) {
-        EXPECT_EQ(m.vertices[v], before.vertices[v]) << x << "," << y;  // the rim and the inside stay
+      if (std::min({x, y, n - x, n - y}) == 0) {
+        EXPECT_EQ(m.vertices[v], before.vertices[v]) << x << "," << y;  // the rim stays
       }
       EXPECT_EQ(m.vertices[v].z(), 0.0);  // moves stay in the tangent plane
     }
@@ -483,13 +483,32 @@ TEST(MeshRepair, RelaxNearBoundaryEvensTheRimBandAndKeepsTheRim) {
       jitterAfter += (m.vertices[v] - Eigen::Vector3d(x, y, 0)).norm();
     }
   EXPECT_LT(jitterAfter, 0.6 * jitterBefore);
-  // Nothing to do without a boundary, or with no rings.
+  const TriangleMesh relaxed = m;
+  EXPECT_EQ(relaxVertices(m, normals, 0, 0.25), 0u);  // no sweeps
+  EXPECT_EQ(m.vertices, relaxed.vertices);
+}
+
+TEST(MeshRepair, RelaxVerticesKeepsACurvedSurfaceWhereItWas) {
   PointCloud cloud;
   TriangleMesh sphere = sphereMesh(cloud);
-  const TriangleMesh sphereBefore = sphere;
-  EXPECT_EQ(relaxNearBoundary(sphere, cloud.normals, 2, 3, 0.25), 0u);
-  EXPECT_EQ(sphere.vertices, sphereBefore.vertices);
-  EXPECT_EQ(relaxNearBoundary(m, normals, 0, 3, 0.25), 0u);
+  std::mt19937_64 rng(7);
+  std::normal_distribution<double> jitter(0.0, 0.012);  // about a sixth of an edge
+  for (auto& p : sphere.vertices) p = (p + Eigen::Vector3d(jitter(rng), jitter(rng), jitter(rng))).normalized();
+  std::vector<Eigen::Vector3d> normals = sphere.vertices;
+  const TriangleMesh before = sphere;
+  const auto meanQuality = [](const TriangleMesh& mesh) {
+    double sum = 0;
+    for (const auto& t : mesh.triangles) sum += triangleQuality(mesh.vertices[t[0]], mesh.vertices[t[1]], mesh.vertices[t[2]]);
+    return sum / static_cast<double>(mesh.triangles.size());
+  };
+  EXPECT_GT(relaxVertices(sphere, normals, 3, 0.05), 1000u);  // closed: every vertex may move
+  EXPECT_GT(meanQuality(sphere), meanQuality(before) + 0.01);
+  double offSphere = 0;
+  for (const auto& p : sphere.vertices) offSphere = std::max(offSphere, std::abs(p.norm() - 1.0));
+  EXPECT_LT(offSphere, 0.004);  // a twentieth of an edge (0.065) and the sagitta of a tangent step
+  // The surface may not move at all: a tangent step leaves a curved surface, so nothing moves.
+  TriangleMesh still = before;
+  EXPECT_EQ(relaxVertices(still, normals, 3, 0.0), 0u);
 }
 
 TEST(MeshRepair, OrientsFlippedFacesOutward) {

@@ -146,7 +146,7 @@ int main(int argc, char** argv) {
                 << result.largeHoles.unsupported << " kept open: the fill left the input)\n";
       std::cout << "  " << std::left << std::setw(30) << "Q<0.4 repairs moved / removed" << result.badTriangles.moved
                 << " / " << result.badTriangles.removed << "\n";
-      std::cout << "  " << std::left << std::setw(30) << "vertices relaxed near rims" << result.boundaryRelaxed << "\n";
+      std::cout << "  " << std::left << std::setw(30) << "vertices relaxed" << result.verticesRelaxed << "\n";
       const iires::ValidityReport& v = result.validity;
       std::cout << "  " << std::left << std::setw(30) << "validity repairs" << v.intersectingPairs
                 << " self-intersecting pairs, " << v.nonManifoldEdges << " non-manifold edges found; " << v.facesRemoved

@@ -46,8 +46,8 @@ void ReconstructParams::validate() const {
   if (resample && targetCount < 4)
     throw std::invalid_argument("target count N must be at least 4 (got " + std::to_string(targetCount) + ")");
   if (!(repairQuality >= 0 && repairQuality < 1)) throw std::invalid_argument("repairQuality must be in [0, 1)");
-  if (boundaryRelaxRings < 0 || boundaryRelaxSweeps < 0)
-    throw std::invalid_argument("boundaryRelaxRings and boundaryRelaxSweeps must be >= 0");
+  if (relaxSweeps < 0) throw std::invalid_argument("relaxSweeps must be >= 0");
+  if (!(relaxDeviation >= 0)) throw std::invalid_argument("relaxDeviation must be non-negative");
   if (!(repairDeviation >= 0)) throw std::invalid_argument("repairDeviation must be non-negative");
   ResampleParams r = resampling;
   r.targetCount = std::max<std::size_t>(targetCount, 1);
@@ -83,7 +83,7 @@ std::string ReconstructResult::toJson() const {
   }
   j.key("bad_triangles").beginObject().member("vertices_moved", badTriangles.moved);
   j.member("vertices_removed", badTriangles.removed).member("remeshed_vertices", remeshedVertices).endObject();
-  j.member("boundary_vertices_relaxed", boundaryRelaxed);
+  j.member("vertices_relaxed", verticesRelaxed);
   const auto holeCounts = [&](std::string_view name, const auto& h) {
     j.key(name).beginObject().member("loops", h.loops).member("filled", h.filled).member("kept", h.kept);
     j.member("faces_added", h.facesAdded).member("vertices_added", h.verticesAdded);
@@ -197,7 +197,7 @@ HoleFillingParams holeParams(const ReconstructParams& params, const ReconstructR
 
 /// Small components removed, small holes closed (again after removing the fans a fill pinched together), large
 /// holes closed (@p holes: params.holes with the input, see holeParams), edges flipped back to Delaunay, bad
-/// triangles repaired, the band along open boundaries relaxed. Returns the faces flipped by the orientation passes
+/// triangles repaired, the vertices relaxed. Returns the faces flipped by the orientation passes
 /// that large holes and remeshing need first.
 std::size_t closeHoles(const ReconstructParams& params, const HoleFillingParams& holes, const Execution& exec,
                        ReconstructResult& result, std::vector<Eigen::Vector3d>& normals) {
@@ -234,8 +234,7 @@ std::size_t closeHoles(const ReconstructParams& params, const HoleFillingParams&
       result.remeshedVertices = remeshBadRegions(result.mesh, normals, params.repairQuality);
     }
   }
-  result.boundaryRelaxed = relaxNearBoundary(result.mesh, normals, params.boundaryRelaxRings,
-                                             params.boundaryRelaxSweeps, params.repairDeviation);
+  result.verticesRelaxed = relaxVertices(result.mesh, normals, params.relaxSweeps, params.relaxDeviation);
   return flipped;
 }
 

@@ -184,16 +184,16 @@ std::size_t removeExtraFans(TriangleMesh& mesh, int threads = 0, const std::vect
 /// stray islands a local method leaves inside a hole. @return number of faces removed.
 std::size_t removeSmallComponents(TriangleMesh& mesh, std::size_t minFaces);
 
-/// @brief Tangential relaxation of the band of vertices within @p rings edges of an open boundary: each interior
-/// vertex of the band (a closed fan, not on the boundary) moves halfway to its neighbours' centroid within its
-/// tangent plane (@p normals, one per vertex), Gauss–Seidel in index order, @p iterations sweeps. A move is taken
-/// when no face of the fan turns over, the fan's worst Q does not drop and its mean Q rises, and the old position
-/// lies within @p maxDeviation × the mean edge length of the new fan. The boundary vertices stay: a scan's rim is
-/// where the data ends. Lloyd relaxation leaves the samples near an open boundary less regular than inside (their
-/// cells are cut by the rim), so the triangles there are worse; this evens them out.
+/// @brief Tangential relaxation: each vertex on no boundary or non-manifold edge with a closed fan moves halfway to
+/// its neighbours' centroid within its tangent plane (@p normals, one per vertex), Gauss–Seidel in index order,
+/// @p sweeps sweeps. A move is taken when no face of the fan turns over, the fan's worst Q does not drop and its
+/// mean Q rises, and the old position lies within @p maxDeviation × the mean edge length of the new fan (the
+/// surface stays where it was). Boundary vertices stay: a scan's rim is where the data ends. Evenly spaced samples
+/// still leave triangles whose shape the neighbours' centroid improves (more so next to a rim, where Lloyd cells
+/// are cut, and next to creases).
 /// @return the vertices moved at least once. Deterministic.
-std::size_t relaxNearBoundary(TriangleMesh& mesh, const std::vector<Eigen::Vector3d>& normals, int rings,
-                              int iterations, double maxDeviation);
+std::size_t relaxVertices(TriangleMesh& mesh, const std::vector<Eigen::Vector3d>& normals, int sweeps,
+                          double maxDeviation);
 
 /// @brief What repairBadTriangles() did.
 struct BadTriangleReport {

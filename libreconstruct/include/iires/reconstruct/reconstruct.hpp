@@ -60,10 +60,10 @@ struct ReconstructParams {
   /// Then the regions (2 rings) around triangles still below repairQuality are remeshed isotropically, kept when
   /// their worst Q rises (remeshBadRegions); nothing happens when no triangle is below it
   bool remeshBadRegions = true;
-  /// Then the vertices within this many edges of an open boundary are relaxed tangentially (relaxNearBoundary; 0 =
-  /// off): a scan's rim leaves the samples next to it less regular than inside, and their triangles worse
-  int boundaryRelaxRings = 2;
-  int boundaryRelaxSweeps = 3;      ///< sweeps of that relaxation (≥ 0)
+  /// Then the vertices are relaxed tangentially, a move kept where its fan gets better (relaxVertices): sweeps
+  /// (0 = off), and how far the surface may move, × the mean edge length
+  int relaxSweeps = 3;
+  double relaxDeviation = 0.05;
   /// Make the mesh valid after the repairs above (repairValidity): no self-intersection, no non-manifold edge or
   /// vertex; intersecting faces are removed with a neighbourhood and the hole is filled again (when fillHoles)
   bool repairValidity = true;
@@ -95,7 +95,7 @@ struct ReconstructResult {
   std::size_t flipsAfterFilling = 0; ///< Delaunay flips after hole filling (local method)
   BadTriangleReport badTriangles;    ///< vertices moved / removed to raise the worst triangles (repairBadTriangles)
   std::size_t remeshedVertices = 0;  ///< vertices moved / removed / added by remeshBadRegions
-  std::size_t boundaryRelaxed = 0;   ///< vertices near an open boundary moved by relaxNearBoundary
+  std::size_t verticesRelaxed = 0;   ///< vertices moved by relaxVertices
   ValidityReport validity;           ///< what repairValidity found and did
   OrientationReport orientation;     ///< orientation diagnostics
   std::size_t unusedVertices = 0;    ///< samples no triangle uses (removed from the mesh)

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
-// relaxNearBoundary(): tangential relaxation of the vertices near an open boundary (mesh_repair.hpp).
+// relaxVertices(): tangential relaxation of the mesh's vertices, kept where their fans get better (mesh_repair.hpp).
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <limits>
@@ -15,44 +15,24 @@ namespace iires {
 
 namespace {
 
-/// The vertices within @p rings edges of a boundary vertex that have a closed fan and lie on no boundary or
-/// non-manifold edge, ascending.
-std::vector<std::uint32_t> boundaryBand(const TriangleMesh& mesh, int rings) {
-  std::vector<std::vector<std::uint32_t>> neighbours(mesh.vertices.size());
+/// The vertices that may move: those on no boundary or non-manifold edge, ascending.
+std::vector<std::uint32_t> innerVertices(const TriangleMesh& mesh) {
   std::vector<char> fixed(mesh.vertices.size(), 0);
-  std::vector<int> depth(mesh.vertices.size(), -1);
-  std::vector<std::uint32_t> frontier;
-  for (const auto& [key, faces] : detail::edgeFaces(mesh)) {
-    const auto a = static_cast<std::uint32_t>(key >> 32), b = static_cast<std::uint32_t>(key & 0xffffffffu);
-    const std::size_t count = faces.size();
-    neighbours[a].push_back(b);
-    neighbours[b].push_back(a);
-    if (count != 2) fixed[a] = fixed[b] = 1;
-    if (count == 1) {
-      for (std::uint32_t v : {a, b})
-        if (depth[v] < 0) depth[v] = 0, frontier.push_back(v);
-    }
-  }
-  for (int ring = 1; ring <= rings; ++ring) {
-    std::vector<std::uint32_t> next;
-    for (std::uint32_t v : frontier)
-      for (std::uint32_t u : neighbours[v])
-        if (depth[u] < 0) depth[u] = ring, next.push_back(u);
-    frontier.swap(next);
-  }
-  std::vector<std::uint32_t> band;
+  for (const auto& [key, faces] : detail::edgeFaces(mesh))
+    if (faces.size() != 2) fixed[key >> 32] = fixed[key & 0xffffffffu] = 1;
+  std::vector<std::uint32_t> inner;
   for (std::uint32_t v = 0; v < mesh.vertices.size(); ++v)
-    if (depth[v] > 0 && !fixed[v]) band.push_back(v);
-  return band;
+    if (!fixed[v]) inner.push_back(v);
+  return inner;
 }
 
 }  // namespace
 
-std::size_t relaxNearBoundary(TriangleMesh& mesh, const std::vector<Eigen::Vector3d>& normals, int rings,
-                              int iterations, double maxDeviation) {
-  if (rings <= 0 || iterations <= 0 || mesh.triangles.empty() || normals.size() != mesh.vertices.size()) return 0;
-  const std::vector<std::uint32_t> band = boundaryBand(mesh, rings);
-  if (band.empty()) return 0;
+std::size_t relaxVertices(TriangleMesh& mesh, const std::vector<Eigen::Vector3d>& normals, int sweeps,
+                          double maxDeviation) {
+  if (sweeps <= 0 || mesh.triangles.empty() || normals.size() != mesh.vertices.size()) return 0;
+  const std::vector<std::uint32_t> inner = innerVertices(mesh);
+  if (inner.empty()) return 0;
   auto& P = mesh.vertices;
   const auto& T = mesh.triangles;
   double edgeSum = 0;
@@ -62,8 +42,8 @@ std::size_t relaxNearBoundary(TriangleMesh& mesh, const std::vector<Eigen::Vecto
   const detail::VertexFaces vf = detail::vertexFaces(mesh);
   std::vector<char> moved(P.size(), 0);
   std::vector<std::uint32_t> ring;
-  for (int sweep = 0; sweep < iterations; ++sweep) {
-    for (std::uint32_t v : band) {
+  for (int sweep = 0; sweep < sweeps; ++sweep) {
+    for (std::uint32_t v : inner) {
       const auto first = vf.incident.begin() + vf.start[v], last = vf.incident.begin() + vf.start[v + 1];
       ring.clear();
       for (auto f = first; f != last; ++f)
@@ -71,7 +51,7 @@ std::size_t relaxNearBoundary(TriangleMesh& mesh, const std::vector<Eigen::Vecto
           if (static_cast<std::uint32_t>(T[*f][c]) != v) ring.push_back(static_cast<std::uint32_t>(T[*f][c]));
       std::sort(ring.begin(), ring.end());
       ring.erase(std::unique(ring.begin(), ring.end()), ring.end());
-      if (ring.size() != static_cast<std::size_t>(last - first)) continue;  // not a closed disc
+      if (first == last || ring.size() != static_cast<std::size_t>(last - first)) continue;  // not a closed disc
       Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
       for (std::uint32_t r : ring) centroid += P[r];
       centroid /= static_cast<double>(ring.size());
