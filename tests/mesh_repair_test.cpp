@@ -435,16 +435,21 @@ TEST(MeshRepair, RemeshBadRegionsRaisesSlivers) {
 
 TEST(MeshRepair, RelaxVerticesEvensJitterAndKeepsTheRim) {
   // A flat 12 × 12 grid of unit squares, each split in two; the vertices one edge in from the rim jittered by up
-  // to 0.3 (in the plane), as Lloyd relaxation leaves samples next to a scan's rim. The band is relaxed, the
-  // rim and the vertices farther in do not move, and no face gets worse than the worst before.
+  // to 0.3 in the plane, as Lloyd relaxation leaves samples next to a scan's rim, and the rim's own vertices along
+  // the rim. Everything relaxes, the rim vertices slide along the rim only, the corners stay, and no face gets
+  // worse than the worst before.
   TriangleMesh m;
   const int n = 12;
   std::mt19937_64 rng(31);
   std::uniform_real_distribution<double> u(-0.3, 0.3);
   for (int y = 0; y <= n; ++y)
     for (int x = 0; x <= n; ++x) {
-      const bool ring1 = std::min({x, y, n - x, n - y}) == 1;
-      m.vertices.emplace_back(x + (ring1 ? u(rng) : 0.0), y + (ring1 ? u(rng) : 0.0), 0.0);
+      const int depth = std::min({x, y, n - x, n - y});
+      const bool corner = (x == 0 || x == n) && (y == 0 || y == n);
+      Eigen::Vector3d p(x, y, 0.0);
+      if (depth == 1) p += Eigen::Vector3d(u(rng), u(rng), 0.0);
+      if (depth == 0 && !corner) p += u(rng) * (x == 0 || x == n ? Eigen::Vector3d::UnitY() : Eigen::Vector3d::UnitX());
+      m.vertices.push_back(p);
     }
   for (int y = 0; y < n; ++y)
     for (int x = 0; x < n; ++x) {
@@ -462,16 +467,27 @@ TEST(MeshRepair, RelaxVerticesEvensJitterAndKeepsTheRim) {
     }
     return std::make_pair(worst, sum / static_cast<double>(mesh.triangles.size()));
   };
-  const std::size_t moved = relaxVertices(m, normals, 3, 0.25);
-  EXPECT_GT(moved, 20u);
+  const std::size_t moved = relaxVertices(m, normals, 3, 0.05);
+  EXPECT_GT(moved, 60u);
+  std::size_t rimMoved = 0;
   for (int y = 0; y <= n; ++y)
     for (int x = 0; x <= n; ++x) {
       const std::size_t v = static_cast<std::size_t>(y * (n + 1) + x);
-      if (std::min({x, y, n - x, n - y}) == 0) {
-        EXPECT_EQ(m.vertices[v], before.vertices[v]) << x << "," << y;  // the rim stays
+      const Eigen::Vector3d &p = m.vertices[v], &p0 = before.vertices[v];
+      const bool xRim = x == 0 || x == n, yRim = y == 0 || y == n;
+      if (xRim && yRim) {
+        EXPECT_EQ(p, p0) << x << "," << y;  // corners stay
       }
-      EXPECT_EQ(m.vertices[v].z(), 0.0);  // moves stay in the tangent plane
+      if (xRim) {
+        EXPECT_EQ(p.x(), p0.x()) << x << "," << y;  // rims: along the rim only
+      }
+      if (yRim) {
+        EXPECT_EQ(p.y(), p0.y()) << x << "," << y;
+      }
+      if (std::min({x, y, n - x, n - y}) == 0 && p != p0) ++rimMoved;
+      EXPECT_EQ(p.z(), 0.0);  // moves stay in the tangent plane
     }
+  EXPECT_GT(rimMoved, 20u);
   EXPECT_GE(quality(m).first, quality(before).first);
   EXPECT_GT(quality(m).second, quality(before).second);
   // The jitter shrinks: the neighbours' centroid of a grid vertex is its grid position.

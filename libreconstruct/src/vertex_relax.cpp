@@ -2,7 +2,10 @@
 // relaxVertices(): tangential relaxation of the mesh's vertices, kept where their fans get better (mesh_repair.hpp).
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <array>
+#include <cstdint>
 #include <limits>
+#include <utility>
 #include <vector>
 
 #include "iires/reconstruct/mesh_quality.hpp"
@@ -15,15 +18,58 @@ namespace iires {
 
 namespace {
 
-/// The vertices that may move: those on no boundary or non-manifold edge, ascending.
-std::vector<std::uint32_t> innerVertices(const TriangleMesh& mesh) {
+constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
+
+/// The vertices that may move, ascending, and for each vertex on a rim its two rim neighbours: a vertex on no
+/// non-manifold edge and on either no boundary edge or exactly two ({kNone, kNone} for the others).
+struct Movable {
+  std::vector<std::uint32_t> vertices;
+  std::vector<std::array<std::uint32_t, 2>> rim;
+};
+
+Movable movableVertices(const TriangleMesh& mesh) {
+  Movable m;
+  m.rim.assign(mesh.vertices.size(), {kNone, kNone});
+  std::vector<int> boundaryEdges(mesh.vertices.size(), 0);
   std::vector<char> fixed(mesh.vertices.size(), 0);
-  for (const auto& [key, faces] : detail::edgeFaces(mesh))
-    if (faces.size() != 2) fixed[key >> 32] = fixed[key & 0xffffffffu] = 1;
-  std::vector<std::uint32_t> inner;
-  for (std::uint32_t v = 0; v < mesh.vertices.size(); ++v)
-    if (!fixed[v]) inner.push_back(v);
-  return inner;
+  for (const auto& [key, faces] : detail::edgeFaces(mesh)) {
+    const auto a = static_cast<std::uint32_t>(key >> 32), b = static_cast<std::uint32_t>(key & 0xffffffffu);
+    if (faces.size() > 2) fixed[a] = fixed[b] = 1;
+    if (faces.size() != 1) continue;
+    for (auto [v, other] : {std::pair{a, b}, std::pair{b, a}}) {
+      if (boundaryEdges[v] < 2) m.rim[v][boundaryEdges[v]] = other;
+      ++boundaryEdges[v];
+    }
+  }
+  for (std::uint32_t v = 0; v < mesh.vertices.size(); ++v) {
+    if (boundaryEdges[v] != 0 && boundaryEdges[v] != 2) fixed[v] = 1;
+    if (fixed[v]) m.rim[v] = {kNone, kNone};
+    else m.vertices.push_back(v);
+  }
+  return m;
+}
+
+/// The point of segment [a, b] closest to @p p.
+Eigen::Vector3d closestOnSegment(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  const Eigen::Vector3d d = b - a;
+  const double t = d.squaredNorm() > 0 ? std::clamp((p - a).dot(d) / d.squaredNorm(), 0.0, 1.0) : 0.0;
+  return a + t * d;
+}
+
+/// Where vertex @p v moves: inside, halfway to its neighbours' centroid (@p ring) in its tangent plane (normal @p n);
+/// on a rim, halfway to its rim neighbours' midpoint, then back onto the rim's two edges (the rim keeps its shape).
+Eigen::Vector3d relaxedPosition(const std::vector<Eigen::Vector3d>& P, std::uint32_t v,
+                                const std::array<std::uint32_t, 2>& rim, const std::vector<std::uint32_t>& ring,
+                                const Eigen::Vector3d& n) {
+  if (rim[0] != kNone) {
+    const Eigen::Vector3d target = P[v] + 0.5 * (0.5 * (P[rim[0]] + P[rim[1]]) - P[v]);
+    const Eigen::Vector3d a = closestOnSegment(target, P[rim[0]], P[v]), b = closestOnSegment(target, P[v], P[rim[1]]);
+    return (a - target).squaredNorm() <= (b - target).squaredNorm() ? a : b;
+  }
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  for (std::uint32_t r : ring) centroid += P[r];
+  centroid /= static_cast<double>(ring.size());
+  return P[v] + 0.5 * (centroid - P[v] - n * n.dot(centroid - P[v]));
 }
 
 }  // namespace
@@ -31,8 +77,8 @@ std::vector<std::uint32_t> innerVertices(const TriangleMesh& mesh) {
 std::size_t relaxVertices(TriangleMesh& mesh, const std::vector<Eigen::Vector3d>& normals, int sweeps,
                           double maxDeviation) {
   if (sweeps <= 0 || mesh.triangles.empty() || normals.size() != mesh.vertices.size()) return 0;
-  const std::vector<std::uint32_t> inner = innerVertices(mesh);
-  if (inner.empty()) return 0;
+  const Movable movable = movableVertices(mesh);
+  if (movable.vertices.empty()) return 0;
   auto& P = mesh.vertices;
   const auto& T = mesh.triangles;
   double edgeSum = 0;
@@ -43,7 +89,7 @@ std::size_t relaxVertices(TriangleMesh& mesh, const std::vector<Eigen::Vector3d>
   std::vector<char> moved(P.size(), 0);
   std::vector<std::uint32_t> ring;
   for (int sweep = 0; sweep < sweeps; ++sweep) {
-    for (std::uint32_t v : inner) {
+    for (std::uint32_t v : movable.vertices) {
       const auto first = vf.incident.begin() + vf.start[v], last = vf.incident.begin() + vf.start[v + 1];
       ring.clear();
       for (auto f = first; f != last; ++f)
@@ -51,13 +97,11 @@ std::size_t relaxVertices(TriangleMesh& mesh, const std::vector<Eigen::Vector3d>
           if (static_cast<std::uint32_t>(T[*f][c]) != v) ring.push_back(static_cast<std::uint32_t>(T[*f][c]));
       std::sort(ring.begin(), ring.end());
       ring.erase(std::unique(ring.begin(), ring.end()), ring.end());
-      if (first == last || ring.size() != static_cast<std::size_t>(last - first)) continue;  // not a closed disc
-      Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
-      for (std::uint32_t r : ring) centroid += P[r];
-      centroid /= static_cast<double>(ring.size());
+      const bool onRim = movable.rim[v][0] != kNone;
+      // One fan around v: a closed disc inside, a half disc on a rim.
+      if (first == last || ring.size() != static_cast<std::size_t>(last - first) + (onRim ? 1 : 0)) continue;
       const Eigen::Vector3d& n = normals[v];
-      const Eigen::Vector3d step = 0.5 * (centroid - P[v] - n * n.dot(centroid - P[v]));
-      const Eigen::Vector3d old = P[v], target = P[v] + step;
+      const Eigen::Vector3d old = P[v], target = relaxedPosition(P, v, movable.rim[v], ring, n);
       double oldMin = 1, oldSum = 0, newMin = 1, newSum = 0, deviation = std::numeric_limits<double>::max();
       bool turned = false;
       for (auto f = first; f != last && !turned; ++f) {

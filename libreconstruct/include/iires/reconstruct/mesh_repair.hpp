@@ -184,13 +184,14 @@ std::size_t removeExtraFans(TriangleMesh& mesh, int threads = 0, const std::vect
 /// stray islands a local method leaves inside a hole. @return number of faces removed.
 std::size_t removeSmallComponents(TriangleMesh& mesh, std::size_t minFaces);
 
-/// @brief Tangential relaxation: each vertex on no boundary or non-manifold edge with a closed fan moves halfway to
-/// its neighbours' centroid within its tangent plane (@p normals, one per vertex), Gauss–Seidel in index order,
-/// @p sweeps sweeps. A move is taken when no face of the fan turns over, the fan's worst Q does not drop and its
-/// mean Q rises, and the old position lies within @p maxDeviation × the mean edge length of the new fan (the
-/// surface stays where it was). Boundary vertices stay: a scan's rim is where the data ends. Evenly spaced samples
-/// still leave triangles whose shape the neighbours' centroid improves (more so next to a rim, where Lloyd cells
-/// are cut, and next to creases).
+/// @brief Tangential relaxation, Gauss–Seidel in index order, @p sweeps sweeps: each vertex with a closed fan moves
+/// halfway to its neighbours' centroid within its tangent plane (@p normals, one per vertex); each vertex on one
+/// rim (two boundary edges, a half-disc fan) halfway to its two rim neighbours' midpoint, taken back onto the rim's
+/// two edges, so the rim keeps its shape. Vertices on non-manifold edges or where rims meet stay. A move is taken
+/// when no face of the fan turns over, the fan's worst Q does not drop and its mean Q rises, and the old position
+/// lies within @p maxDeviation × the mean edge length of the new fan (the surface stays where it was). Evenly spaced
+/// samples still leave triangles that their neighbours' centroid improves, more so next to a rim (Lloyd cells are
+/// cut there) and next to creases.
 /// @return the vertices moved at least once. Deterministic.
 std::size_t relaxVertices(TriangleMesh& mesh, const std::vector<Eigen::Vector3d>& normals, int sweeps,
                           double maxDeviation);
