@@ -41,6 +41,18 @@ iires::TriangleMesh chamferedBox(double leg) {
   return prismMesh({{0, 0}, {1, 0}, {1, 0.5 - leg}, {1 - leg, 0.5}, {0, 0.5}});
 }
 
+/// The box [0, 1] × [0, 1] × [0, 0.5] with its edge x = 1, z = 0.5 rounded: a fillet of radius @p r as
+/// @p facets flat facets (each turning 90°/facets).
+iires::TriangleMesh filletedBox(double r, int facets) {
+  std::vector<std::array<double, 2>> xz = {{0, 0}, {1, 0}};
+  for (int k = 0; k <= facets; ++k) {
+    const double a = 0.5 * M_PI * k / facets;  // from the side (x = 1) round to the top (z = 0.5)
+    xz.push_back({1 - r + r * std::cos(a), 0.5 - r + r * std::sin(a)});
+  }
+  xz.push_back({0, 0.5});
+  return prismMesh(xz);
+}
+
 /// @p mesh sampled with @p count points (seed 7), normals estimated as the resampler has them.
 iires::PointCloud sampled(const iires::TriangleMesh& mesh, std::size_t count) {
   iires::MeshSamplingParams sp;
@@ -112,4 +124,30 @@ TEST(Features, SamplesByANarrowChamferStayOnTheSurface) {
   ASSERT_GE(n, 20u);
   EXPECT_LE(sum / static_cast<double>(n), 0.05 * c.h)
       << n << " samples, the worst " << worst / c.h << " h off";
+}
+
+// A fillet of radius 1.4 input spacings as four facets 22.5° apart (as couplingdown's rims): no facet edge is
+// sharp, but the fits see one 90° crease and put samples on the line where top and side meet, 0.4 radii off
+// the surface. Three sheets model the input there, the third a band over the facets, narrower than a local
+// spacing and turning from a face by less than the detector's angle; no input point lies near the faces'
+// line, and the samples move onto the fillet.
+TEST(Features, HeldSamplesOnASmallFilletMoveOntoIt) {
+  const double r = 0.011;
+  const auto mesh = filletedBox(r, 4);
+  const auto cloud = sampled(mesh, 60000);
+  const double h = iires::estimateSpacing(cloud.points);
+  const iires::MeshDistance surface(mesh);
+  const iires::KnnIndex index(cloud.points);
+  std::vector<Eigen::Vector3d> out;
+  for (int t = 0; t <= 60; ++t) out.emplace_back(1.0, 0.2 + 0.01 * t, 0.5);  // the faces' line
+  ASSERT_GT(surface.distance(out[0]), 0.5 * h);
+  iires::detail::ontoSheets(cloud, index, h, FeatureParams{}, out, 2);
+  double sum = 0;
+  std::size_t on = 0;
+  for (const Eigen::Vector3d& q : out) {
+    sum += surface.distance(q);
+    on += surface.distance(q) <= 0.2 * h;
+  }
+  EXPECT_LE(sum / static_cast<double>(out.size()), 0.15 * h);
+  EXPECT_GE(10 * on, 9 * out.size()) << on << " of " << out.size() << " samples on the fillet";
 }

@@ -77,8 +77,9 @@ std::vector<Eigen::Vector3d> normalSeeds(const std::vector<Eigen::Vector3d>& nrm
 /// around the seeds (k-means), a plane fitted to each cluster and the points reassigned to the nearest plane,
 /// three times. False unless every sheet keeps 5 points and fits within maxResidual local spacings @p hl,
 /// 90 % of the points lie within 3·maxResidual of a sheet (else more sheets, or curved ones, than the model
-/// has), no two sheets are within the detector's angle and a third one either crosses the first two's line (a
-/// corner) or lies between them along it at least a local spacing wide (a band: a chamfer; @p band says so).
+/// has), no two sheets are within the detector's angle (a band and a face: half of it) and a third one either
+/// crosses the first two's line (a corner) or lies between them along it where their line is off the surface
+/// (a band: a chamfer or a small fillet; @p band says so).
 bool fitSheets(const PointCloud& cloud, const std::vector<std::uint32_t>& nbr, const Eigen::Vector3d& y,
                double hl, const FeatureParams& params, std::vector<Eigen::Vector3d> seed,
                std::vector<Sheet>& sheets, bool& band) {
@@ -127,14 +128,28 @@ bool fitSheets(const PointCloud& cloud, const std::vector<std::uint32_t>& nbr, c
     }
   }
   if (10 * explained < 9 * m) return false;
-  for (int s = 0; s < k; ++s)
-    for (int s2 = 0; s2 < k; ++s2)
-      if (s2 != s && std::abs(sheets[s].n.dot(sheets[s2].n)) > cosSharp) return false;  // two of one sheet
   // A third sheet crosses the first two's line (a corner) or lies between them along it (a band).
   band = k == 3 && std::abs(sheets[2].n.dot(sheets[0].n.cross(sheets[1].n).normalized())) <= 0.3;
+  // Two sheets within the detector's angle are one; a band, a strip of facets or a fillet's arc between two
+  // faces, may turn from each by half of it.
+  const double cosBand = std::cos(0.5 * params.angle * kDeg);
+  for (int s = 0; s < k; ++s)
+    for (int s2 = 0; s2 < k; ++s2)
+      if (s2 != s &&
+          std::abs(sheets[s].n.dot(sheets[s2].n)) > (band && (s == 2 || s2 == 2) ? cosBand : cosSharp))
+        return false;
   if (band && !(sheets[2].n.dot(sheets[0].n) > sheets[0].n.dot(sheets[1].n) &&
                 sheets[2].n.dot(sheets[1].n) > sheets[0].n.dot(sheets[1].n)))
     return false;
+  // A band is there only where the faces meet off the surface: no input point within 0.2 hl of their line.
+  if (band) {
+    const Eigen::Vector3d dir = sheets[0].n.cross(sheets[1].n).normalized();
+    const Eigen::Vector3d x = lineNearest(sheets[0].n, sheets[0].o, sheets[1].n, sheets[1].o, y);
+    for (std::uint32_t j : nbr) {
+      const Eigen::Vector3d d = cloud.points[j] - x;
+      if ((d - dir * d.dot(dir)).norm() < 0.2 * hl) return false;
+    }
+  }
   // Each sheet's lines and the cells its points cover (those a local spacing or more from every line).
   for (int s = 0; s < k; ++s) {
     Sheet& sh = sheets[s];
@@ -149,7 +164,6 @@ bool fitSheets(const PointCloud& cloud, const std::vector<std::uint32_t>& nbr, c
     // points a local spacing or more from every line, or a third of its width, a band's between its two
     // lines.
     const double width = band && s == 2 ? std::abs(sh.w[0].dot(sh.at[1] - sh.at[0])) : 0.0;
-    if (band && s == 2 && width < hl) return false;  // narrower than the sampling resolves: a crease
     const double clearance = band && s == 2 ? std::min(hl, width / 3.0) : hl;
     int count[1 << (kMaxSheets - 1)] = {};
     for (std::uint32_t j : sh.pts) {
@@ -197,7 +211,7 @@ Eigen::Vector3d nearestOnSheet(const Sheet& sh, const Eigen::Vector3d& q) {
 
 void ontoSheets(const PointCloud& cloud, const KnnIndex& index, double h, const FeatureParams& params,
                 std::vector<Eigen::Vector3d>& out, int threads) {
-  constexpr double kOff = 0.3;  // local spacings: a sample farther than this from the sheets moves
+  constexpr double kOff = 0.3;   // local spacings: a sample farther than this from the sheets moves
   constexpr double kMove = 2.0;  // local spacings: and by at most this much (farther: not its own model)
   parallelFor(out.size(), threads, [&](std::size_t i) {
     std::vector<std::uint32_t> idx;

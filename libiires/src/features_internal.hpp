@@ -127,8 +127,8 @@ void fillCreaseGaps(const PointCloud& cloud, const KnnIndex& index, double h, co
 /// points within params.radius local spacings of the sample (at least the 40 nearest) are modelled as one, two
 /// or three planar sheets (a face, a crease, a corner or a band): the input normals clustered (a third sheet
 /// where a normal leaves the plane of the first two by the detector's angle, or lies between them by that angle
-/// from both: a chamfer narrower than the fits, its band at least a local spacing wide; where three do not fit,
-/// two), a plane
+/// from both: a chamfer or small fillet narrower than the fits, where no input point lies within 0.2 local
+/// spacings of the first two's line; where three do not fit, two), a plane
 /// fitted to each cluster and the points reassigned to the nearest plane; the model holds where each plane fits
 /// within maxResidual and 90 % of the points lie within 3·maxResidual of one. Each sheet covers the cells of its
 /// plane, cut by the lines where it meets the other sheets, that its points within the radius lie in (a
