@@ -58,7 +58,18 @@ std::vector<Eigen::Vector3d> normalSeeds(const std::vector<Eigen::Vector3d>& nrm
   const Eigen::Vector3d across = seed[0].cross(seed[1]).normalized();
   for (std::size_t t = 1; t < m; ++t)
     if (std::abs(nrm[nbr[t]].dot(across)) > std::abs(nrm[nbr[c]].dot(across))) c = t;
-  if (std::abs(nrm[nbr[c]].dot(across)) > std::sin(params.angle * kDeg)) seed.push_back(nrm[nbr[c]]);
+  if (std::abs(nrm[nbr[c]].dot(across)) > std::sin(params.angle * kDeg)) {
+    seed.push_back(nrm[nbr[c]]);
+    return seed;
+  }
+  // Else a band between the two: the normal farthest from both (a chamfer's; at a crease, a normal blurred
+  // across it, which the band's plane fit then rejects), if by the detector's angle from each.
+  for (std::size_t t = 1; t < m; ++t)
+    if (std::max(nrm[nbr[t]].dot(seed[0]), nrm[nbr[t]].dot(seed[1])) <
+        std::max(nrm[nbr[c]].dot(seed[0]), nrm[nbr[c]].dot(seed[1])))
+      c = t;
+  if (std::max(nrm[nbr[c]].dot(seed[0]), nrm[nbr[c]].dot(seed[1])) < std::cos(params.angle * kDeg))
+    seed.push_back(nrm[nbr[c]]);
   return seed;
 }
 
@@ -66,10 +77,13 @@ std::vector<Eigen::Vector3d> normalSeeds(const std::vector<Eigen::Vector3d>& nrm
 /// around the seeds (k-means), a plane fitted to each cluster and the points reassigned to the nearest plane,
 /// three times. False unless every sheet keeps 5 points and fits within maxResidual local spacings @p hl,
 /// 90 % of the points lie within 3·maxResidual of a sheet (else more sheets, or curved ones, than the model
-/// has), no two sheets are within the detector's angle and a third one crosses the first two's line.
+/// has), no two sheets are within the detector's angle (a band and a face: half of it) and a third one either
+/// crosses the first two's line (a corner) or lies between them along it where their line is off the surface
+/// (a band: a chamfer or a small fillet; @p band says so).
 bool fitSheets(const PointCloud& cloud, const std::vector<std::uint32_t>& nbr, const Eigen::Vector3d& y,
                double hl, const FeatureParams& params, std::vector<Eigen::Vector3d> seed,
-               std::vector<Sheet>& sheets) {
+               std::vector<Sheet>& sheets, bool& band) {
+  band = false;
   const std::size_t m = nbr.size();
   const auto& nrm = cloud.normals;
   const double cosSharp = std::cos(params.angle * kDeg);
@@ -114,10 +128,28 @@ bool fitSheets(const PointCloud& cloud, const std::vector<std::uint32_t>& nbr, c
     }
   }
   if (10 * explained < 9 * m) return false;
+  // A third sheet crosses the first two's line (a corner) or lies between them along it (a band).
+  band = k == 3 && std::abs(sheets[2].n.dot(sheets[0].n.cross(sheets[1].n).normalized())) <= 0.3;
+  // Two sheets within the detector's angle are one; a band, a strip of facets or a fillet's arc between two
+  // faces, may turn from each by half of it.
+  const double cosBand = std::cos(0.5 * params.angle * kDeg);
   for (int s = 0; s < k; ++s)
     for (int s2 = 0; s2 < k; ++s2)
-      if (s2 != s && std::abs(sheets[s].n.dot(sheets[s2].n)) > cosSharp) return false;  // two of one sheet
-  if (k == 3 && std::abs(sheets[2].n.dot(sheets[0].n.cross(sheets[1].n).normalized())) <= 0.3) return false;
+      if (s2 != s &&
+          std::abs(sheets[s].n.dot(sheets[s2].n)) > (band && (s == 2 || s2 == 2) ? cosBand : cosSharp))
+        return false;
+  if (band && !(sheets[2].n.dot(sheets[0].n) > sheets[0].n.dot(sheets[1].n) &&
+                sheets[2].n.dot(sheets[1].n) > sheets[0].n.dot(sheets[1].n)))
+    return false;
+  // A band is there only where the faces meet off the surface: no input point within 0.2 hl of their line.
+  if (band) {
+    const Eigen::Vector3d dir = sheets[0].n.cross(sheets[1].n).normalized();
+    const Eigen::Vector3d x = lineNearest(sheets[0].n, sheets[0].o, sheets[1].n, sheets[1].o, y);
+    for (std::uint32_t j : nbr) {
+      const Eigen::Vector3d d = cloud.points[j] - x;
+      if ((d - dir * d.dot(dir)).norm() < 0.2 * hl) return false;
+    }
+  }
   // Each sheet's lines and the cells its points cover (those a local spacing or more from every line).
   for (int s = 0; s < k; ++s) {
     Sheet& sh = sheets[s];
@@ -128,14 +160,25 @@ bool fitSheets(const PointCloud& cloud, const std::vector<std::uint32_t>& nbr, c
       sh.at[sh.lines] = lineNearest(sh.n, sh.o, sheets[s2].n, sheets[s2].o, y);
       ++sh.lines;
     }
+    // A point near a line may be the other sheet's, within the tolerance of this one: a cell counts the
+    // points a local spacing or more from every line, or a third of its width, a band's between its two
+    // lines.
+    const double width = band && s == 2 ? std::abs(sh.w[0].dot(sh.at[1] - sh.at[0])) : 0.0;
+    const double clearance = band && s == 2 ? std::min(hl, width / 3.0) : hl;
+    int count[1 << (kMaxSheets - 1)] = {};
     for (std::uint32_t j : sh.pts) {
       if ((cloud.points[j] - y).norm() > params.radius * hl)
-        continue;         // along a curved crease the lines bend
-      bool clear = true;  // a point near a line may be the other sheet's, within the tolerance of this one
+        continue;  // along a curved crease the lines bend
+      bool clear = true;
       for (int b = 0; b < sh.lines; ++b)
-        clear = clear && std::abs(sh.w[b].dot(cloud.points[j] - sh.at[b])) >= hl;
+        clear = clear && std::abs(sh.w[b].dot(cloud.points[j] - sh.at[b])) >= clearance;
       if (clear) sh.covered[sh.cell(cloud.points[j])] = true;
+      ++count[sh.cell(cloud.points[j])];
     }
+    // A sheet with no point clear of its lines (a face between a band and the ball's rim): the cell most of
+    // its points lie in.
+    if (std::none_of(std::begin(sh.covered), std::end(sh.covered), [](bool c) { return c; }))
+      sh.covered[std::max_element(std::begin(count), std::end(count)) - std::begin(count)] = true;
   }
   return true;
 }
@@ -168,8 +211,8 @@ Eigen::Vector3d nearestOnSheet(const Sheet& sh, const Eigen::Vector3d& q) {
 
 void ontoSheets(const PointCloud& cloud, const KnnIndex& index, double h, const FeatureParams& params,
                 std::vector<Eigen::Vector3d>& out, int threads) {
-  constexpr double kOff = 0.3;  // local spacings: a sample farther than this from the sheets moves
-  constexpr double kMove = 2.0;  // local spacings: and by at most this much (farther: the model is not its own)
+  constexpr double kOff = 0.3;   // local spacings: a sample farther than this from the sheets moves
+  constexpr double kMove = 2.0;  // local spacings: and by at most this much (farther: not its own model)
   parallelFor(out.size(), threads, [&](std::size_t i) {
     std::vector<std::uint32_t> idx;
     std::vector<double> d2;
@@ -184,10 +227,10 @@ void ontoSheets(const PointCloud& cloud, const KnnIndex& index, double h, const 
     // Three sheets where the normals say so, else (or where those do not fit) two; one only where the normals
     // see no second.
     const std::vector<Eigen::Vector3d> seed = normalSeeds(cloud.normals, idx, params);
-    bool fitted = false;
+    bool fitted = false, band = false;
     for (std::size_t k = seed.size(); k >= 1 && !fitted && !(k == 1 && seed.size() > 1); --k)
-      fitted =
-          fitSheets(cloud, idx, q, hl, params, {seed.begin(), seed.begin() + static_cast<long>(k)}, sheets);
+      fitted = fitSheets(cloud, idx, q, hl, params, {seed.begin(), seed.begin() + static_cast<long>(k)},
+                         sheets, band);
     if (!fitted) return;
     Eigen::Vector3d best = q;
     double bd = std::numeric_limits<double>::infinity();
@@ -198,7 +241,11 @@ void ontoSheets(const PointCloud& cloud, const KnnIndex& index, double h, const 
     // A move onto the surface brings the sample nearer the input; one away from it (a model biased by a sheet
     // it leaves out, as next to a corner) does not.
     // (localSpacing with no floor: the mean distance to the 6 nearest input points.)
-    if (bd > kOff * hl && bd <= kMove * hl && localSpacing(index, best, 0) < localSpacing(index, q, 0)) out[i] = best;
+    // Near a band (a chamfer narrower than the fits) the two faces' line, where the crease fits put the
+    // sample, is off the surface by construction: the sample moves onto the band however near.
+    if ((bd > kOff * hl || band) && bd <= kMove * hl &&
+        localSpacing(index, best, 0) < localSpacing(index, q, 0))
+      out[i] = best;
   });
 }
 

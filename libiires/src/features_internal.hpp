@@ -125,15 +125,18 @@ void fillCreaseGaps(const PointCloud& cloud, const KnnIndex& index, double h, co
 
 /// Step 6b of snapToCreases(): each held sample in @p out that lies off the surface moves onto it. The input
 /// points within params.radius local spacings of the sample (at least the 40 nearest) are modelled as one, two
-/// or three planar sheets (a face, a crease, a corner): the input normals clustered (a third sheet only where a
-/// normal leaves the plane of the first two by the detector's angle; where three do not fit, two), a plane
+/// or three planar sheets (a face, a crease, a corner or a band): the input normals clustered (a third sheet
+/// where a normal leaves the plane of the first two by the detector's angle, or lies between them by that angle
+/// from both: a chamfer or small fillet narrower than the fits, where no input point lies within 0.2 local
+/// spacings of the first two's line; where three do not fit, two), a plane
 /// fitted to each cluster and the points reassigned to the nearest plane; the model holds where each plane fits
 /// within maxResidual and 90 % of the points lie within 3·maxResidual of one. Each sheet covers the cells of its
 /// plane, cut by the lines where it meets the other sheets, that its points within the radius lie in (a
-/// half-plane at a crease, a quarter or three quarters at a convex or concave corner). A sample farther than 0.3
-/// local spacings from every sheet moves to the nearest point of them (a crease line or corner where that is
-/// nearest) if that is at most 2 local spacings away and nearer the input (the mean distance to the 6 nearest
-/// input points drops). Deterministic, in parallel over the samples.
+/// half-plane at a crease, a quarter or three quarters at a convex or concave corner, a band's strip). A sample
+/// farther than 0.3 local spacings from every sheet, or any distance where the model has a band (the two faces'
+/// line, where the crease fits put samples, is then off the surface), moves to the nearest point of them (a
+/// crease line or corner where that is nearest) if that is at most 2 local spacings away and nearer the input
+/// (the mean distance to the 6 nearest input points drops). Deterministic, in parallel over the samples.
 void ontoSheets(const PointCloud& cloud, const KnnIndex& index, double h, const FeatureParams& params,
                 std::vector<Eigen::Vector3d>& out, int threads);
 
