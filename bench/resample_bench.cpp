@@ -2,7 +2,6 @@
 // Resampling benchmark: iires vs Open3D farthest-point and voxel down-sampling on the same non-uniform dense
 // sampling of a CGAL model, in one run. Prints one key=value line per (model, input, N, method).
 // Usage: resample_bench MESH INPUT_COUNT N [N ...] [--density-ratio R] [--fps-limit X] [--threads T] [--no-peers]
-//        [--crease-angle A]   (ResampleParams::mls.creaseAngle, degrees; default 0 = off)
 #include <open3d/geometry/PointCloud.h>
 
 #include <chrono>
@@ -38,19 +37,14 @@ void report(const std::string& prefix, const std::string& method, const std::vec
 }  // namespace
 
 int main(int argc, char** argv) {
-  double fpsLimit = 2e10, creaseAngle = 0;
+  double fpsLimit = 2e10;
   bool peers = true;
   const iires::bench::GridArgs args = iires::bench::parseGridArgs(
       argc, argv, 5.0,
-      "resample_bench MESH INPUT_COUNT N [N ...] [--density-ratio R] [--fps-limit X] [--threads T] [--no-peers] "
-      "[--crease-angle A]",
+      "resample_bench MESH INPUT_COUNT N [N ...] [--density-ratio R] [--fps-limit X] [--threads T] [--no-peers]",
       [&](const std::string& arg, int& a) {
         if (arg == "--no-peers") {
           peers = false;
-          return true;
-        }
-        if (arg == "--crease-angle" && a + 1 < argc) {
-          creaseAngle = std::stod(argv[++a]);
           return true;
         }
         if (arg != "--fps-limit" || a + 1 >= argc) return false;
@@ -75,7 +69,6 @@ int main(int argc, char** argv) {
     const std::string prefix = "model=" + name + " input=" + std::to_string(inputCount) + " N=" + std::to_string(n);
     iires::ResampleParams p;
     p.targetCount = n;
-    p.mls.creaseAngle = creaseAngle;
     double t = now();
     const auto r = iires::resample(cloud, p, iires::Execution{threads});
     const double seconds = now() - t;

@@ -8,7 +8,6 @@
 #include <random>
 
 #include "iires/knn.hpp"
-#include "iires/normals.hpp"
 
 #include "shapes.hpp"
 
@@ -108,49 +107,3 @@ TEST(MlsSurface, BeyondIsZeroInAHoleAndGrowsPastTheBoundary) {
 }
 
 }  // namespace
-
-namespace {
-
-using iires::test::cubeDistance;
-
-/// Projections of points walking over the cube's edge x = z = 1 (across the top face, then down the side face,
-/// at y = 0.5): the largest step between consecutive projections over the walk's step, and the largest distance
-/// of a projection to the cube, both in units of the input spacing.
-std::pair<double, double> walkOverEdge(const iires::MlsSurface& surface, double spacing) {
-  constexpr int kSteps = 400;
-  const double length = 0.6, step = length / kSteps;
-  double jump = 0, error = 0;
-  Eigen::Vector3d last = Eigen::Vector3d::Zero();
-  for (int s = 0; s <= kSteps; ++s) {
-    const double t = s * step;  // along the surface from (0.7, 0.5, 1) over the edge to (1, 0.5, 0.7)
-    const Eigen::Vector3d x = t < 0.3 ? Eigen::Vector3d(0.7 + t, 0.5, 1.0) : Eigen::Vector3d(1.0, 0.5, 1.3 - t);
-    const Eigen::Vector3d y = surface.project(x);
-    error = std::max(error, std::abs(cubeDistance(y)));
-    if (s > 0) jump = std::max(jump, (y - last).norm() / step);
-    last = y;
-  }
-  return {jump, error / spacing};
-}
-
-}  // namespace
-
-// Sparse input across a crease: a fit over both faces rounds the edge off by a fraction of a spacing and jumps
-// where its neighbourhood changes; fitted per face (creaseAngle), the walk stays on the cube and continuous.
-TEST(MlsSurface, CreaseSplitKeepsASparseCubesEdge) {
-  const iires::PointCloud cube = iires::test::cubeCloud(1500, 5);  // ≈ 0.014 apart, h ≈ 0.045
-  const iires::KnnIndex index(cube.points);
-  const iires::NeighbourTable table(index, cube.points, 17);
-  // Estimated normals as resample() has them: PCA (blending the faces within a kernel of the edge), made face
-  // normals (faceNormals); and the true ones.
-  const auto face = iires::faceNormals(cube.points, iires::estimateNormals(cube.points), table);
-  for (const auto* normals : {&cube.normals, &face}) {
-    iires::MlsParams p;
-    p.creaseAngle = 30;
-    const iires::MlsSurface surface(cube.points, *normals, p);
-    const auto [jump, error] = walkOverEdge(surface, surface.meanSpacing());
-    // One fit over both faces (creaseAngle 0): jumps 5.2× (PCA normals) to 12× the walk's step (true normals:
-    // the faces face away at the edge, and the fit switches between them), 0.33 spacings inside the edge.
-    EXPECT_LT(jump, 1.5) << (normals == &face ? "face normals" : "true normals");
-    EXPECT_LT(error, 0.02) << (normals == &face ? "face normals" : "true normals");
-  }
-}

@@ -206,8 +206,6 @@ void ResampleParams::validate() const {
   if (maxInputPerSample > 0 && maxInputPerSample < 4) throw std::invalid_argument("maxInputPerSample must be 0 or >= 4");
   if (!(candidateFactor >= 1.0)) throw std::invalid_argument("candidateFactor must be >= 1");
   if (mls.k < 3) throw std::invalid_argument("mls.k must be >= 3");
-  if (!(mls.creaseAngle >= 0.0 && mls.creaseAngle < 90.0))
-    throw std::invalid_argument("mls.creaseAngle must be in [0, 90) degrees (0 = off)");
   if (mode == ResampleMode::kCurvature) curvature.validate();
   if (sharpEdges && !(edgeRatio >= 0.1 && edgeRatio <= 4.0))
     throw std::invalid_argument("edgeRatio (--edge-ratio) must be in [0.1, 4], got " + std::to_string(edgeRatio));
@@ -304,9 +302,6 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params, const Ex
 
   t = clock.begin("normals");
   workingNormals(cloud, params.normals, sheets, exec);
-  // The crease split fits each face on its own: it wants normals that do not blend the faces.
-  if (params.mls.creaseAngle > 0 && neighbours)
-    cloud.normals = faceNormals(cloud.points, cloud.normals, *neighbours, {}, exec.threads);
   clock.end("normals", t);
 
   // What does not need the geodesic coordinates: the MLS surface (on the geodesic graph's k-d tree with the

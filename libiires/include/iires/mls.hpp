@@ -20,13 +20,6 @@ struct MlsParams {
   /// Sheet rule (sheets.hpp, acrossGap) in every fit: input points on a near-parallel sheet at least sheetGap
   /// local spacings off the query's get no weight (0 = off: the normals' sign test only).
   double sheetGap = 1.25;
-  /// Crease angle (degrees in [0, 90), 0 = off): neighbours whose normals differ by more belong to different
-  /// faces, each fitted on its own, and a query near a crease goes to the nearest point of the piecewise surface
-  /// they make instead of a blend of both faces that rounds the crease over a kernel width (and jumps where the
-  /// blend's neighbourhood changes). Wants normals that do not blend the faces (faceNormals(), normals.hpp; resample()
-  /// computes them when this is on). With it only near-opposite normals (within 25°: a thin part's other side) are
-  /// another sheet: the faces of a crease sharper than a right angle face away from each other.
-  double creaseAngle = 0;
 };
 
 /// @brief The input neighbourhood of a previous projection, kept by a caller that projects the same moving
@@ -91,7 +84,6 @@ class MlsSurface {
   const KnnIndex* index_;
   std::vector<double> h_;
   std::vector<std::uint8_t> nearSheets_;  // empty: the sheet gate everywhere
-  double cosCrease_ = 1.0;  // cos(creaseAngle); 1 = no crease split
   double meanSpacing_ = 0;
   double area_ = 0;
 };
