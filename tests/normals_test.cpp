@@ -112,40 +112,4 @@ TEST(Normals, OrientAcrossCreasesOverSharpEdges) {
   }
 }
 
-// Within a kernel width of a crease PCA normals lean towards the other face; faceNormals gives those points
-// their own face's normal and leaves the rest as they are, for any thread count.
-TEST(Normals, FaceNormalsDoNotBlendASparseCubesFaces) {
-  const auto cube = iires::test::cubeCloud(1500, 5);
-  const iires::KnnIndex index(cube.points);
-  const iires::NeighbourTable table(index, cube.points, 17);
-  const auto pca = iires::estimateNormals(cube.points);
-  auto wrong = [&](const std::vector<Eigen::Vector3d>& n) {  // share more than 10° off the true normal
-    std::size_t count = 0;
-    for (std::size_t i = 0; i < n.size(); ++i) count += n[i].dot(cube.normals[i]) < std::cos(10 * M_PI / 180);
-    return static_cast<double>(count) / static_cast<double>(n.size());
-  };
-  const auto one = iires::faceNormals(cube.points, pca, table, {}, 1);
-  EXPECT_GT(wrong(pca), 0.25);
-  EXPECT_LT(wrong(one), 0.1);
-  for (std::size_t i = 0; i < one.size(); ++i) {
-    EXPECT_NEAR(one[i].norm(), 1.0, 1e-9);
-    EXPECT_GT(one[i].dot(pca[i]), 0.0) << "orientation kept, point " << i;
-  }
-  EXPECT_EQ(iires::faceNormals(cube.points, pca, table, {}, 2), one);
-  // On a smooth surface a point's own tangent plane mostly fits best; where a neighbour's wins, it is as good:
-  // (3000 points on the unit sphere) 6 % of the normals change, the worst error 4.2° → 5.8°, the mean 1.03° → 1.20°.
-  const auto sphere = iires::test::sphereCloud(3000, 1.0, 7);
-  const iires::KnnIndex sphereIndex(sphere.points);
-  const iires::NeighbourTable sphereTable(sphereIndex, sphere.points, 17);
-  const auto sphereFace = iires::faceNormals(sphere.points, iires::estimateNormals(sphere.points), sphereTable);
-  double worst = 0, mean = 0;
-  for (std::size_t i = 0; i < sphere.size(); ++i) {
-    const double degrees = std::acos(std::min(1.0, sphereFace[i].dot(sphere.normals[i]))) * 180 / M_PI;
-    worst = std::max(worst, degrees);
-    mean += degrees / static_cast<double>(sphere.size());
-  }
-  EXPECT_LT(worst, 8.0);
-  EXPECT_LT(mean, 1.5);
-}
-
 }  // namespace

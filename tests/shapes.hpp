@@ -41,31 +41,6 @@ inline PointCloud planeCloud(std::size_t n, double size = 1.0, double ratio = 1.
   return c;
 }
 
-/// @p n points uniformly random on the surface of the unit cube [0, 1]³ (a random face each), with the faces'
-/// outward normals.
-inline PointCloud cubeCloud(std::size_t n, std::uint64_t seed) {
-  std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<double> u(0.0, 1.0);
-  std::uniform_int_distribution<int> face(0, 5);
-  PointCloud c;
-  for (std::size_t i = 0; i < n; ++i) {
-    const int f = face(rng), axis = f / 2;
-    Eigen::Vector3d p(u(rng), u(rng), u(rng)), nrm = Eigen::Vector3d::Zero();
-    p[axis] = f % 2 ? 1.0 : 0.0;
-    nrm[axis] = f % 2 ? 1.0 : -1.0;
-    c.points.push_back(p);
-    c.normals.push_back(nrm);
-  }
-  return c;
-}
-
-/// Distance from @p p to the surface of the unit cube [0, 1]³.
-inline double cubeDistance(const Eigen::Vector3d& p) {
-  const Eigen::Vector3d q = (p - Eigen::Vector3d::Constant(0.5)).cwiseAbs() - Eigen::Vector3d::Constant(0.5);
-  const double outside = q.cwiseMax(0.0).norm();
-  return outside > 0 ? outside : -q.maxCoeff();
-}
-
 /// A regular grid on the unit sphere's octahedral parameterisation is overkill; a Fibonacci sphere is
 /// near-uniform and deterministic.
 inline std::vector<Eigen::Vector3d> fibonacciSphere(std::size_t n, double radius = 1.0) {

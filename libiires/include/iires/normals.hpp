@@ -66,28 +66,6 @@ void orientAcrossCreases(const std::vector<Eigen::Vector3d>& points, std::vector
                          const std::vector<std::uint32_t>& neighbours, std::size_t stride, std::size_t k,
                          int threads = 0, const std::vector<Eigen::Vector3d>* sides = nullptr);
 
-class NeighbourTable;
-
-/// @brief Parameters of faceNormals().
-struct FaceNormalParams {
-  double tolerance = 0.05;  ///< plane tolerance τ, in kernel widths h (distance to the 8th neighbour)
-  double margin = 1.3;      ///< a neighbour's plane replaces the point's own when its support is this many times more
-  double maxRefit = 25;     ///< degrees the refitted normal may turn from the chosen plane's (else the plane's is kept)
-  int passes = 2;           ///< Jacobi passes (each reads the previous pass's normals)
-};
-
-/// @brief Normals that do not blend the faces of a crease (PCA normals within a kernel width of one lean towards
-/// the other face). Each point takes, among the planes through it with its neighbours' normals, the one most of its
-/// neighbours lie on — support Σ θ(dⱼ) exp(−(rⱼ/τ)²), rⱼ the height off the plane, θ the MLS kernel — when that beats
-/// its own plane's by params.margin, refitted (weighted PCA) over the neighbours it supports. On a smooth surface the
-/// own tangent plane mostly fits best (where a neighbour's wins, it is nearly as good). Orientation is kept.
-/// @param table neighbour lists of exactly @p points; each row is read whole (at least 9 entries, the point itself
-/// included, else that point keeps its normal)
-/// @note O(n k²) per pass. Deterministic for any thread count.
-std::vector<Eigen::Vector3d> faceNormals(const std::vector<Eigen::Vector3d>& points,
-                                         const std::vector<Eigen::Vector3d>& normals, const NeighbourTable& table,
-                                         const FaceNormalParams& params = {}, int threads = 0);
-
 /// Given normals are trusted to be oriented when at most this share of their neighbour pairs on one plane point
 /// opposite ways (orientationConflicts); above it (normals from a tool that does not orient them) only their
 /// directions are used.
