@@ -14,6 +14,7 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <iterator>
 #include <memory>
@@ -44,6 +45,10 @@ namespace PMP = CGAL::Polygon_mesh_processing;
 /// 3-D Delaunay triangulation is not used: its fills change from run to run on two threads (3torus, loops of
 /// 124-240 edges).
 constexpr std::size_t kExhaustiveEdges = 250;
+
+/// A faired patch whose triangles fall this far short of Q 0.4 in all (addedShortfall: a degenerate triangle's
+/// worth) is made again without fairing; the repairs after the fill handle a poor triangle or two, not a fold.
+constexpr double kRefairShortfall = 0.4;
 
 /// The input points (HoleFillingParams::inputPoints): whether a loop's fill lies on the sampled surface, and
 /// whether the input goes on beyond the loop.
@@ -120,6 +125,68 @@ std::vector<HalfedgeIndex> borderCycles(const Mesh& sm) {
   return cycles;
 }
 
+/// One loop to close: its border halfedge, edges, the share of it the input goes on beyond, the input's unit there
+/// (InputSupport::unit) and the patch's target edge length (the loop's spacing, and every loop edge under twice it).
+struct LoopFill {
+  HalfedgeIndex h;
+  std::size_t edges = 0;
+  double continued = 0, unit = 0, target = 0;
+};
+
+/// A loop's patch: its faces and the vertices refining added.
+struct Patch {
+  std::vector<FaceIndex> faces;
+  std::vector<VertexIndex> added;
+};
+
+/// @p loop closed in @p sm by CGAL's exhaustive triangulation, then refined; false (nothing done) when the loop is
+/// too long for the search or it found no triangulation.
+bool triangulateLoop(Mesh& sm, const LoopFill& loop, Patch& patch) {
+  if (loop.edges <= kExhaustiveEdges)
+    PMP::triangulate_hole(sm, loop.h, std::back_inserter(patch.faces),
+                          CGAL::parameters::use_delaunay_triangulation(false));
+  if (patch.faces.empty()) return false;
+  PMP::refine(sm, std::vector<FaceIndex>(patch.faces), std::back_inserter(patch.faces),
+              std::back_inserter(patch.added));
+  return true;
+}
+
+/// The refined @p patch C⁰-faired when @p fair, then kept where it lies on the sampled surface or across a gap in
+/// the data, else removed again (false: the loop is a border again); kept, it is evened out by isotropic remeshing
+/// at the target length (the loop itself, the patch's border, is neither split, collapsed nor moved).
+bool finishPatch(Mesh& sm, const LoopFill& loop, const Patch& patch, bool fair, const HoleFillingParams& params,
+                 InputSupport& input) {
+  if (fair) PMP::fair(sm, patch.added, CGAL::parameters::fairing_continuity(0));
+  if (input.active() && loop.continued >= params.maxContinuedShare &&
+      !input.supports(sm, patch.added, params.supportDistance * loop.unit)) {
+    for (FaceIndex f : patch.faces) CGAL::Euler::remove_face(sm.halfedge(f), sm);
+    return false;
+  }
+  if (params.refineIterations > 0)
+    PMP::isotropic_remeshing(patch.faces, loop.target, sm,
+                             CGAL::parameters::number_of_iterations(static_cast<unsigned>(params.refineIterations))
+                                 .protect_constraints(true));
+  return true;
+}
+
+/// How far the faces with a vertex added since the input (index ≥ @p firstAdded) fall short of a good shape: the
+/// sum over them of max(0, kGoodQuality − Q). Additive, so two fills of one loop compare by this total.
+double addedShortfall(const Mesh& sm, std::size_t firstAdded) {
+  constexpr double kGoodQuality = 0.4;  // the reconstruction's repair threshold
+  double shortfall = 0;
+  for (FaceIndex f : sm.faces()) {
+    std::array<Eigen::Vector3d, 3> q;
+    bool added = false;
+    int c = 0;
+    for (VertexIndex v : CGAL::vertices_around_face(sm.halfedge(f), sm)) {
+      q[static_cast<std::size_t>(c++)] = toEigen(sm.point(v));
+      added = added || static_cast<std::size_t>(v) >= firstAdded;
+    }
+    if (added) shortfall += std::max(0.0, kGoodQuality - triangleQuality(q[0], q[1], q[2]));
+  }
+  return shortfall;
+}
+
 }  // namespace
 
 LargeHoleReport fillLargeHoles(TriangleMesh& mesh, std::vector<Eigen::Vector3d>& normals,
@@ -172,31 +239,32 @@ LargeHoleReport fillLargeHoles(TriangleMesh& mesh, std::vector<Eigen::Vector3d>&
     }
     // Triangulated, refined (new vertices inside, CGAL's density control), then faired: C⁰ fairing (a membrane)
     // gives a planar loop a flat cap; C¹ would carry the walls' tangents into a dome (measured on the sparse
-    // hand's wrist: Hausdorff 9.0 % of the diagonal with C¹, 3.4 % with C⁰).
-    std::vector<FaceIndex> faces;
-    if (edges <= kExhaustiveEdges)
-      PMP::triangulate_hole(sm, h, std::back_inserter(faces), CGAL::parameters::use_delaunay_triangulation(false));
-    if (faces.empty()) {
+    // hand's wrist: Hausdorff 9.0 % of the diagonal with C¹, 3.4 % with C⁰). Where the membrane folds (a loop
+    // round a crease), the patch comes out of the remeshing with slivers: then it is made again from the refined
+    // triangulation without fairing, and the patch with the better triangles is kept.
+    const LoopFill fill{h, edges, continued, u,
+                        std::max(perimeter / static_cast<double>(edges), std::max(meanEdge, longest / 1.9))};
+    const double shortfallBefore = addedShortfall(sm, nv);
+    Patch patch;
+    if (!triangulateLoop(sm, fill, patch)) {
       ++report.kept;
       continue;
     }
-    std::vector<VertexIndex> added;
-    PMP::refine(sm, std::vector<FaceIndex>(faces), std::back_inserter(faces), std::back_inserter(added));
-    PMP::fair(sm, added, CGAL::parameters::fairing_continuity(0));
-    // On the sampled surface, or across a gap in the data; else undone (the loop is a border again).
-    if (input.active() && continued >= params.maxContinuedShare &&
-        !input.supports(sm, added, params.supportDistance * u)) {
-      for (FaceIndex f : faces) CGAL::Euler::remove_face(sm.halfedge(f), sm);
+    Mesh refined = sm;
+    const bool filled = finishPatch(sm, fill, patch, true, params, input);
+    if (filled) {
+      const double faired = addedShortfall(sm, nv) - shortfallBefore;
+      if (faired > kRefairShortfall) {
+        Mesh fairedMesh = std::move(sm);
+        sm = std::move(refined);
+        if (!finishPatch(sm, fill, patch, false, params, input) || addedShortfall(sm, nv) - shortfallBefore >= faired)
+          sm = std::move(fairedMesh);
+      }
+    }
+    if (!filled) {
       ++report.kept, ++report.unsupported;
       continue;
     }
-    // Even out the patch: isotropic remeshing of its faces at the loop's spacing; the loop itself (the patch's
-    // border) is neither split, collapsed nor moved. The target keeps every loop edge under twice it.
-    const double target = std::max(perimeter / static_cast<double>(edges), std::max(meanEdge, longest / 1.9));
-    if (params.refineIterations > 0)
-      PMP::isotropic_remeshing(faces, target, sm,
-                               CGAL::parameters::number_of_iterations(static_cast<unsigned>(params.refineIterations))
-                                   .protect_constraints(true));
     ++report.filled;
   }
   if (!report.filled) return report;
