@@ -49,13 +49,6 @@ Movable movableVertices(const TriangleMesh& mesh) {
   return m;
 }
 
-/// The point of segment [a, b] closest to @p p.
-Eigen::Vector3d closestOnSegment(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
-  const Eigen::Vector3d d = b - a;
-  const double t = d.squaredNorm() > 0 ? std::clamp((p - a).dot(d) / d.squaredNorm(), 0.0, 1.0) : 0.0;
-  return a + t * d;
-}
-
 /// Where vertex @p v moves: inside, halfway to its neighbours' centroid (@p ring) in its tangent plane (normal @p n);
 /// on a rim, halfway to its rim neighbours' midpoint, then back onto the rim's two edges (the rim keeps its shape).
 Eigen::Vector3d relaxedPosition(const std::vector<Eigen::Vector3d>& P, std::uint32_t v,
@@ -63,7 +56,8 @@ Eigen::Vector3d relaxedPosition(const std::vector<Eigen::Vector3d>& P, std::uint
                                 const Eigen::Vector3d& n) {
   if (rim[0] != kNone) {
     const Eigen::Vector3d target = P[v] + 0.5 * (0.5 * (P[rim[0]] + P[rim[1]]) - P[v]);
-    const Eigen::Vector3d a = closestOnSegment(target, P[rim[0]], P[v]), b = closestOnSegment(target, P[v], P[rim[1]]);
+    const Eigen::Vector3d a = detail::closestPointOnSegment(target, P[rim[0]], P[v]);
+    const Eigen::Vector3d b = detail::closestPointOnSegment(target, P[v], P[rim[1]]);
     return (a - target).squaredNorm() <= (b - target).squaredNorm() ? a : b;
   }
   Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
