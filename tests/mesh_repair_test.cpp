@@ -527,6 +527,56 @@ TEST(MeshRepair, RelaxVerticesKeepsACurvedSurfaceWhereItWas) {
   EXPECT_EQ(relaxVertices(still, normals, 3, 0.0), 0u);
 }
 
+/// A flat grid of (nx × ny) unit squares, each split in two, counter-clockwise seen from +z.
+TriangleMesh flatGrid(int nx, int ny) {
+  TriangleMesh m;
+  for (int y = 0; y <= ny; ++y)
+    for (int x = 0; x <= nx; ++x) m.vertices.emplace_back(x, y, 0.0);
+  for (int y = 0; y < ny; ++y)
+    for (int x = 0; x < nx; ++x) {
+      const int a = y * (nx + 1) + x;
+      m.triangles.emplace_back(a, a + 1, a + nx + 2);
+      m.triangles.emplace_back(a, a + nx + 2, a + nx + 1);
+    }
+  return m;
+}
+
+double worstQuality(const TriangleMesh& m) {
+  double worst = 1;
+  for (const auto& t : m.triangles) worst = std::min(worst, triangleQuality(m.vertices[t[0]], m.vertices[t[1]], m.vertices[t[2]]));
+  return worst;
+}
+
+TEST(MeshRepair, PeelRimSliversRemovesObtuseRimTrianglesOnly) {
+  // A 6 × 4 grid whose vertex (3, 1) sits 0.12 above the rim edge (2, 0)–(3, 0): that rim triangle's apex angle is
+  // 153°, inside the edge's diametral ball. It is peeled; the apex becomes a rim vertex.
+  TriangleMesh m = flatGrid(6, 4);
+  const int apex = 1 * 7 + 3;
+  m.vertices[apex] = Eigen::Vector3d(2.5, 0.12, 0.0);
+  ASSERT_LT(worstQuality(m), 0.4);
+  const std::size_t faces = m.triangles.size();
+  EXPECT_EQ(peelRimSlivers(m, 0.4), 1u);
+  EXPECT_EQ(m.triangles.size(), faces - 1);
+  for (const auto& t : m.triangles) EXPECT_FALSE((t.array() == 2).any() && (t.array() == 3).any() && (t.array() == apex).any());
+  EXPECT_EQ(evaluateMesh(m).nonManifoldVertices, 0u);
+
+  // An ear below the rim: a triangle on the rim edge (2, 0)–(3, 0) whose third vertex lies 0.1 below it. Peeled,
+  // its tip in no face. A needle ear (tip 5 below, acute everywhere) is poor too, but not peeled: the rim would move
+  // in by more than half an edge.
+  for (const double depth : {0.1, 5.0}) {
+    TriangleMesh e = flatGrid(6, 4);
+    e.vertices.emplace_back(2.5, -depth, 0.0);
+    e.triangles.emplace_back(3, 2, static_cast<int>(e.vertices.size() - 1));
+    ASSERT_LT(worstQuality(e), 0.4);
+    EXPECT_EQ(peelRimSlivers(e, 0.4), depth < 1 ? 1u : 0u) << depth;
+  }
+
+  // One row of squares: the apex is on the other rim, so peeling would pinch it; nothing is peeled.
+  TriangleMesh strip = flatGrid(6, 1);
+  strip.vertices[7 + 3] = Eigen::Vector3d(2.5, 0.12, 0.0);
+  EXPECT_EQ(peelRimSlivers(strip, 0.4), 0u);
+}
+
 TEST(MeshRepair, OrientsFlippedFacesOutward) {
   PointCloud c;
   c.points = test::fibonacciSphere(1000);

@@ -145,7 +145,7 @@ int main(int argc, char** argv) {
                 << " / " << result.largeHoles.kept << " (" << result.largeHoles.verticesAdded << " vertices added; "
                 << result.largeHoles.unsupported << " kept open: the fill left the input)\n";
       std::cout << "  " << std::left << std::setw(30) << "Q<0.4 repairs moved / removed" << result.badTriangles.moved
-                << " / " << result.badTriangles.removed << "\n";
+                << " / " << result.badTriangles.removed << " (" << result.badTriangles.peeled << " rim faces peeled)\n";
       std::cout << "  " << std::left << std::setw(30) << "vertices relaxed" << result.verticesRelaxed << "\n";
       const iires::ValidityReport& v = result.validity;
       std::cout << "  " << std::left << std::setw(30) << "validity repairs" << v.intersectingPairs

@@ -82,7 +82,8 @@ std::string ReconstructResult::toJson() const {
     j.member("flips_after_filling", flipsAfterFilling).endObject();
   }
   j.key("bad_triangles").beginObject().member("vertices_moved", badTriangles.moved);
-  j.member("vertices_removed", badTriangles.removed).member("remeshed_vertices", remeshedVertices).endObject();
+  j.member("vertices_removed", badTriangles.removed).member("remeshed_vertices", remeshedVertices);
+  j.member("rim_faces_peeled", badTriangles.peeled).endObject();
   j.member("vertices_relaxed", verticesRelaxed);
   const auto holeCounts = [&](std::string_view name, const auto& h) {
     j.key(name).beginObject().member("loops", h.loops).member("filled", h.filled).member("kept", h.kept);
@@ -233,6 +234,7 @@ std::size_t closeHoles(const ReconstructParams& params, const HoleFillingParams&
       flipped += orientConsistently(result.mesh, normals).facesFlipped;  // remeshing needs it oriented
       result.remeshedVertices = remeshBadRegions(result.mesh, normals, params.repairQuality);
     }
+    result.badTriangles.peeled = peelRimSlivers(result.mesh, params.repairQuality);
   }
   result.verticesRelaxed = relaxVertices(result.mesh, normals, params.relaxSweeps, params.relaxDeviation);
   return flipped;
@@ -268,6 +270,7 @@ std::size_t repairMeshValidity(const ReconstructParams& params, const HoleFillin
       flipped += orientConsistently(result.mesh, normals).facesFlipped;
       result.remeshedVertices += remeshBadRegions(result.mesh, normals, params.repairQuality);
     }
+    result.badTriangles.peeled += peelRimSlivers(result.mesh, params.repairQuality);
     if (result.mesh.triangles != clean.triangles || result.mesh.vertices != clean.vertices) {  // a repair ran
       vp.rounds = 1;
       const ValidityReport check = repairValidity(result.mesh, normals, vp, exec, &clean);

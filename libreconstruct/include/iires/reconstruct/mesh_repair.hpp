@@ -196,10 +196,20 @@ std::size_t removeSmallComponents(TriangleMesh& mesh, std::size_t minFaces);
 std::size_t relaxVertices(TriangleMesh& mesh, const std::vector<Eigen::Vector3d>& normals, int sweeps,
                           double maxDeviation);
 
+/// @brief Remove the triangles below @p minQuality that sit on an open rim with their obtuse corner inside the rim
+/// edge's diametral ball: with one boundary edge, the corner opposite it, when that vertex is on no rim (it becomes
+/// a rim vertex, still manifold); with two (an ear), the corner between them (left in no face). A rim triangle has
+/// no neighbour to flip with, and its apex cannot move away from the rim edge without squeezing the faces behind
+/// it; the rim moves in by less than half the rim edge. Peeling exposes two edges, whose faces are looked at again
+/// (a few passes; one peel per vertex and pass, so no vertex is pinched).
+/// @return faces removed. Deterministic.
+std::size_t peelRimSlivers(TriangleMesh& mesh, double minQuality);
+
 /// @brief What repairBadTriangles() did.
 struct BadTriangleReport {
   std::size_t moved = 0;    ///< vertices moved within their tangent plane
   std::size_t removed = 0;  ///< vertices removed (their ring re-triangulated; they stay in the list, unused)
+  std::size_t peeled = 0;   ///< faces on an open rim removed (peelRimSlivers)
 };
 
 /// @brief Raise the worst triangles (Q below @p minQuality, worst first) by changing one of their vertices whose
