@@ -270,7 +270,8 @@ int main(int argc, char** argv) {
   if (!child.method.empty()) {
     child.threads = threads;
     try {
-      std::cout << "status=ok " << runMethod(child) << std::endl;
+      const std::string row = runMethod(child);  // before the status: a throw must not leave "status=ok" behind
+      std::cout << "status=ok " << row << std::endl;
     } catch (const std::exception& e) {
       std::cout << "status=error message=\"" << e.what() << "\"" << std::endl;
     }
