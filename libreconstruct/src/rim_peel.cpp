@@ -49,15 +49,20 @@ bool peelable(const TriangleMesh& mesh, const Eigen::Vector3i& t, const std::arr
 std::size_t peelRimSlivers(TriangleMesh& mesh, double minQuality) {
   std::size_t peeled = 0;
   for (int pass = 0; pass < kMaxPasses; ++pass) {
+    std::vector<std::uint32_t> poor;  // most meshes have none: then no edge map is built
+    for (std::uint32_t f = 0; f < mesh.triangles.size(); ++f) {
+      const auto& t = mesh.triangles[f];
+      if (triangleQuality(mesh.vertices[vtx(t, 0)], mesh.vertices[vtx(t, 1)], mesh.vertices[vtx(t, 2)]) < minQuality)
+        poor.push_back(f);
+    }
+    if (poor.empty()) break;
     const auto faces = detail::edgeFaces(mesh);
     std::vector<char> onRim(mesh.vertices.size(), 0), remove(mesh.triangles.size(), 0), touched(onRim.size(), 0);
     for (const auto& [key, list] : faces)
       if (list.size() == 1) onRim[key >> 32] = onRim[key & 0xffffffffu] = 1;
     std::size_t now = 0;
-    for (std::uint32_t f = 0; f < mesh.triangles.size(); ++f) {
+    for (const std::uint32_t f : poor) {
       const auto& t = mesh.triangles[f];
-      if (triangleQuality(mesh.vertices[vtx(t, 0)], mesh.vertices[vtx(t, 1)], mesh.vertices[vtx(t, 2)]) >= minQuality)
-        continue;
       std::array<bool, 3> rim{};
       for (int c = 0; c < 3; ++c) rim[c] = faces.at(detail::undirectedKey(vtx(t, c), vtx(t, (c + 1) % 3))).size() == 1;
       // Neighbouring peels in one pass could pinch a vertex between them: one peel per vertex and pass.
