@@ -63,8 +63,9 @@ double quantile(std::vector<double> values, double q) {
 /// c5 v² over the plane (a, n), at p, with the statistics liftShares() weighs it by. @p weights: the neighbours' θ_j.
 struct QuadricFit {
   bool ok = false;  ///< false: under-determined, keep the plane
-  float lift = 0;   ///< f at p (input units): the quadric's height above the plane there
-  Eigen::Vector3f slope = Eigen::Vector3f::Zero();  ///< ∇f at p in the tangent plane: the quadric's normal is n − slope
+  double move = 0;  ///< signed distance from p along n to the quadric (input units)
+  double lift = 0;  ///< f at p (input units): the quadric's height above the plane there
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero();  ///< n − ∇f at p (not normalised): the quadric's normal
   float liftVar = 0;       ///< Var(lift) / σ² under white noise σ² along n (the lift is linear in the heights)
   float heightVar = 0;     ///< Var(f(p)) / σ²: the share of white noise's variance the quadric lets through at p
   float residualVar = -1;  ///< σ² estimated from the weighted residuals (input units²; < 0: too few points to tell)
@@ -111,11 +112,12 @@ QuadricFit fitQuadric(const Eigen::Vector3d& p, const std::vector<Eigen::Vector3
   // Weighted least squares: E[Σ w r²] = σ² (Σw − tr(A⁻¹B)) with B = Σ w² m mᵀ.
   quadricNormalEquations(w2, qu, qv, qz, count, btb, unused);
   const double dof = wsum - llt.solve(btb).trace();
-  const double lift = h * m.dot(c), gu = c[1] + 2 * c[3] * pu + c[4] * pv, gv = c[2] + c[4] * pu + 2 * c[5] * pv;
-  if (!std::isfinite(lift) || !std::isfinite(gu) || !std::isfinite(gv)) return q;
+  const double f = m.dot(c), gu = c[1] + 2 * c[3] * pu + c[4] * pv, gv = c[2] + c[4] * pu + 2 * c[5] * pv;
+  q.normal = n - gu * u - gv * v;
+  if (!std::isfinite(f) || !q.normal.allFinite()) return q;
   q.ok = true;
-  q.lift = static_cast<float>(lift);
-  q.slope = (gu * u + gv * v).cast<float>();
+  q.move = h * (f - d.dot(n));  // along n only, as eq. (3)
+  q.lift = h * f;
   q.liftVar = static_cast<float>(liftVar), q.heightVar = static_cast<float>(heightVar);
   if (dof > 0.5) q.residualVar = static_cast<float>(h * h * rss / dof);
   return q;
@@ -257,7 +259,8 @@ std::vector<double> liftShares(const std::vector<QuadricFit>& fits, const SweepK
     }
   std::vector<double> keep(n, 1.0);
   const double noiseVar = quantile(std::move(residual), 0.5);
-  if (!(noiseVar > 0)) return keep;  // noise-free: the quadric everywhere
+  // Noise below a millionth of the kernel width is round-off: a noise-free cloud keeps the quadric everywhere.
+  if (!(noiseVar > 1e-12 * kernel.rows.medianH * kernel.rows.medianH)) return keep;
   const double passed = std::pow(quantile(std::move(through), 0.5), laterSweeps);
   std::vector<double> bias2(n, 0.0), next(n, 0.0);
   for (std::size_t i = 0; i < n; ++i)
@@ -284,12 +287,15 @@ std::vector<double> liftShares(const std::vector<QuadricFit>& fits, const SweepK
 
 /// One projection sweep (eq. 1–3) of every point of @p kernel.points: @p next (@p cur when !@p move) and the fitted
 /// @p nextNormals; @p laterSweeps: how many sweeps follow this one (liftShares()).
-void projectSweep(const SweepKernel& kernel, int degree, int laterSweeps, bool move, int threads,
-                  std::vector<Eigen::Vector3d>& next, std::vector<Eigen::Vector3d>& nextNormals) {
+/// @return the noise probe: the mean distance from the points to their fits (the quadric's where it was fitted,
+/// before liftShares() weighs it), which the sweeps' noise tests are calibrated on
+double projectSweep(const SweepKernel& kernel, int degree, int laterSweeps, bool move, int threads,
+                    std::vector<Eigen::Vector3d>& next, std::vector<Eigen::Vector3d>& nextNormals) {
   const Rows& rows = kernel.rows;
   const std::vector<Eigen::Vector3d>& cur = kernel.points;
   const std::size_t n = cur.size();
   std::vector<QuadricFit> fits(degree == 2 ? n : 0);
+  std::vector<double> fitDistance(n);
   parallelFor(n, threads, [&](std::size_t i) {
     const std::uint32_t* nb = rows.nbr.data() + i * rows.stride;
     const std::size_t count = rows.found[i];
@@ -306,19 +312,26 @@ void projectSweep(const SweepKernel& kernel, int degree, int laterSweeps, bool m
     const MlsPlane plane = fitWeightedPlane(cur, nb, count, w, wn, nullptr, kernel.normals[i], 0.0);
     next[i] = move ? projectOntoPlane(cur[i], plane) : cur[i];  // eq. (3)
     nextNormals[i] = plane.normal;
-    if (degree == 2) fits[i] = fitQuadric(cur[i], cur, nb, count, theta, rows.h[i], plane);
+    fitDistance[i] = std::abs(plane.normal.dot(plane.centre - cur[i]));
+    if (degree == 2) {
+      fits[i] = fitQuadric(cur[i], cur, nb, count, theta, rows.h[i], plane);
+      if (fits[i].ok) fitDistance[i] = std::abs(fits[i].move);
+    }
   });
-  if (degree != 2) return;
+  const double probe = std::accumulate(fitDistance.begin(), fitDistance.end(), 0.0) / static_cast<double>(n);
+  if (degree != 2) return probe;
   // Degree 2: along the plane's normal onto the quadric, by the share of its lift the data support.
   const std::vector<double> keep = liftShares(fits, kernel, laterSweeps, threads);
   parallelFor(n, threads, [&](std::size_t i) {
     const QuadricFit& f = fits[i];
     if (!f.ok) return;
-    const Eigen::Vector3d normal = (nextNormals[i] - keep[i] * f.slope.cast<double>()).normalized();
+    const Eigen::Vector3d& na = nextNormals[i];  // the plane's normal n_a
+    const Eigen::Vector3d normal = (keep[i] == 1.0 ? f.normal : na + keep[i] * (f.normal - na)).normalized();
     if (!normal.allFinite()) return;
-    if (move) next[i] += keep[i] * static_cast<double>(f.lift) * nextNormals[i];
+    if (move) next[i] = keep[i] == 1.0 ? cur[i] + f.move * na : next[i] + keep[i] * f.lift * na;
     nextNormals[i] = normal;
   });
+  return probe;
 }
 
 }  // namespace
@@ -385,7 +398,6 @@ DenoiseResult denoise(const PointCloud& input, const DenoiseParams& params, cons
   result.neighbourSeconds = std::chrono::duration<double>(sweepStart - start).count();
 
   std::vector<Eigen::Vector3d> cur = in, normals = inNormals, next(n), nextNormals(n);
-  std::vector<double> moved(n);
   const double sharp = params.sharpnessAngle > 0 ? 1.0 - std::cos(params.sharpnessAngle * M_PI / 180.0) : 0.0;
   const double invSharp2 = sharp > 0 ? 1.0 / (sharp * sharp) : 0.0;
   const int sweeps = std::max(1, params.iterations);  // at least one fit, for the normals
@@ -393,14 +405,13 @@ DenoiseResult denoise(const PointCloud& input, const DenoiseParams& params, cons
   for (int it = 0; it < sweeps; ++it) {
     const bool useBilateral = sharp > 0 && ((given && !probing) || it > 0);
     const SweepKernel kernel{rows, cur, normals, useBilateral, given, invSharp2};
-    projectSweep(kernel, params.degree, sweeps - 1 - it, params.iterations > 0, exec.threads, next, nextNormals);
-    for (std::size_t i = 0; i < n; ++i) moved[i] = (next[i] - cur[i]).norm();
+    const double meanMove =
+        projectSweep(kernel, params.degree, sweeps - 1 - it, params.iterations > 0, exec.threads, next, nextNormals);
     // Without given normals the first sweep's normals are unoriented; the bilateral term uses |n_j·n_p|,
     // and later sweeps orient each fit like the point's previous normal, so the sign only needs fixing
     // once at the end.
     normals.swap(nextNormals);
     if (params.iterations == 0) break;
-    const double meanMove = std::accumulate(moved.begin(), moved.end(), 0.0) / static_cast<double>(n);
     // Noise as wide as the kernel: the fits follow it. Again from the input with a kernel twice as wide (four
     // times the points; Euclidean rows: a table's filtered rows are too short), where the caps leave room.
     if (it == 0 && !widened && wideKernel > kernelK && meanMove * kNoiseKernelRatio > rows.medianH) {

@@ -71,10 +71,10 @@ struct DenoiseParams {
   /// In degrees, in (0, 90]; 0 switches the term off. 45: fandisk (100k points, noise 0.33·l) error within 2·l of the sharp edges 3.95 → 2.75
   /// ×10⁻⁴ diagonal (CGAL bilateral 3.08), mean error 2.00 → 1.85; bunny00 1.70 → 1.71.
   double sharpnessAngle = 45.0;
-  /// Noise probe: when the first sweep moves the points by less than this many input spacings (mean distance to
-  /// the nearest neighbour) on average,
-  /// the input is already clean; its positions are kept (the fitted normals are still returned) and no
-  /// further sweep runs, since smoothing a clean cloud only erodes tight curvature. 0 = off.
+  /// Noise probe: when the first sweep's fits (the quadric's in full, before its shrinkage) lie less than this many
+  /// input spacings (mean distance to the nearest neighbour) from the points on average, the input is already
+  /// clean; its positions are kept (the fitted normals are still returned) and no further sweep runs, since
+  /// smoothing a clean cloud only erodes tight curvature. 0 = off.
   double cleanDisplacement = 0.0;
   /// Normals given with the input are data: a clean input (see cleanDisplacement) keeps them as given. false:
   /// they were estimates (the sheet rule's PCA over 16 neighbours): a probe sweep without the bilateral term
