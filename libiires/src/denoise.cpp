@@ -287,9 +287,11 @@ std::vector<double> liftShares(const std::vector<QuadricFit>& fits, const SweepK
 
 /// One projection sweep (eq. 1–3) of every point of @p kernel.points: @p next (@p cur when !@p move) and the fitted
 /// @p nextNormals; @p laterSweeps: how many sweeps follow this one (liftShares()).
+/// A probe below @p cleanBelow says the input is clean (the caller keeps its positions): the full quadric's normals
+/// are returned, as for a noise-free cloud, and liftShares() is not run.
 /// @return the noise probe: the mean distance from the points to their fits (the quadric's where it was fitted,
 /// before liftShares() weighs it), which the sweeps' noise tests are calibrated on
-double projectSweep(const SweepKernel& kernel, int degree, int laterSweeps, bool move, int threads,
+double projectSweep(const SweepKernel& kernel, int degree, int laterSweeps, bool move, double cleanBelow, int threads,
                     std::vector<Eigen::Vector3d>& next, std::vector<Eigen::Vector3d>& nextNormals) {
   const Rows& rows = kernel.rows;
   const std::vector<Eigen::Vector3d>& cur = kernel.points;
@@ -321,7 +323,8 @@ double projectSweep(const SweepKernel& kernel, int degree, int laterSweeps, bool
   const double probe = std::accumulate(fitDistance.begin(), fitDistance.end(), 0.0) / static_cast<double>(n);
   if (degree != 2) return probe;
   // Degree 2: along the plane's normal onto the quadric, by the share of its lift the data support.
-  const std::vector<double> keep = liftShares(fits, kernel, laterSweeps, threads);
+  const std::vector<double> keep =
+      probe < cleanBelow ? std::vector<double>(n, 1.0) : liftShares(fits, kernel, laterSweeps, threads);
   parallelFor(n, threads, [&](std::size_t i) {
     const QuadricFit& f = fits[i];
     if (!f.ok) return;
@@ -405,8 +408,9 @@ DenoiseResult denoise(const PointCloud& input, const DenoiseParams& params, cons
   for (int it = 0; it < sweeps; ++it) {
     const bool useBilateral = sharp > 0 && ((given && !probing) || it > 0);
     const SweepKernel kernel{rows, cur, normals, useBilateral, given, invSharp2};
-    const double meanMove =
-        projectSweep(kernel, params.degree, sweeps - 1 - it, params.iterations > 0, exec.threads, next, nextNormals);
+    const double cleanBelow = it == 0 && params.iterations > 0 ? params.cleanDisplacement * rows.spacing : 0.0;
+    const double meanMove = projectSweep(kernel, params.degree, sweeps - 1 - it, params.iterations > 0, cleanBelow,
+                                         exec.threads, next, nextNormals);
     // Without given normals the first sweep's normals are unoriented; the bilateral term uses |n_j·n_p|,
     // and later sweeps orient each fit like the point's previous normal, so the sign only needs fixing
     // once at the end.
