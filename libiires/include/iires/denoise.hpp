@@ -59,7 +59,8 @@ struct DenoiseParams {
   /// 2 = the same move along n_a, onto a θ-weighted quadric height field over that plane, which removes the
   /// plane's shrinkage on curved parts (≈ κh²/4 per sweep) so sweeps do not erode the shape (noise-free
   /// bunny00, 100k points, 3 sweeps of 16 neighbours: error 0.077·l with the plane, 0.010·l with the
-  /// quadric).
+  /// quadric). The quadric's height at p has several times the plane's variance, so the move onto it is shrunk
+  /// towards the plane by how far its lift stands out of the noise (empirical Bayes; denoise()).
   int degree = 2;
   /// Bilateral normal term, so a fit does not average across a sharp edge: every weight of the sweep is
   /// multiplied by exp(−(1 − |n_j·n_p|)² / σ²) with σ = 1 − cos(sharpnessAngle) in the covariance's wide
@@ -70,10 +71,10 @@ struct DenoiseParams {
   /// In degrees, in (0, 90]; 0 switches the term off. 45: fandisk (100k points, noise 0.33·l) error within 2·l of the sharp edges 3.95 → 2.75
   /// ×10⁻⁴ diagonal (CGAL bilateral 3.08), mean error 2.00 → 1.85; bunny00 1.70 → 1.71.
   double sharpnessAngle = 45.0;
-  /// Noise probe: when the first sweep moves the points by less than this many input spacings (mean distance to
-  /// the nearest neighbour) on average,
-  /// the input is already clean; its positions are kept (the fitted normals are still returned) and no
-  /// further sweep runs, since smoothing a clean cloud only erodes tight curvature. 0 = off.
+  /// Noise probe: when the first sweep's fits (the quadric's in full, before its shrinkage) lie less than this many
+  /// input spacings (mean distance to the nearest neighbour) from the points on average, the input is already
+  /// clean; its positions are kept (the fitted normals are still returned) and no further sweep runs, since
+  /// smoothing a clean cloud only erodes tight curvature. 0 = off.
   double cleanDisplacement = 0.0;
   /// Normals given with the input are data: a clean input (see cleanDisplacement) keeps them as given. false:
   /// they were estimates (the sheet rule's PCA over 16 neighbours): a probe sweep without the bilateral term
@@ -111,7 +112,10 @@ std::size_t denoiseNeighbours(const DenoiseParams& params);
 /// θ_j = exp(−|p_j − p|² / h²) (eq. 2, h = the robust kernel width of p), a(p) = Σ θ_j p_j / Σ θ_j (eq. 1),
 /// n_a = the eigenvector of the smallest eigenvalue of the weighted covariance around a (weights with width
 /// 2h, for a steady normal), and p' = p + n_a n_aᵀ (a(p) − p) (eq. 3): the point moves along n_a only, onto
-/// the local weighted plane (degree 1) or onto the θ-weighted quadric height field over it (degree 2).
+/// the local weighted plane (degree 1) or towards the θ-weighted quadric height field over it (degree 2), by the
+/// share b²/(b² + c σ² v) of the quadric's lift d above the plane: σ² the median residual variance of the fits,
+/// σ² v the lift's variance, b² ≈ d² − σ² v its squared bias averaged over the neighbours, c the share of the
+/// sweep's noise variance the later sweeps let through (σ² = 0 keeps the full quadric).
 /// The normals of the output come out of the last sweep's fit (n_a, or the quadric's normal at p'),
 /// oriented like the input normals when given, else by minimum-spanning-tree propagation over the k-NN graph
 /// already found (orientNormals()). Internally the points are processed in Morton order (cache locality).
