@@ -90,11 +90,23 @@ QuadricFit fitQuadric(const Eigen::Vector3d& p, const std::vector<Eigen::Vector3
   Eigen::Matrix<double, 6, 1> atb, unused;
   quadricNormalEquations(weights, qu, qv, qz, count, ata, atb);
   for (int r = 3; r < 6; ++r) ata(r, r) += 1e-2 * wsum;  // ridge on the curvature terms: flat if unsure
-  const Eigen::LLT<Eigen::Matrix<double, 6, 6>> llt(ata);  // positive definite with the ridge
-  if (llt.info() != Eigen::Success) return q;
-  const Eigen::Matrix<double, 6, 1> c = llt.solve(atb);
-  const Eigen::Vector3d d = (p - plane.centre) * invH;
+  // Positive definite with the ridge: Cholesky, with the pivoting LDLT as fallback (as in MlsSurface; then no
+  // statistics: the full quadric is kept).
+  const Eigen::LLT<Eigen::Matrix<double, 6, 6>> llt(ata);
+  const bool cholesky = llt.info() == Eigen::Success;
+  const Eigen::Matrix<double, 6, 1> c =
+      cholesky ? Eigen::Matrix<double, 6, 1>(llt.solve(atb)) : ata.ldlt().solve(atb).eval();
+  if (!c.allFinite()) return q;
+  const Eigen::Vector3d d = (p - plane.centre) / h;
   const double pu = d.dot(u), pv = d.dot(v);
+  const double f = c[0] + c[1] * pu + c[2] * pv + c[3] * pu * pu + c[4] * pu * pv + c[5] * pv * pv;
+  const double gu = c[1] + 2 * c[3] * pu + c[4] * pv, gv = c[2] + c[4] * pu + 2 * c[5] * pv;
+  q.normal = n - gu * u - gv * v;
+  if (!std::isfinite(f) || !q.normal.allFinite()) return q;
+  q.ok = true;
+  q.move = h * (f - d.dot(n));  // along n only, as eq. (3)
+  q.lift = h * f;
+  if (!cholesky) return q;
   Eigen::Matrix<double, 6, 1> m;
   m << 1, pu, pv, pu * pu, pu * pv, pv * pv;
   // f(p) = mᵀ c = Σ_j a_j z_j with a_j = w_j m_jᵀ A⁻¹ m; the plane's height at p is Σ_j (w_j / Σw) z_j (a is the
@@ -112,12 +124,6 @@ QuadricFit fitQuadric(const Eigen::Vector3d& p, const std::vector<Eigen::Vector3
   // Weighted least squares: E[Σ w r²] = σ² (Σw − tr(A⁻¹B)) with B = Σ w² m mᵀ.
   quadricNormalEquations(w2, qu, qv, qz, count, btb, unused);
   const double dof = wsum - llt.solve(btb).trace();
-  const double f = m.dot(c), gu = c[1] + 2 * c[3] * pu + c[4] * pv, gv = c[2] + c[4] * pu + 2 * c[5] * pv;
-  q.normal = n - gu * u - gv * v;
-  if (!std::isfinite(f) || !q.normal.allFinite()) return q;
-  q.ok = true;
-  q.move = h * (f - d.dot(n));  // along n only, as eq. (3)
-  q.lift = h * f;
   q.liftVar = static_cast<float>(liftVar), q.heightVar = static_cast<float>(heightVar);
   if (dof > 0.5) q.residualVar = static_cast<float>(h * h * rss / dof);
   return q;

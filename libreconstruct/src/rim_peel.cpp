@@ -26,7 +26,7 @@ bool obtuseAt(const Eigen::Vector3d& o, const Eigen::Vector3d& x, const Eigen::V
   return (x - o).dot(y - o) < 0;
 }
 
-/// Whether face @p f is to be peeled. @p rim: its corners' edges (c, c + 1) used by it alone; @p onRim: per vertex,
+/// Whether face @p t is to be peeled. @p rim: its corners' edges (c, c + 1) used by it alone; @p onRim: per vertex,
 /// whether it ends a boundary edge. One rim edge: the opposite corner must be obtuse (inside the edge's diametral
 /// ball) and on no rim (it becomes a rim vertex and stays manifold). Two rim edges (an ear): the corner between them
 /// obtuse; it is left in no face.
