@@ -251,19 +251,16 @@ LargeHoleReport fillLargeHoles(TriangleMesh& mesh, std::vector<Eigen::Vector3d>&
       continue;
     }
     Mesh refined = sm;
-    const bool filled = finishPatch(sm, fill, patch, true, params, input);
-    if (filled) {
-      const double faired = addedShortfall(sm, nv) - shortfallBefore;
-      if (faired > kRefairShortfall) {
-        Mesh fairedMesh = std::move(sm);
-        sm = std::move(refined);
-        if (!finishPatch(sm, fill, patch, false, params, input) || addedShortfall(sm, nv) - shortfallBefore >= faired)
-          sm = std::move(fairedMesh);
-      }
-    }
-    if (!filled) {
+    if (!finishPatch(sm, fill, patch, true, params, input)) {
       ++report.kept, ++report.unsupported;
       continue;
+    }
+    const double faired = addedShortfall(sm, nv) - shortfallBefore;
+    if (faired > kRefairShortfall) {
+      Mesh fairedMesh = std::move(sm);
+      sm = std::move(refined);
+      if (!finishPatch(sm, fill, patch, false, params, input) || addedShortfall(sm, nv) - shortfallBefore >= faired)
+        sm = std::move(fairedMesh);
     }
     ++report.filled;
   }
