@@ -31,6 +31,10 @@ constexpr double kBeyondLimit = 0.05;
 // the cloud: at the rim corner of a plate a few spacings thick a quadric fit extrapolates 1–3 input spacings
 // out. Looser than kOffSurfaceLimit, which a clean 5× density gradient's sparse side reaches (h capped there).
 constexpr double kCollapseOffLimit = 1.0;
+// A split's midpoint projected farther than this × the chord from where it was: the chord cuts across a bore, a
+// recess or a gap rather than spanning a stretch of surface (a surface's sagitta over a chord L is L²/8R: a quarter
+// of L means a radius under 5L/8).
+constexpr double kSplitSagitta = 0.25;
 constexpr double kCarryShare = 0.05;     // edits touching more than this share of samples restart the relaxation
 constexpr std::size_t kWiderQuery = 3;   // candidates queried for a sample the rule refuses some of
 constexpr double kCellSheetHeight = 1.25;  // voxel cells: another sheet lies this × the sheet height off a plane
@@ -382,7 +386,9 @@ EditMap Resampler::splitAndCollapse(Samples& s, const std::vector<Edge>& sorted,
       pos[c] = surface_.project(0.5 * (s.pos[e.a] + s.pos[e.b]), &nrm[c], &off[c], &s.nrm[e.a], nullptr, 0, &out[c]);
     });
     for (std::size_t c = 0; c < batch.size() && newPos.size() < splits; ++c)
-      if (off[c] <= kOffSurfaceLimit && out[c] <= kBeyondLimit) {
+      if (off[c] <= kOffSurfaceLimit && out[c] <= kBeyondLimit &&
+          (pos[c] - 0.5 * (s.pos[batch[c]->a] + s.pos[batch[c]->b])).norm() <=
+              kSplitSagitta * (s.pos[batch[c]->a] - s.pos[batch[c]->b]).norm()) {
         newPos.push_back(pos[c]), newNrm.push_back(nrm[c]);
         map.touched.push_back(batch[c]->a), map.touched.push_back(batch[c]->b);
       }
