@@ -112,8 +112,8 @@ TEST(NoisySphere, NoTwoOutputPointsCoincide) {
 
 // A CAD part sampled sparsely (joint, 3,000 points) with normals from a tool that does not orient them, upsampled
 // ten times: the midpoints of chords across its bores and recesses projected up to four edges away from their
-// chord (1,700 splits moved over 0.3 edges), and one sample ended three output spacings off the part: the run
-// failed. A split whose midpoint moves farther than its chord is long is not made (another edge is split).
+// chord (about 1,700 splits moved over 0.3 edges), and samples ended more than three output spacings off the part:
+// the run failed. A split whose midpoint moves farther than its chord is long is not made (another edge is split).
 TEST(SparseCad, UpsampledTenTimesWithUnorientedNormals) {
   iires::MeshSamplingParams sp;
   sp.count = 3000;
