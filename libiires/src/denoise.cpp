@@ -337,6 +337,8 @@ double projectSweep(const SweepKernel& kernel, int degree, int laterSweeps, bool
     const Eigen::Vector3d& na = nextNormals[i];  // the plane's normal n_a
     const Eigen::Vector3d normal = (keep[i] == 1.0 ? f.normal : na + keep[i] * (f.normal - na)).normalized();
     if (!normal.allFinite()) return;
+    // keep = 1 moves by the quadric's own arithmetic, so a clean input's positions and normals stay bit for bit
+    // those of the unshrunk quadric (the resampler and the mesher follow round-off).
     if (move) next[i] = keep[i] == 1.0 ? cur[i] + f.move * na : next[i] + keep[i] * f.lift * na;
     nextNormals[i] = normal;
   });

@@ -387,13 +387,14 @@ EditMap Resampler::splitAndCollapse(Samples& s, const std::vector<Edge>& sorted,
       const Edge& e = *batch[c];
       pos[c] = surface_.project(0.5 * (s.pos[e.a] + s.pos[e.b]), &nrm[c], &off[c], &s.nrm[e.a], nullptr, 0, &out[c]);
     });
-    for (std::size_t c = 0; c < batch.size() && newPos.size() < splits; ++c)
+    for (std::size_t c = 0; c < batch.size() && newPos.size() < splits; ++c) {
+      const Eigen::Vector3d &a = s.pos[batch[c]->a], &b = s.pos[batch[c]->b];
       if (off[c] <= kOffSurfaceLimit && out[c] <= kBeyondLimit &&
-          (pos[c] - 0.5 * (s.pos[batch[c]->a] + s.pos[batch[c]->b])).norm() <=
-              kSplitSagitta * (s.pos[batch[c]->a] - s.pos[batch[c]->b]).norm()) {
+          (pos[c] - 0.5 * (a + b)).norm() <= kSplitSagitta * (a - b).norm()) {
         newPos.push_back(pos[c]), newNrm.push_back(nrm[c]);
         map.touched.push_back(batch[c]->a), map.touched.push_back(batch[c]->b);
       }
+    }
   }
   std::vector<char> touched(s.size(), 0), removed(s.size(), 0);
   std::size_t collapsed = 0;
