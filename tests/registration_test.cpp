@@ -238,14 +238,15 @@ TEST(Registration, FortyPercentCutPlacedFromItsOpenSide) {
 
 TEST(Registration, FortyPercentCutNeedsEnoughCoarseSurvivors) {
   // The coarse pass ranks rotations by the energy of point subsets at a few offsets: for a scan missing 40 %
-  // the true rotation can rank below the 48th (one case of 72 drawn once on six models, kept to full precision;
-  // with 48 survivors it lands 143° off). 96 survivors reach it; the registration benchmark measures the
-  // aggregate (a case the other way round exists too: armadillo, 1 of 72).
+  // the true rotation can rank below the 48th (one case of 70 drawn on joint — scale in [0.74, 1.35], angle in
+  // [90°, 180°], random axis and cut — kept to full precision; with 48 survivors it lands 142° off; 3 of the 70
+  // were such cases). 96 survivors reach it; the registration benchmark measures the aggregate. The case depends
+  // on the resampled clouds: it is drawn again when the resampling changes.
   const PointCloud full = scan("joint", 6000, 110), target = scan("joint", 20000, 210);
   const Eigen::Matrix4d pose =
-      similarity(1.0436765137657114, 164.37076591528466,
-                 {0.30628667522094943, -0.11037885764048316, 0.37197521713334059}, Eigen::Vector3d(1, -2, 0.5));
-  const Eigen::Vector3d normal(0.75374873333307835, -0.24130028776378099, -0.77030503910254833);
+      similarity(0.95290730786594036, 106.6648775503902,
+                 {-2.4429129174141377, -0.44217888577015479, -2.0687104211513487}, Eigen::Vector3d(1, -2, 0.5));
+  const Eigen::Vector3d normal(1.0296174289647053, 0.30325142281386985, -1.2488792433109159);
   const PointCloud source = moved(cutByPlane(full, normal, 0.4), pose);
   const auto r = registerClouds(source, target, fast());
   expectRecovered(r, pose.inverse(), source, target, "40 % cut, joint");

@@ -14,6 +14,7 @@
 #include "iires/knn.hpp"
 #include "iires/detail/parallel.hpp"
 #include "iires/detail/radix_sort.hpp"
+#include "patch_orientation.hpp"
 
 namespace iires {
 namespace {
@@ -36,11 +37,13 @@ std::vector<std::uint32_t> knnLists(const std::vector<Eigen::Vector3d>& points, 
 /// Orientation over a minimum spanning tree of the symmetric k-NN graph (j among i's first @p k neighbours
 /// nbr[i·stride, i·stride + k), or i among j's; entries equal to i — itself, padding — skipped) on the weights
 /// 1 − |nᵢ·nⱼ|, each normal flipped to agree with its tree parent. Kruskal: the edges (each once) sorted by
-/// weight, ties by their order in the lists, so the tree is unique; then per component a walk from its root.
-/// With @p sides, each component then takes the side most of those vectors are on.
+/// weight, ties by their order in the lists, so the tree is unique; then per component a walk from its first point.
+/// The patches the tree could only guess across are then settled by orientPatchesByField, and each component takes
+/// the side most of @p sides are on, or its point of largest x faces +x.
 void orientOverGraph(const std::vector<Eigen::Vector3d>& points, std::vector<Eigen::Vector3d>& normals,
                      const std::vector<std::uint32_t>& nbr, std::size_t stride, std::size_t k, int threads,
-                     bool acrossEdge = false, const std::vector<Eigen::Vector3d>* sides = nullptr) {
+                     bool acrossEdge = false, const std::vector<Eigen::Vector3d>* sides = nullptr,
+                     const OrientationEvidence* evidence = nullptr) {
   const std::size_t n = points.size();
   if (n == 0) return;
   auto listed = [&](std::uint32_t i, std::uint32_t j) {  // j among i's first k
@@ -100,8 +103,7 @@ void orientOverGraph(const std::vector<Eigen::Vector3d>& points, std::vector<Eig
   std::vector<char> done(n, 0);
   std::vector<std::uint32_t> queue;
   queue.reserve(n);
-  auto walk = [&](std::uint32_t root) {  // root's component, its normal made to face +x
-    if (normals[root].x() < 0) normals[root] = -normals[root];
+  auto walk = [&](std::uint32_t root) {  // each normal made to agree with its tree parent
     done[root] = 1;
     queue.assign(1, root);
     for (std::size_t q = 0; q < queue.size(); ++q) {
@@ -114,27 +116,30 @@ void orientOverGraph(const std::vector<Eigen::Vector3d>& points, std::vector<Eig
         queue.push_back(t);
       }
     }
-    if (!sides) return;
-    long long vote = 0;  // the component's normals on the side of @p sides minus those against it
-    for (std::uint32_t v : queue) vote += normals[v].dot((*sides)[v]) < 0 ? -1 : 1;
-    if (vote < 0)
-      for (std::uint32_t v : queue) normals[v] = -normals[v];
   };
-  // Roots in decreasing x, so each component starts at its extreme point: the largest x first; the points its
-  // tree leaves (other components) are sorted only when there are any.
+  for (std::uint32_t i = 0; i < n; ++i)
+    if (!done[i]) walk(i);
+  // Faces the tree could only guess across (a crease a sparse sampling does not resolve) turned to agree with the
+  // rest of their part.
+  detail::orientPatchesByField(points, normals, nbr, stride, k, evidence ? *evidence : OrientationEvidence{nbr, stride},
+                               threads);
+  // Each component then faces the side most of @p sides are on, or its point of largest x faces +x.
   auto higher = [&](std::uint32_t a, std::uint32_t b) {
     return std::make_tuple(-points[a].x(), a) < std::make_tuple(-points[b].x(), b);
   };
-  std::uint32_t first = 0;
-  for (std::uint32_t i = 1; i < n; ++i)
-    if (higher(i, first)) first = i;
-  walk(first);
-  std::vector<std::uint32_t> rest;
+  std::vector<std::uint32_t> extreme(n, std::numeric_limits<std::uint32_t>::max());
+  std::vector<long long> vote(n, 0);  // the component's normals on the side of @p sides minus those against it
+  for (std::uint32_t i = 0; i < n; ++i) {
+    const std::uint32_t c = sets.find(i);
+    if (extreme[c] == std::numeric_limits<std::uint32_t>::max() || higher(i, extreme[c])) extreme[c] = i;
+    if (sides) vote[c] += normals[i].dot((*sides)[i]) < 0 ? -1 : 1;
+  }
+  std::vector<char> turn(n, 0);
+  for (std::uint32_t c = 0; c < n; ++c)
+    if (extreme[c] != std::numeric_limits<std::uint32_t>::max())
+      turn[c] = sides ? vote[c] < 0 : normals[extreme[c]].x() < 0;
   for (std::uint32_t i = 0; i < n; ++i)
-    if (!done[i]) rest.push_back(i);
-  std::sort(rest.begin(), rest.end(), higher);
-  for (std::uint32_t root : rest)
-    if (!done[root]) walk(root);
+    if (turn[sets.find(i)]) normals[i] = -normals[i];
 }
 
 /// orientAcrossCreases: normals whose lines differ by more than asin(this) (15°) meet at a crease.
@@ -247,8 +252,9 @@ void orientNormals(const std::vector<Eigen::Vector3d>& points, std::vector<Eigen
 
 void orientNormals(const std::vector<Eigen::Vector3d>& points, std::vector<Eigen::Vector3d>& normals,
                    const std::vector<std::uint32_t>& neighbours, std::size_t stride, std::size_t k, int threads,
-                   bool acrossEdge, const std::vector<Eigen::Vector3d>* sides) {
-  orientOverGraph(points, normals, neighbours, stride, std::min(k, stride), threads, acrossEdge, sides);
+                   bool acrossEdge, const std::vector<Eigen::Vector3d>* sides,
+                   const OrientationEvidence* evidence) {
+  orientOverGraph(points, normals, neighbours, stride, std::min(k, stride), threads, acrossEdge, sides, evidence);
 }
 
 void orientAcrossCreases(const std::vector<Eigen::Vector3d>& points, std::vector<Eigen::Vector3d>& normals,

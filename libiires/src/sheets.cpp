@@ -383,7 +383,14 @@ void orientSheets(SheetState& st, const NeighbourTable& table, bool given, int t
     guide[i] = pcaNormal(st.points, i, idx.data(), f, st.normals[i]);
     for (std::size_t a = 0; a < orientK; ++a) graph[i * orientK + a] = a < f ? idx[a] : static_cast<std::uint32_t>(i);
   });
-  orientNormals(st.points, guide, graph, orientK, orientK, threads, true, given ? &st.normals : nullptr);
+  // The patches' evidence: the rows before the rule filtered them (a thin part's two sides included), with the pairs
+  // the rule puts across a gap.
+  std::vector<std::uint8_t> apart(st.n * st.K, 0);
+  parallelFor(st.n, threads, [&](std::size_t i) {
+    for (std::size_t a = 0; a < st.found[i]; ++a) apart[i * st.K + a] = !st.final(i, st.row(i)[a]);
+  });
+  const OrientationEvidence evidence{st.rows, st.K, &apart};
+  orientNormals(st.points, guide, graph, orientK, orientK, threads, true, given ? &st.normals : nullptr, &evidence);
   parallelFor(st.n, threads, [&](std::size_t i) {
     if (st.normals[i].dot(guide[i]) < 0) st.normals[i] = -st.normals[i];
   });

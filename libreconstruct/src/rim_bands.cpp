@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // closeRimBands(): the rim of a part thinner than the mesh's edges closed by a band of triangles between the two
-// boundary loops that run side by side along it.
+// boundary loops that run side by side along it, or between the two sides of a slit along it.
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
@@ -21,11 +21,15 @@ namespace {
 using detail::undirectedKey;
 
 constexpr double kPartnerEdges = 1.5;  ///< a loop vertex's partner on the other loop: within this × the mean edge
-constexpr double kPathEdges = 3.0;     ///< ... and joined to it along the input by a path at most this long
+/// ... and joined to it along the input by a path at most this long: along a rim a few input spacings wide the input's
+/// graph is thin (a rim point's neighbours are mostly the faces'), and the path may detour; two sheets with no rim
+/// between them are joined only round their far end.
+constexpr double kPathEdges = 5.0;
 constexpr double kMatchedShare = 0.9;  ///< two loops run side by side: this share of each one's vertices matched
 constexpr double kMinBandQuality = 0.05;  ///< a band with a flatter triangle is not added
 constexpr int kMaxPasses = 8;             ///< passes (a pass that turns a part over starts the next)
 constexpr std::size_t kMaxVisited = 4096; ///< input points one path search visits at most
+constexpr std::size_t kSlitSteps = 3;     ///< a loop's vertex partners with its own loop this many steps along or more
 
 /// Whether the input's surface graph joins @p a and @p b (through the input points nearest to them) by a path of
 /// at most @p maxPath, the gaps to the first and from the last point included: A* on the graph. Two sheets facing
@@ -109,8 +113,8 @@ Boundary boundaryOf(const TriangleMesh& mesh) {
   return out;
 }
 
-/// For each vertex of each loop, the nearest vertex of another loop within @p radius: (loop, position) or
-/// (npos, 0).
+/// For each vertex of each loop, the nearest vertex within @p radius of another loop, or of its own at least
+/// kSlitSteps along it (across a slit): (loop, position) or (npos, 0).
 std::vector<std::vector<std::pair<std::size_t, std::size_t>>> partners(const TriangleMesh& mesh, const Boundary& b,
                                                                          double radius) {
   std::vector<Eigen::Vector3d> points;
@@ -126,11 +130,14 @@ std::vector<std::vector<std::pair<std::size_t, std::size_t>>> partners(const Tri
     for (std::size_t p = 0; p < b.loops[l].size(); ++p, ++k) {
       std::pair<std::size_t, std::size_t> found{std::string::npos, 0};
       index.radius(points[k], radius, idx, sq);
-      for (std::uint32_t q : idx)  // nearest first
-        if (owner[q].first != l) {
+      const std::size_t n = b.loops[l].size();
+      for (std::uint32_t q : idx) {  // nearest first
+        const std::size_t along = owner[q].second > p ? owner[q].second - p : p - owner[q].second;
+        if (owner[q].first != l || std::min(along, n - along) >= kSlitSteps) {
           found = owner[q];
           break;
         }
+      }
       out[l].push_back(found);
     }
   return out;
@@ -170,6 +177,44 @@ std::vector<Eigen::Vector3i> zipBand(const TriangleMesh& mesh, const std::vector
   return faces;
 }
 
+/// The band across a slit: loop @p a (in its faces' direction) running out along a thin rim and back, its two sides
+/// side by side. Zipped from vertex @p i0 and its partner @p j0 on the far side towards both ends, where the sides
+/// meet: from (i0, j0) forwards on one side and backwards on the other, then from (j0, i0) likewise; each step as
+/// zipBand's, the last triangle of each half closing its end. Empty when a triangle would be nearly flat or an
+/// edge across exists already.
+std::vector<Eigen::Vector3i> zipSlit(const TriangleMesh& mesh, const std::vector<std::uint32_t>& a, std::size_t i0,
+                                     std::size_t j0, const detail::EdgeCounts& edges) {
+  const std::size_t n = a.size();
+  const auto& P = mesh.vertices;
+  auto dist = [&](std::uint32_t u, std::uint32_t v) { return (P[u] - P[v]).norm(); };
+  auto flat = [&](const Eigen::Vector3i& f) {
+    return triangleQuality(P[static_cast<std::size_t>(f[0])], P[static_cast<std::size_t>(f[1])],
+                           P[static_cast<std::size_t>(f[2])]) < kMinBandQuality;
+  };
+  std::vector<Eigen::Vector3i> faces;
+  std::unordered_set<std::uint64_t> across{undirectedKey(a[i0], a[j0])};
+  for (const auto& [start, end] : {std::pair{i0, j0}, std::pair{j0, i0}}) {
+    // The open end between them: a[start], a[start + 1], …, a[end] forwards along the loop.
+    std::size_t i = start, j = end, left = (end + n - start) % n + 1;
+    auto next = [&](std::size_t x) { return (x + 1) % n; };
+    auto prev = [&](std::size_t x) { return (x + n - 1) % n; };
+    while (left >= 3) {
+      const Eigen::Vector3i onA(static_cast<int>(a[next(i)]), static_cast<int>(a[i]), static_cast<int>(a[j]));
+      const Eigen::Vector3i onB(static_cast<int>(a[j]), static_cast<int>(a[prev(j)]), static_cast<int>(a[i]));
+      bool stepA = left == 3 || dist(a[next(i)], a[j]) <= dist(a[i], a[prev(j)]);
+      if (left > 3 && flat(stepA ? onA : onB)) stepA = !stepA;
+      const Eigen::Vector3i& f = stepA ? onA : onB;
+      if (flat(f)) return {};
+      faces.push_back(f);
+      stepA ? i = next(i) : j = prev(j);
+      --left;
+      if (left >= 3 && (edges.has(undirectedKey(a[i], a[j])) || !across.insert(undirectedKey(a[i], a[j])).second))
+        return {};
+    }
+  }
+  return faces;
+}
+
 /// One pass: the loop pairs found, their bands added; at most one part turned over, only for the band it lets in
 /// (returns true then: the boundary must be found again).
 bool bandPass(TriangleMesh& mesh, std::vector<Eigen::Vector3d>& normals, const SampledPoints& input,
@@ -184,33 +229,60 @@ bool bandPass(TriangleMesh& mesh, std::vector<Eigen::Vector3d>& normals, const S
     std::unordered_map<std::size_t, std::size_t> count;
     for (const auto& p : partner[l])
       if (p.first != std::string::npos) ++count[p.first];
+    // A slit's two ends, where its sides meet, have no vertex across.
     for (const auto& [other, c] : count)
-      if (static_cast<double>(c) >= kMatchedShare * static_cast<double>(partner[l].size())) mainPartner[l] = other;
+      if (static_cast<double>(c) >= kMatchedShare * static_cast<double>(partner[l].size() - (other == l ? 2 : 0)))
+        mainPartner[l] = other;
   }
   DisjointSets parts(mesh.vertices.size());
   for (const auto& t : mesh.triangles)
     for (int c = 1; c < 3; ++c) parts.unite(static_cast<std::uint32_t>(t[0]), static_cast<std::uint32_t>(t[c]));
+  // Whether loop l's vertices are joined along the input to their partners on loop o where matched.
+  auto joinedToPartners = [&](std::size_t l, std::size_t o) {
+    std::size_t joined = 0, matched = 0;
+    for (std::size_t i = 0; i < boundary.loops[l].size(); ++i) {
+      const auto& p = partner[l][i];
+      if (p.first != o) continue;
+      ++matched;
+      joined += joinedAlongInput(input, mesh.vertices[boundary.loops[l][i]],
+                                 mesh.vertices[boundary.loops[o][p.second]], kPathEdges * boundary.meanEdge);
+    }
+    return static_cast<double>(joined) >= kMatchedShare * static_cast<double>(matched);
+  };
   std::vector<char> used(nl, 0);
   for (std::size_t l = 0; l < nl; ++l) {
+    if (mainPartner[l] != l || !joinedToPartners(l, l)) continue;
+    // A slit: zipped from the vertex whose partner is farthest along the loop (the middle of the slit).
+    const auto& a = boundary.loops[l];
+    std::size_t i0 = 0, farthest = 0;
+    for (std::size_t i = 0; i < a.size(); ++i) {
+      const std::size_t j = partner[l][i].second, along = std::max(i, j) - std::min(i, j);
+      if (partner[l][i].first == l && std::min(along, a.size() - along) > farthest)
+        farthest = std::min(along, a.size() - along), i0 = i;
+    }
+    const std::vector<Eigen::Vector3i> band = zipSlit(mesh, a, i0, partner[l][i0].second, boundary.edges);
+    if (band.empty()) continue;
+    used[l] = 1;
+    mesh.triangles.insert(mesh.triangles.end(), band.begin(), band.end());
+    ++report.bands;
+    report.facesAdded += band.size();
+  }
+  for (std::size_t l = 0; l < nl; ++l) {
     const std::size_t o = mainPartner[l];
-    if (o == std::string::npos || o <= l || mainPartner[o] != l || used[l] || used[o]) continue;
+    if (o == std::string::npos || o <= l || mainPartner[o] != l || used[l] || used[o] || !joinedToPartners(l, o))
+      continue;
     const auto& a = boundary.loops[l];
     const auto& b = boundary.loops[o];
-    // Joined along the input where matched, and which way b runs against a.
-    std::size_t joined = 0, matched = 0;
+    // Which way b runs against a.
     long along = 0;
     for (std::size_t i = 0; i < a.size(); ++i) {
       const auto& p = partner[l][i];
       const auto& q = partner[l][(i + 1) % a.size()];
-      if (p.first != o) continue;
-      ++matched;
-      joined += joinedAlongInput(input, mesh.vertices[a[i]], mesh.vertices[b[p.second]], kPathEdges * boundary.meanEdge);
-      if (q.first != o) continue;
+      if (p.first != o || q.first != o) continue;
       const long d = (static_cast<long>(q.second) - static_cast<long>(p.second) + static_cast<long>(b.size())) %
                      static_cast<long>(b.size());
       along += d == 0 ? 0 : (2 * d < static_cast<long>(b.size()) ? 1 : -1);
     }
-    if (static_cast<double>(joined) < kMatchedShare * static_cast<double>(matched)) continue;
     // Both loops running the same way: two open parts oriented apart; the band needs b's part turned over, so it
     // is zipped against b reversed (as b runs once turned), and the part is turned only when the band is made.
     const bool turn = along > 0;

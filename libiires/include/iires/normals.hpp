@@ -28,6 +28,17 @@ std::vector<Eigen::Vector3d> estimateNormals(const std::vector<Eigen::Vector3d>&
 void orientNormals(const std::vector<Eigen::Vector3d>& points, std::vector<Eigen::Vector3d>& normals,
                    int k = 12);
 
+/// @brief Neighbour rows of the same points as orientNormals()' graph, wider, whose pairs settle the sides of the
+/// patches the graph's spanning tree could only guess across (a face or bore past a crease a sparse sampling does not
+/// resolve): point i's are rows[i·stride, i·stride + stride), entries equal to i skipped. @p apart, when given (one
+/// flag per entry), marks the pairs that lie across a gap (two sheets, see sheets.hpp): no patch holds both points
+/// of such a pair, whatever chain of agreeing neighbours (round a fold tighter than the normals' fit) joins them.
+struct OrientationEvidence {
+  const std::vector<std::uint32_t>& rows;
+  std::size_t stride;
+  const std::vector<std::uint8_t>* apart = nullptr;
+};
+
 /// @brief Orient normals consistently over a k-NN graph the caller already has (no search of its own).
 /// @param neighbours point i's neighbours are neighbours[i·stride + 0 … i·stride + k − 1] (the point itself
 /// may be among them and is skipped); the graph is made symmetric.
@@ -38,11 +49,14 @@ void orientNormals(const std::vector<Eigen::Vector3d>& points, std::vector<Eigen
 /// nor carries one sheet's orientation to the other
 /// @param sides (optional, one per point) each connected component takes the side most of these vectors are on
 /// (e.g. given normals whose signs are mostly right) instead of facing +x at its root
+/// @param evidence (optional) wider rows whose pairs settle the patches the tree could only guess across, and the
+/// pairs among them that lie across a gap (see OrientationEvidence); without it, @p neighbours' rows
 /// @note O(n k) (Kruskal's minimum spanning tree on 1 − |nᵢ·nⱼ| after a radix sort of the weights, roots as
 /// estimateNormals). Deterministic.
 void orientNormals(const std::vector<Eigen::Vector3d>& points, std::vector<Eigen::Vector3d>& normals,
                    const std::vector<std::uint32_t>& neighbours, std::size_t stride, std::size_t k,
-                   int threads = 0, bool acrossEdge = false, const std::vector<Eigen::Vector3d>* sides = nullptr);
+                   int threads = 0, bool acrossEdge = false, const std::vector<Eigen::Vector3d>* sides = nullptr,
+                   const OrientationEvidence* evidence = nullptr);
 
 /// @brief Normals whose lines differ by more than this angle (degrees) meet at a crease: orientAcrossCreases()'s
 /// threshold, and the local triangulation's for unfolding a neighbour over a crease.

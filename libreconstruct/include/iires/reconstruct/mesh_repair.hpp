@@ -130,13 +130,15 @@ struct RimBandReport {
 
 /// @brief Close the rim of a part thinner than the mesh's edges (a plate, a shell's lip): the resampling keeps
 /// samples on both faces and the triangulation does not link them across the gap, so the two faces end in two
-/// boundary loops running side by side along the rim. Two loops are joined by a band of triangles (zipped along
-/// them, each step taking the shorter edge across) when at least 90 % of each one's vertices have their nearest
-/// other-loop vertex, within 1.5 mean edges, on the other and at least 90 % of those pairs are joined along
-/// params.inputPoints' surface graph (a path at most 3 mean edges long): across a rim the input runs round it;
-/// two sheets facing each other across a gap are joined only round its far end, so their loops stay open. Two parts whose loops run the same way (each oriented on its own)
-/// are first made to agree: the second is turned over (faces and normals). Nothing is done without
-/// params.inputPoints and its graph.
+/// boundary loops running side by side along the rim — or, where samples on the rim itself join the faces in
+/// places, in slits: one loop running out along the rim and back, its two sides side by side. Two loops, or the two
+/// sides of a slit, are joined by a band of triangles (zipped along them, each step taking the shorter edge across)
+/// when at least 90 % of each loop's vertices (a slit's but its two ends) have their nearest vertex across, within
+/// 1.5 mean edges, on the other side and at least 90 % of those pairs are joined along params.inputPoints' surface
+/// graph (a path at most 5 mean edges long): across a rim the input runs round it; two sheets facing each other
+/// across a gap are joined only round its far end, so their loops stay open. Two parts whose loops run the same
+/// way (each oriented on its own) are first made to agree: the second is turned over (faces and normals). Nothing
+/// is done without params.inputPoints and its graph.
 /// @pre @p mesh is consistently oriented per component (orientConsistently()).
 /// @note Deterministic.
 RimBandReport closeRimBands(TriangleMesh& mesh, std::vector<Eigen::Vector3d>& normals, const HoleFillingParams& params);
