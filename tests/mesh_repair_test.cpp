@@ -11,6 +11,7 @@
 #include <memory>
 #include <random>
 
+#include "iires/knn.hpp"
 #include "iires/reconstruct/mesh_quality.hpp"
 #include "iires/reconstruct/mesh_repair.hpp"
 #include "iires/reconstruct/triangulate.hpp"
@@ -624,6 +625,67 @@ TEST(MeshRepair, RemoveExtraFansOnlyWhereFlaggedFindsTheSame) {
   EXPECT_EQ(flagged.triangles, everywhere.triangles);
   const std::vector<char> nothing(pinched.vertices.size(), 0);
   EXPECT_EQ(removeExtraFans(none, 2, &nothing), 0u);
+}
+
+// A box a fifth of an edge thick meshed on every face but one rim face: its boundary is a single loop, running along
+// that rim on the top face and back along the bottom (a slit). closeRimBands zips it into one closed part; before,
+// a mesh with fewer than two loops was not looked at (a band joined two loops). The input: the whole box sampled
+// at a quarter edge, its graph the 8 nearest neighbours.
+TEST(RimBands, LoneSlitAlongAThinRimIsZipped) {
+  const int m = 11;  // vertices along each side of the big faces
+  const double e = 0.1, t = 0.2 * e, side = (m - 1) * e;
+  TriangleMesh mesh;
+  std::vector<Eigen::Vector3d> normals;
+  for (int top = 0; top < 2; ++top)
+    for (int j = 0; j < m; ++j)
+      for (int i = 0; i < m; ++i) {
+        mesh.vertices.emplace_back(i * e, j * e, top * t);
+        normals.emplace_back(0, 0, top ? 1 : -1);
+      }
+  auto v = [&](int top, int i, int j) { return top * m * m + j * m + i; };
+  for (int j = 0; j + 1 < m; ++j)
+    for (int i = 0; i + 1 < m; ++i) {
+      mesh.triangles.emplace_back(v(1, i, j), v(1, i + 1, j), v(1, i + 1, j + 1));
+      mesh.triangles.emplace_back(v(1, i, j), v(1, i + 1, j + 1), v(1, i, j + 1));
+      mesh.triangles.emplace_back(v(0, i, j), v(0, i + 1, j + 1), v(0, i + 1, j));
+      mesh.triangles.emplace_back(v(0, i, j), v(0, i, j + 1), v(0, i + 1, j + 1));
+    }
+  for (int k = 0; k + 1 < m; ++k) {  // the rim faces at x = 0, x = side and y = side; y = 0 left open
+    for (const auto& [a, b] : {std::pair{std::array{0, k}, std::array{0, k + 1}},
+                               std::pair{std::array{m - 1, k}, std::array{m - 1, k + 1}},
+                               std::pair{std::array{k, m - 1}, std::array{k + 1, m - 1}}}) {
+      mesh.triangles.emplace_back(v(0, a[0], a[1]), v(0, b[0], b[1]), v(1, b[0], b[1]));
+      mesh.triangles.emplace_back(v(0, a[0], a[1]), v(1, b[0], b[1]), v(1, a[0], a[1]));
+    }
+  }
+  orientConsistently(mesh, normals);
+  ASSERT_EQ(evaluateMesh(mesh).boundaryLoops, 1u);
+  auto box = std::make_shared<std::vector<Eigen::Vector3d>>();
+  const double q = 0.25 * e;
+  for (double a = 0; a <= side + 1e-9; a += q)
+    for (double b = 0; b <= side + 1e-9; b += q) box->emplace_back(a, b, 0.0), box->emplace_back(a, b, t);
+  for (double a = 0; a <= side + 1e-9; a += q)
+    for (const double z : {0.25 * t, 0.5 * t, 0.75 * t})
+      for (const Eigen::Vector3d p : {Eigen::Vector3d(a, 0, z), Eigen::Vector3d(a, side, z), Eigen::Vector3d(0, a, z),
+                                      Eigen::Vector3d(side, a, z)})
+        box->push_back(p);
+  const KnnIndex index(*box);
+  SampledPoints::Edges edges;
+  std::vector<std::uint32_t> idx;
+  std::vector<double> d2;
+  for (std::uint32_t i = 0; i < box->size(); ++i) {
+    index.knn((*box)[i], 9, idx, d2);
+    for (std::uint32_t j : idx)
+      if (j != i) edges.push_back({std::min(i, j), std::max(i, j)});
+  }
+  HoleFillingParams p;
+  p.inputPoints = std::make_shared<const SampledPoints>(box, [edges] { return edges; });
+  const RimBandReport r = closeRimBands(mesh, normals, p);
+  const MeshQuality quality = evaluateMesh(mesh);
+  EXPECT_EQ(r.bands, 1u);
+  EXPECT_TRUE(quality.closed);
+  EXPECT_EQ(quality.components, 1u);
+  EXPECT_EQ(quality.genus, 0);
 }
 
 /// Two closed triangulated unit spheres, the second shifted by @p shift: they cut each other when |shift| < 2.

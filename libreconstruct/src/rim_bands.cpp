@@ -143,6 +143,13 @@ std::vector<std::vector<std::pair<std::size_t, std::size_t>>> partners(const Tri
   return out;
 }
 
+/// Whether the band triangle @p f of @p mesh would be nearly flat (its quality under kMinBandQuality).
+bool flatTriangle(const TriangleMesh& mesh, const Eigen::Vector3i& f) {
+  const auto& P = mesh.vertices;
+  return triangleQuality(P[static_cast<std::size_t>(f[0])], P[static_cast<std::size_t>(f[1])],
+                         P[static_cast<std::size_t>(f[2])]) < kMinBandQuality;
+}
+
 /// The band between loops @p a and @p b (each in its faces' direction, running opposite ways along the rim),
 /// zipped from a's first vertex and its partner @p b0 in b: each step adds the triangle whose new edge across the
 /// band is shorter, or the other one where that triangle would be nearly flat. Empty when both would be, or an edge
@@ -155,10 +162,7 @@ std::vector<Eigen::Vector3i> zipBand(const TriangleMesh& mesh, const std::vector
   auto B = [&](std::size_t j) { return b[(b0 + m - j % m) % m]; };  // b walked backwards: along the rim like a
   const auto& P = mesh.vertices;
   auto dist = [&](std::uint32_t u, std::uint32_t v) { return (P[u] - P[v]).norm(); };
-  auto flat = [&](const Eigen::Vector3i& f) {
-    return triangleQuality(P[static_cast<std::size_t>(f[0])], P[static_cast<std::size_t>(f[1])],
-                           P[static_cast<std::size_t>(f[2])]) < kMinBandQuality;
-  };
+  auto flat = [&](const Eigen::Vector3i& f) { return flatTriangle(mesh, f); };
   std::vector<Eigen::Vector3i> faces;
   std::unordered_set<std::uint64_t> across{undirectedKey(A(0), B(0))};
   for (std::size_t i = 0, j = 0; i < n || j < m;) {
@@ -187,10 +191,7 @@ std::vector<Eigen::Vector3i> zipSlit(const TriangleMesh& mesh, const std::vector
   const std::size_t n = a.size();
   const auto& P = mesh.vertices;
   auto dist = [&](std::uint32_t u, std::uint32_t v) { return (P[u] - P[v]).norm(); };
-  auto flat = [&](const Eigen::Vector3i& f) {
-    return triangleQuality(P[static_cast<std::size_t>(f[0])], P[static_cast<std::size_t>(f[1])],
-                           P[static_cast<std::size_t>(f[2])]) < kMinBandQuality;
-  };
+  auto flat = [&](const Eigen::Vector3i& f) { return flatTriangle(mesh, f); };
   std::vector<Eigen::Vector3i> faces;
   std::unordered_set<std::uint64_t> across{undirectedKey(a[i0], a[j0])};
   for (const auto& [start, end] : {std::pair{i0, j0}, std::pair{j0, i0}}) {
@@ -220,7 +221,7 @@ std::vector<Eigen::Vector3i> zipSlit(const TriangleMesh& mesh, const std::vector
 bool bandPass(TriangleMesh& mesh, std::vector<Eigen::Vector3d>& normals, const SampledPoints& input,
               RimBandReport& report) {
   Boundary boundary = boundaryOf(mesh);
-  if (boundary.loops.size() < 2 || !(boundary.meanEdge > 0)) return false;
+  if (boundary.loops.empty() || !(boundary.meanEdge > 0)) return false;
   const auto partner = partners(mesh, boundary, kPartnerEdges * boundary.meanEdge);
   const std::size_t nl = boundary.loops.size();
   // Each loop's main partner loop (most of its vertices' partners).
