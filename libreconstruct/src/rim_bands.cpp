@@ -216,8 +216,8 @@ std::vector<Eigen::Vector3i> zipSlit(const TriangleMesh& mesh, const std::vector
   return faces;
 }
 
-/// One pass: the loop pairs found, their bands added; at most one part turned over, only for the band it lets in
-/// (returns true then: the boundary must be found again).
+/// One pass: the slits and the loop pairs found, their bands added; at most one part turned over, only for the band it
+/// lets in (returns true then: the boundary must be found again).
 bool bandPass(TriangleMesh& mesh, std::vector<Eigen::Vector3d>& normals, const SampledPoints& input,
               RimBandReport& report) {
   Boundary boundary = boundaryOf(mesh);
