@@ -111,9 +111,11 @@ TEST(NoisySphere, NoTwoOutputPointsCoincide) {
 }
 
 // A CAD part sampled sparsely (joint, 3,000 points) with normals from a tool that does not orient them, upsampled
-// ten times: the midpoints of chords across its bores and recesses projected up to four edges away from their
-// chord (about 1,700 splits moved over 0.3 edges), and samples ended more than three output spacings off the part:
-// the run failed. A split whose midpoint moves farther than its chord is long is not made (another edge is split).
+// ten times. Oriented by the spanning tree alone, a whole bore came out turned over; the midpoints of chords across
+// it projected up to four edges away and samples ended more than three output spacings off the part (the run
+// failed until splits moving farther than their chord were refused; then cv 0.107). With the patches settled by
+// their dipole interactions the bore faces the right way: cv 0.082 (0.080 without the split rule, which this input
+// no longer needs).
 TEST(SparseCad, UpsampledTenTimesWithUnorientedNormals) {
   iires::MeshSamplingParams sp;
   sp.count = 3000;
@@ -124,7 +126,7 @@ TEST(SparseCad, UpsampledTenTimesWithUnorientedNormals) {
   cloud.normals = iires::estimateNormals(cloud.points, np);
   const auto r = resampleTo(cloud, 30000);
   ASSERT_EQ(r.cloud.size(), 30000u);
-  EXPECT_LE(r.spacing.cv, 0.12);
+  EXPECT_LE(r.spacing.cv, 0.09);
 }
 
 // The tool writes exactly N points and a report with the promised fields.
