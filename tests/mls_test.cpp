@@ -106,4 +106,34 @@ TEST(MlsSurface, BeyondIsZeroInAHoleAndGrowsPastTheBoundary) {
   EXPECT_GT(last, 1.0);  // 0.04 past the last points: more than a kernel width
 }
 
+// A roof: two planes whose normals are 50° apart meet along the y axis, sampled on a jittered grid. Points
+// 0.8–1.8 spacings beside the crease, a little above face A, project onto A's plane when the fit weights the
+// neighbours by their normals (normalSigma); the plain fit, which the other face's points still reach with
+// positive weight, rounds the crease and leaves them off the plane.
+TEST(MlsSurface, NormalWeightsKeepAFitOnItsOwnSideOfACrease) {
+  const double half = 25.0 * M_PI / 180.0;
+  const Eigen::Vector3d nA(-std::sin(half), 0, std::cos(half)), nB(std::sin(half), 0, std::cos(half));
+  const Eigen::Vector3d uA(-std::cos(half), 0, -std::sin(half)), uB(std::cos(half), 0, -std::sin(half));
+  iires::PointCloud roof;
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> jitter(-0.2, 0.2);
+  for (int i = 0; i < 60; ++i)
+    for (int j = -30; j < 30; ++j) {
+      const double s = (i + 0.5 + jitter(rng)) * 0.01, t = (j + jitter(rng)) * 0.01;
+      roof.points.push_back(s * uA + Eigen::Vector3d(0, t, 0)), roof.normals.push_back(nA);
+      roof.points.push_back(s * uB + Eigen::Vector3d(0, t, 0)), roof.normals.push_back(nB);
+    }
+  auto offA = [&](double sigma) {
+    iires::MlsParams p;
+    p.normalSigma = sigma;
+    const iires::MlsSurface surface(roof.points, roof.normals, p);
+    double worst = 0;
+    for (double s = 0.008; s < 0.019; s += 0.002)
+      worst = std::max(worst, std::abs(nA.dot(surface.project(s * uA + 0.003 * nA))));
+    return worst;
+  };
+  EXPECT_LT(offA(0.5), 1e-4);
+  EXPECT_GT(offA(0.0), 2e-4);  // spacing 0.01: the plain fit leaves up to 3 % of a spacing
+}
+
 }  // namespace

@@ -8,6 +8,8 @@
 
 #include "shapes.hpp"
 #include "iires/knn.hpp"
+#include "iires/metrics.hpp"
+#include "iires/sampling.hpp"
 
 namespace {
 
@@ -191,6 +193,50 @@ TEST(Resample, ContextSamplesAreHeldButNeitherCountedNorOutput) {
     EXPECT_GT(std::sqrt(d2[0]), 0.5 * full.spacing.mean) << "a free sample on top of a context sample";
   }
   EXPECT_LT(left, p.targetCount / 50) << "the free samples stay out of the covered half";
+}
+
+/// A closed hexagonal prism, radius 1 and height 1.5: its side faces meet at creases whose normals are 60° apart.
+iires::TriangleMesh hexagonalPrism() {
+  iires::TriangleMesh m;
+  for (int z = 0; z < 2; ++z)
+    for (int k = 0; k < 6; ++k)
+      m.vertices.emplace_back(std::cos(k * M_PI / 3), std::sin(k * M_PI / 3), 1.5 * z);
+  m.vertices.emplace_back(0, 0, 0);
+  m.vertices.emplace_back(0, 0, 1.5);
+  for (int k = 0; k < 6; ++k) {
+    const int a = k, b = (k + 1) % 6;
+    m.triangles.emplace_back(a, b, b + 6);
+    m.triangles.emplace_back(a, b + 6, a + 6);
+    m.triangles.emplace_back(12, b, a);
+    m.triangles.emplace_back(13, a + 6, b + 6);
+  }
+  return m;
+}
+
+// With sharp edges the free samples beside a crease are fitted to their own face (the MLS fits weight the input
+// points by their normals): on a prism sampled 5× denser at one end, positions only, their mean distance to the
+// true surface is a fraction of what the plain fits leave, which round the 60° creases between the side faces.
+TEST(Resample, SharpEdgesFitFreeSamplesToTheirOwnFace) {
+  const iires::TriangleMesh prism = hexagonalPrism();
+  iires::MeshSamplingParams sp;
+  sp.count = 60000;
+  sp.densityRatio = 5;
+  iires::PointCloud cloud = iires::sampleMesh(prism, sp);
+  cloud.normals.clear();
+  iires::ResampleParams p;
+  p.targetCount = 4000;
+  p.sharpEdges = true;
+  const auto r = iires::resample(cloud, p);
+  ASSERT_EQ(r.cloud.size(), 4000u);
+  std::vector<char> held(r.cloud.size(), 0);
+  for (std::uint32_t i : r.fixedIndices) held[i] = 1;
+  std::vector<Eigen::Vector3d> free;
+  for (std::size_t i = 0; i < held.size(); ++i)
+    if (!held[i]) free.push_back(r.cloud.points[i]);
+  const auto err = iires::MeshDistance(prism).distances(free);
+  // Measured: mean 6.8e-8, max 1.1e-4 (plain fits: 4.6e-7 and 4.8e-4); the output spacing is 0.055.
+  EXPECT_LT(err.mean, 2e-7);
+  EXPECT_LT(err.max, 2.5e-4);
 }
 
 }  // namespace

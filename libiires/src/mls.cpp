@@ -183,12 +183,14 @@ Eigen::Vector3d MlsSurface::project(const Eigen::Vector3d& x0, Eigen::Vector3d* 
     if (lastH == 0 && cache) *cache = {idx, queried, h};
     lastH = h;
     const double inv = 1.0 / (h * h);
+    const double normalInv = params_.normalSigma > 0 ? 1.0 / (params_.normalSigma * params_.normalSigma) : 0.0;
     // eq. (2): Gaussian weights; eq. (1): weighted average a(x) and averaged oriented normal n_a.
     double wsum = 0;
     Eigen::Vector3d a = Eigen::Vector3d::Zero(), nsum = Eigen::Vector3d::Zero();
     w.resize(found);
     for (std::size_t j = 0; j < found; ++j) {
       w[j] = facing(idx[j]) && (!gate || onSheet(idx[j])) ? std::exp(-d2[j] * inv) + 1e-12 : 0.0;
+      if (normalInv > 0 && w[j] > 0) w[j] *= std::exp(-(normals_[idx[j]] - reference).squaredNorm() * normalInv);
       wsum += w[j];
       a += w[j] * points_[idx[j]];
       nsum += w[j] * normals_[idx[j]];

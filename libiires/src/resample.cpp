@@ -32,6 +32,10 @@ using detail::voxelThin;
 
 using Clock = std::chrono::steady_clock;
 
+// With sharp edges the MLS fits weight each input point by its normal's agreement with the estimate's
+// (MlsParams::normalSigma): a free sample beside a crease is fitted to its own face, not to a rounding of it.
+constexpr double kSharpNormalSigma = 0.5;
+
 /// The points (and normals) of @p cloud at @p indices, in that order.
 PointCloud select(const PointCloud& cloud, const std::vector<std::uint32_t>& indices) {
   PointCloud out;
@@ -313,6 +317,7 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params, const Ex
     auto t = clock.begin("surface");
     MlsParams mp = params.mls;
     if (!params.intrinsic) mp.sheetGap = 0;  // straight-line neighbourhoods
+    if (params.sharpEdges && mp.normalSigma == 0) mp.normalSigma = kSharpNormalSigma;
     result.nearSheets = nearSheets;
     surface.emplace(cloud.points, cloud.normals, mp, Execution{threads}, index ? &*index : pointIndex,
                     neighbours ? &*neighbours : nullptr, std::move(nearSheets));

@@ -20,6 +20,10 @@ struct MlsParams {
   /// Sheet rule (sheets.hpp, acrossGap) in every fit: input points on a near-parallel sheet at least sheetGap
   /// local spacings off the query's get no weight (0 = off: the normals' sign test only).
   double sheetGap = 1.25;
+  /// > 0: each neighbour's weight is also multiplied by exp(−|n_j − n|²/σ²), n the current estimate's normal
+  /// (robust implicit MLS, Öztireli et al. 2009): a fit near a crease follows the query's own sheet and does
+  /// not round the crease off. 0 = off (the normals' sign test only).
+  double normalSigma = 0.0;
 };
 
 /// @brief The input neighbourhood of a previous projection, kept by a caller that projects the same moving
