@@ -267,4 +267,35 @@ TEST(Outliers, NonUniformBunnyWithOutliers) {
   EXPECT_GE(double(within) / double(count), 0.95);
 }
 
+/// The cube [−1, 1]³ as 12 triangles, outward.
+iires::TriangleMesh cube() {
+  iires::TriangleMesh m;
+  for (int i = 0; i < 8; ++i) m.vertices.emplace_back(i & 1 ? 1 : -1, i & 2 ? 1 : -1, i & 4 ? 1 : -1);
+  const int f[12][3] = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6}, {0, 1, 4}, {1, 5, 4},
+                        {2, 6, 3}, {3, 6, 7}, {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}};
+  for (const auto& t : f) m.triangles.emplace_back(t[0], t[1], t[2]);
+  return m;
+}
+
+// A clean cube sampled 5× denser at one end: beside an edge or a corner the random sampling leaves true points
+// whose neighbours are not mutual and whose planes span two faces, and the rule flags them. Pulled onto the plane
+// of their nearest trusted point's neighbourhood, which spans the crease too, they would move inside the cube (5
+// of the 34 points flagged over these 12 samplings, up to 0.021 deep; the spacing at the dense end is about 0.01);
+// a point within that plane's own scatter stays where it is. Those pulled still may end inside (2: a corner's
+// plane can be tighter than the point is off it).
+TEST(Outliers, PullLeavesTruePointsBesideACreaseOnTheSurface) {
+  std::size_t flagged = 0, inside = 0;
+  for (std::uint64_t seed = 1; seed <= 12; ++seed) {
+    iires::MeshSamplingParams sp;
+    sp.count = 100000;
+    sp.densityRatio = 5;
+    sp.seed = seed;
+    const iires::PointCloud cloud = iires::sampleMesh(cube(), sp);
+    const auto r = iires::processOutliers(cloud, OutlierParams{});
+    flagged += r.found;
+    for (std::uint32_t o : r.outliers) inside += r.cloud.points[o].cwiseAbs().maxCoeff() < 0.999;
+  }
+  EXPECT_GT(flagged, 12u);
+  EXPECT_LE(inside, 2u);
+}
 }  // namespace

@@ -86,7 +86,7 @@ void removeOutliers(const PointCloud& input, const std::vector<std::uint8_t>& dr
 /// eq. (5): projects each outlier onto the MLS plane of its nearest trusted point q's neighbourhood. Points
 /// flagged in @p isolated (far from the object) have no surface to land on and are removed instead; so is an
 /// outlier whose projection lands more than twice the fit's support radius h from a(q), where the plane no
-/// longer stands for the surface.
+/// longer stands for the surface. An outlier within the plane's own scatter stays where it is.
 void pullOutliers(const PointCloud& input, const OutlierParams& params, const std::vector<std::uint8_t>& trusted,
                   const std::vector<std::uint8_t>& isolated, OutlierResult& result, int threads) {
   const std::size_t n = input.size();
@@ -126,6 +126,12 @@ void pullOutliers(const PointCloud& input, const OutlierParams& params, const st
       unsupported[o] = 1;
       return;
     }
+    // A point no farther from the plane than the plane's own points (twice their RMS distance) is not shown off
+    // the surface by it: beside a crease the plane spans both sheets, and pulling a true point of one sheet onto
+    // it would move it inside the object. It stays where it is.
+    double rss = 0;
+    for (std::size_t j = 0; j < f; ++j) rss += std::pow(plane.normal.dot(cleanPoints[idx[j]] - plane.centre), 2);
+    if ((pulled - P[o]).norm() <= 2.0 * std::sqrt(rss / static_cast<double>(f))) return;
     result.cloud.points[o] = pulled;
     if (normals) result.cloud.normals[o] = plane.normal;
   });
