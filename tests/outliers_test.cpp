@@ -95,6 +95,7 @@ TEST(Outliers, DensityChangeIsNotAnOutlier) {
     OutlierParams literal = p;
     literal.minMutual = literal.k;
     literal.planeThreshold = 1e-9;
+    literal.nearPlaneThreshold = std::numeric_limits<double>::infinity();  // no sheet rescues a flagged point
     const auto lit = iires::processOutliers(data.cloud, literal);
     if (noise > 0) {
       EXPECT_GT(lit.found, 10 * std::max<std::size_t>(r.found, 10));
@@ -278,11 +279,11 @@ iires::TriangleMesh cube() {
 }
 
 // A clean cube sampled 5× denser at one end: beside an edge or a corner the random sampling leaves true points
-// whose neighbours are not mutual and whose planes span two faces, and the rule flags them. Pulled onto the plane
-// of their nearest trusted point's neighbourhood, which spans the crease too, they would move inside the cube (5
-// of the 34 points flagged over these 12 samplings, up to 0.021 deep; the spacing at the dense end is about 0.01);
-// a point within that plane's own scatter stays where it is. Those pulled still may end inside (2: a corner's
-// plane can be tighter than the point is off it).
+// whose neighbours are not mutual and whose planes span two faces, and the rule flags them. Most lie on a plane
+// that most of their neighbours share (their face) and are not outliers: 34 flagged over these 12 samplings
+// without that test, 19 with it. Pulled onto the plane of their nearest trusted point's neighbourhood, which
+// spans the crease too, the others would move inside the cube (5 of the 34, up to 0.021 deep; the spacing at
+// the dense end is about 0.01; 3 of the 19); one within that plane's own scatter stays where it is (1 left).
 TEST(Outliers, PullLeavesTruePointsBesideACreaseOnTheSurface) {
   std::size_t flagged = 0, inside = 0;
   for (std::uint64_t seed = 1; seed <= 12; ++seed) {
@@ -296,6 +297,7 @@ TEST(Outliers, PullLeavesTruePointsBesideACreaseOnTheSurface) {
     for (std::uint32_t o : r.outliers) inside += r.cloud.points[o].cwiseAbs().maxCoeff() < 0.999;
   }
   EXPECT_GT(flagged, 12u);
-  EXPECT_LE(inside, 2u);
+  EXPECT_LE(flagged, 25u);
+  EXPECT_LE(inside, 1u);
 }
 }  // namespace

@@ -18,6 +18,14 @@ namespace {
 using Clock = std::chrono::steady_clock;
 constexpr std::size_t kSpacingNeighbours = 6;  // l = mean distance to the 6 nearest neighbours (paper §6.1)
 constexpr std::size_t kNearPlaneSheets = 4;  // a flagged point's trusted neighbours whose planes are tried
+// A flagged point that a plane through it shares with this share of its planeNeighbours nearest (within this many
+// local spacings of the plane, around the point within this largest angular gap, three of them within the reach)
+// is on a sheet (onSharedPlane).
+constexpr double kSharedPlaneShare = 0.625;
+constexpr double kSharedPlaneTolerance = 0.5;
+constexpr double kSharedPlaneGap = 240.0 * M_PI / 180.0;
+constexpr double kSharedPlaneReach = 2.0;
+constexpr std::size_t kSharedPlaneNear = 3;
 constexpr std::size_t kNearPlanePoints = 9;     // the nearest trusted point and its 8 nearest trusted neighbours
 /// A point whose spacing exceeds this many times the cloud's 90th-percentile spacing is an outlier, whatever its
 /// neighbours: sparse parts of real scans stay well within it, a point diagonals away from the object does not.
@@ -81,6 +89,43 @@ void removeOutliers(const PointCloud& input, const std::vector<std::uint8_t>& dr
     for (std::size_t a = 0; a < carried.size(); ++a) result.cloud.attributes[a].values.push_back(carried[a]->values[i]);
   }
   result.removed = input.size() - result.cloud.size();
+}
+
+/// Whether a plane through @p P[row[0]] and two of its neighbours row[1 … m−1] (at least 17° apart as seen from
+/// it) holds kSharedPlaneShare of those neighbours within kSharedPlaneTolerance local spacings @p local, lying
+/// around the point (no angular gap over kSharedPlaneGap between them as seen from it, in the plane) and
+/// kSharedPlaneNear of them within kSharedPlaneReach local spacings of it: the point lies on the sheet most of its
+/// neighbourhood lies on. Beside a crease, where every plane fitted to the neighbourhood spans both sheets, the point's own sheet
+/// still holds its side's points, on one side of it at worst. A plane through an outlier holds a strip of a
+/// surface at most, seen from the outlier within a narrow angle, or (between two sheets) strips of both, few of
+/// their points near it.
+bool onSharedPlane(const std::vector<Eigen::Vector3d>& P, const std::uint32_t* row, std::size_t m, double local) {
+  const Eigen::Vector3d& p = P[row[0]];
+  const double tol = kSharedPlaneTolerance * local, reach2 = std::pow(kSharedPlaneReach * local, 2);
+  const auto need = static_cast<std::size_t>(std::ceil(kSharedPlaneShare * static_cast<double>(m - 1)));
+  std::vector<double> angle;
+  for (std::size_t a = 1; a < m; ++a)
+    for (std::size_t b = a + 1; b < m; ++b) {
+      const Eigen::Vector3d u = P[row[a]] - p, v = P[row[b]] - p;
+      Eigen::Vector3d n = u.cross(v);
+      if (!(n.norm() > 0.3 * u.norm() * v.norm())) continue;  // nearly in line with p: no plane
+      n.normalize();
+      const Eigen::Vector3d e1 = u.normalized(), e2 = n.cross(e1);
+      angle.clear();
+      std::size_t near = 0;
+      for (std::size_t t = 1; t < m; ++t) {
+        const Eigen::Vector3d d = P[row[t]] - p;
+        if (std::abs(n.dot(d)) > tol) continue;
+        angle.push_back(std::atan2(d.dot(e2), d.dot(e1)));
+        near += d.squaredNorm() <= reach2;
+      }
+      if (angle.size() < need || near < kSharedPlaneNear) continue;
+      std::sort(angle.begin(), angle.end());
+      double gap = angle.front() + 2 * M_PI - angle.back();
+      for (std::size_t t = 1; t < angle.size(); ++t) gap = std::max(gap, angle[t] - angle[t - 1]);
+      if (gap <= kSharedPlaneGap) return true;
+    }
+  return false;
 }
 
 /// eq. (5): projects each outlier onto the MLS plane of its nearest trusted point q's neighbourhood. Points
@@ -302,6 +347,8 @@ OutlierResult processOutliers(const PointCloud& input, const OutlierParams& para
           return;
         }
       }
+      if (!isolated[i] && onSharedPlane(P, ri, std::min<std::size_t>(planeK + 1, count[i]), localSpacing[i]))
+        outlier[i] = 0;
     });
 
   OutlierResult result;
