@@ -300,4 +300,5 @@ TEST(Outliers, PullLeavesTruePointsBesideACreaseOnTheSurface) {
   EXPECT_LE(flagged, 25u);
   EXPECT_LE(inside, 1u);
 }
+
 }  // namespace

@@ -94,11 +94,11 @@ void removeOutliers(const PointCloud& input, const std::vector<std::uint8_t>& dr
 /// Whether a plane through @p P[row[0]] and two of its neighbours row[1 … m−1] (at least 17° apart as seen from
 /// it) holds kSharedPlaneShare of those neighbours within kSharedPlaneTolerance local spacings @p local, lying
 /// around the point (no angular gap over kSharedPlaneGap between them as seen from it, in the plane) and
-/// kSharedPlaneNear of them within kSharedPlaneReach local spacings of it: the point lies on the sheet most of its
-/// neighbourhood lies on. Beside a crease, where every plane fitted to the neighbourhood spans both sheets, the point's own sheet
-/// still holds its side's points, on one side of it at worst. A plane through an outlier holds a strip of a
-/// surface at most, seen from the outlier within a narrow angle, or (between two sheets) strips of both, few of
-/// their points near it.
+/// kSharedPlaneNear of them within kSharedPlaneReach local spacings of it: the point lies on the sheet most of
+/// its neighbourhood lies on. Beside a crease, where every plane fitted to the neighbourhood spans both sheets,
+/// the point's own sheet still holds its side's points, on one side of it at worst. A plane through an outlier
+/// holds a strip of a surface at most, seen from the outlier within a narrow angle, or (between two sheets)
+/// strips of both, few of their points near it.
 bool onSharedPlane(const std::vector<Eigen::Vector3d>& P, const std::uint32_t* row, std::size_t m, double local) {
   const Eigen::Vector3d& p = P[row[0]];
   const double tol = kSharedPlaneTolerance * local, reach2 = std::pow(kSharedPlaneReach * local, 2);

@@ -76,7 +76,10 @@ std::size_t outlierNeighbours(const OutlierParams& params);
 /// 90th percentile of that distance over the cloud (points scattered far from the object). The literal eq. 4 (any non-mutual neighbour) flags ordinary points where the density changes —
 /// those points are non-mutual too but lie on their neighbours' plane, so the second test clears them; an
 /// outlier moved 3–6 spacings off the surface is non-mutual (the surface points' own neighbours are all
-/// closer) and far from the plane.
+/// closer) and far from the plane. With a finite nearPlaneThreshold a flagged point is cleared again when it lies
+/// on a sheet: within nearPlaneThreshold of the plane of one of its nearest trusted points and its 8 nearest
+/// trusted neighbours, or on a plane through it that most of its planeNeighbours nearest share, around it (beside
+/// a crease every fitted plane spans both faces, while the point's own face still holds its side's points).
 ///
 /// Pull (eq. 5): an outlier o is moved to o + n_a n_aᵀ (a(q) − o), where q is its nearest trusted point
 /// (mutual and within planeThreshold of its plane; any non-outlier when fewer than planeNeighbours exist) and
@@ -84,7 +87,7 @@ std::size_t outlierNeighbours(const OutlierParams& params);
 /// distance to the farthest of them, so the plane is stable under noise); its normal becomes n_a, oriented
 /// like q's normal when the input has normals. An isolated point has no surface to land on and is removed
 /// instead, and so is an outlier whose projection lands more than 2h from a(q), beyond where the plane stands
-/// for the surface.
+/// for the surface. An outlier no farther from the plane than twice its points' RMS distance stays where it is.
 /// @throws InputError when the cloud is empty, holds NaN/Inf, or has fewer than planeNeighbours + 1
 /// points; std::invalid_argument for bad parameters.
 /// @param table (optional) neighbour lists of exactly input.points with k ≥ outlierNeighbours(params),
