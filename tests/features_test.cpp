@@ -23,16 +23,7 @@ namespace {
 using iires::FeatureDetector;
 using iires::FeatureParams;
 using iires::Segment;
-
-/// The cube [0, size]³ as 12 triangles, outward.
-iires::TriangleMesh cubeMesh(double size = 1.0) {
-  iires::TriangleMesh m;
-  for (int i = 0; i < 8; ++i) m.vertices.emplace_back(size * (i & 1), size * ((i >> 1) & 1), size * ((i >> 2) & 1));
-  const int f[12][3] = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6}, {0, 1, 4}, {1, 5, 4},
-                        {2, 6, 3}, {3, 6, 7}, {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}};
-  for (const auto& t : f) m.triangles.emplace_back(t[0], t[1], t[2]);
-  return m;
-}
+using iires::test::cubeMesh;
 
 /// Mesh sampled (uniformly, or @p densityRatio × denser at one end), normals estimated (PCA + MST orientation) as
 /// the resampler would have them.

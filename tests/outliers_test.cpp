@@ -268,16 +268,6 @@ TEST(Outliers, NonUniformBunnyWithOutliers) {
   EXPECT_GE(double(within) / double(count), 0.95);
 }
 
-/// The cube [−1, 1]³ as 12 triangles, outward.
-iires::TriangleMesh cube() {
-  iires::TriangleMesh m;
-  for (int i = 0; i < 8; ++i) m.vertices.emplace_back(i & 1 ? 1 : -1, i & 2 ? 1 : -1, i & 4 ? 1 : -1);
-  const int f[12][3] = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6}, {0, 1, 4}, {1, 5, 4},
-                        {2, 6, 3}, {3, 6, 7}, {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}};
-  for (const auto& t : f) m.triangles.emplace_back(t[0], t[1], t[2]);
-  return m;
-}
-
 // A clean cube sampled 5× denser at one end: beside an edge or a corner the random sampling leaves true points
 // whose neighbours are not mutual and whose planes span two faces, and the rule flags them. Most lie on a plane
 // that most of their neighbours share (their face) and are not outliers: 34 flagged over these 12 samplings
@@ -291,10 +281,13 @@ TEST(Outliers, PullLeavesTruePointsBesideACreaseOnTheSurface) {
     sp.count = 100000;
     sp.densityRatio = 5;
     sp.seed = seed;
-    const iires::PointCloud cloud = iires::sampleMesh(cube(), sp);
+    const iires::PointCloud cloud = iires::sampleMesh(iires::test::cubeMesh(2.0), sp);
     const auto r = iires::processOutliers(cloud, OutlierParams{});
     flagged += r.found;
-    for (std::uint32_t o : r.outliers) inside += r.cloud.points[o].cwiseAbs().maxCoeff() < 0.999;
+    for (std::uint32_t o : r.outliers) {
+      const Eigen::Vector3d q = r.cloud.points[o];
+      inside += std::min(q.minCoeff(), 2.0 - q.maxCoeff()) > 0.001;  // off every face, inwards
+    }
   }
   EXPECT_GT(flagged, 12u);
   EXPECT_LE(flagged, 25u);

@@ -102,6 +102,16 @@ inline bool hasCornerBelow(const TriangleMesh& m, const Eigen::Vector3i& t, doub
   return false;
 }
 
+/// The cube [0, size]³ as 12 triangles, outward.
+inline TriangleMesh cubeMesh(double size = 1.0) {
+  TriangleMesh m;
+  for (int i = 0; i < 8; ++i) m.vertices.emplace_back(size * (i & 1), size * ((i >> 1) & 1), size * ((i >> 2) & 1));
+  const int f[12][3] = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6}, {0, 1, 4}, {1, 5, 4},
+                        {2, 6, 3}, {3, 6, 7}, {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}};
+  for (const auto& t : f) m.triangles.emplace_back(t[0], t[1], t[2]);
+  return m;
+}
+
 /// A closed UV sphere (no intersections by construction).
 inline TriangleMesh uvSphereMesh(int rings, int segments) {
   TriangleMesh m;
