@@ -139,6 +139,7 @@ Eigen::Vector3d MlsSurface::project(const Eigen::Vector3d& x0, Eigen::Vector3d* 
     d2.resize(idx.size());
   }
   const int steps = std::max(1, iterations > 0 ? iterations : params_.iterations);
+  const double normalInv = params_.normalSigma > 0 ? 1.0 / (params_.normalSigma * params_.normalSigma) : 0.0;
   for (int it = 0; it < steps; ++it) {
     // Re-centre the neighbourhood only when the estimate moved by more than a quarter kernel width.
     if (lastH == 0 || (x - queried).squaredNorm() > 0.0625 * lastH * lastH) {
@@ -183,7 +184,6 @@ Eigen::Vector3d MlsSurface::project(const Eigen::Vector3d& x0, Eigen::Vector3d* 
     if (lastH == 0 && cache) *cache = {idx, queried, h};
     lastH = h;
     const double inv = 1.0 / (h * h);
-    const double normalInv = params_.normalSigma > 0 ? 1.0 / (params_.normalSigma * params_.normalSigma) : 0.0;
     // eq. (2): Gaussian weights; eq. (1): weighted average a(x) and averaged oriented normal n_a.
     double wsum = 0;
     Eigen::Vector3d a = Eigen::Vector3d::Zero(), nsum = Eigen::Vector3d::Zero();

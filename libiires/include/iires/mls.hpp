@@ -20,9 +20,10 @@ struct MlsParams {
   /// Sheet rule (sheets.hpp, acrossGap) in every fit: input points on a near-parallel sheet at least sheetGap
   /// local spacings off the query's get no weight (0 = off: the normals' sign test only).
   double sheetGap = 1.25;
-  /// > 0: each neighbour's weight is also multiplied by exp(−|n_j − n|²/σ²), n the current estimate's normal
-  /// (robust implicit MLS, Öztireli et al. 2009): a fit near a crease follows the query's own sheet and does
-  /// not round the crease off. 0 = off (the normals' sign test only).
+  /// > 0: each neighbour's weight is also multiplied by exp(−|n_j − n|²/σ²), n the normal the sign test compares
+  /// with (the hint or the nearest input point's at the first step, then the estimate's; robust implicit MLS,
+  /// Öztireli et al. 2009): a fit near a crease follows the query's own sheet and does not round the crease off.
+  /// 0 = off (the normals' sign test only). `--sharp-edges` sets 0.5 unless given.
   double normalSigma = 0.0;
 };
 

@@ -34,7 +34,9 @@ struct ResampleParams {
   std::size_t targetCount = 10000;  ///< N, the exact number of output points (≥ 1)
   ResampleMode mode = ResampleMode::kIsotropic;  ///< `--mode isotropic|curvature`
   CurvatureParams curvature;        ///< curvature mode: eq. 8–10 (levels, ratios flat → curved)
-  bool sharpEdges = false;          ///< detect sharp features and keep samples on them (`--sharp-edges`)
+  /// detect sharp features and keep samples on them (`--sharp-edges`); the MLS fits then weight the input points
+  /// by their normals (mls.normalSigma 0.5 unless set), so the free samples beside a crease keep to their face
+  bool sharpEdges = false;
   FeatureParams features;           ///< the feature detector and its chains
   double edgeRatio = 0.5;           ///< spacing of the samples on feature lines, in units of l, [0.1, 4] (`--edge-ratio`)
   int neighbours = 14;              ///< Euclidean candidates per sample for its 1-ring (≥ 6)
