@@ -195,29 +195,11 @@ TEST(Resample, ContextSamplesAreHeldButNeitherCountedNorOutput) {
   EXPECT_LT(left, p.targetCount / 50) << "the free samples stay out of the covered half";
 }
 
-/// A closed hexagonal prism, radius 1 and height 1.5: its side faces meet at creases whose normals are 60° apart.
-iires::TriangleMesh hexagonalPrism() {
-  iires::TriangleMesh m;
-  for (int z = 0; z < 2; ++z)
-    for (int k = 0; k < 6; ++k)
-      m.vertices.emplace_back(std::cos(k * M_PI / 3), std::sin(k * M_PI / 3), 1.5 * z);
-  m.vertices.emplace_back(0, 0, 0);
-  m.vertices.emplace_back(0, 0, 1.5);
-  for (int k = 0; k < 6; ++k) {
-    const int a = k, b = (k + 1) % 6;
-    m.triangles.emplace_back(a, b, b + 6);
-    m.triangles.emplace_back(a, b + 6, a + 6);
-    m.triangles.emplace_back(12, b, a);
-    m.triangles.emplace_back(13, a + 6, b + 6);
-  }
-  return m;
-}
-
 // With sharp edges the free samples beside a crease are fitted to their own face (the MLS fits weight the input
 // points by their normals): on a prism sampled 5× denser at one end, positions only, their mean distance to the
 // true surface is a fraction of what the plain fits leave, which round the 60° creases between the side faces.
 TEST(Resample, SharpEdgesFitFreeSamplesToTheirOwnFace) {
-  const iires::TriangleMesh prism = hexagonalPrism();
+  const iires::TriangleMesh prism = iires::test::prismMesh(6, 1.0, 1.5);  // creases 60° apart
   iires::MeshSamplingParams sp;
   sp.count = 60000;
   sp.densityRatio = 5;

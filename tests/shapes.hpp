@@ -112,6 +112,27 @@ inline TriangleMesh cubeMesh(double size = 1.0) {
   return m;
 }
 
+/// A closed right prism over a regular @p sides-gon of circumradius @p radius, @p height tall, outward: its side
+/// faces meet at creases whose normals are 360°/sides apart (a triangle's: an acute 60° edge).
+inline TriangleMesh prismMesh(int sides, double radius, double height) {
+  TriangleMesh m;
+  for (int z = 0; z < 2; ++z)
+    for (int k = 0; k < sides; ++k)
+      m.vertices.emplace_back(radius * std::cos(2 * M_PI * k / sides), radius * std::sin(2 * M_PI * k / sides),
+                              height * z);
+  m.vertices.emplace_back(0, 0, 0);
+  m.vertices.emplace_back(0, 0, height);
+  const int bottom = 2 * sides, top = bottom + 1;
+  for (int k = 0; k < sides; ++k) {
+    const int a = k, b = (k + 1) % sides;
+    m.triangles.emplace_back(a, b, b + sides);
+    m.triangles.emplace_back(a, b + sides, a + sides);
+    m.triangles.emplace_back(bottom, b, a);
+    m.triangles.emplace_back(top, a + sides, b + sides);
+  }
+  return m;
+}
+
 /// A closed UV sphere (no intersections by construction).
 inline TriangleMesh uvSphereMesh(int rings, int segments) {
   TriangleMesh m;
