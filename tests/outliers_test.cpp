@@ -268,6 +268,17 @@ TEST(Outliers, NonUniformBunnyWithOutliers) {
   EXPECT_GE(double(within) / double(count), 0.95);
 }
 
+/// 100k points on @p mesh, 5× denser at one end, positions only (as a scan).
+PointCloud gradientSampling(const iires::TriangleMesh& mesh, std::uint64_t seed) {
+  iires::MeshSamplingParams sp;
+  sp.count = 100000;
+  sp.densityRatio = 5;
+  sp.seed = seed;
+  PointCloud cloud = iires::sampleMesh(mesh, sp);
+  cloud.normals.clear();
+  return cloud;
+}
+
 // A clean cube sampled 5× denser at one end: beside an edge or a corner the random sampling leaves true points
 // whose neighbours are not mutual and whose planes span two faces, and the rule flags them. Most lie on a plane
 // that most of their neighbours share (their face) and are not outliers: 34 flagged over these 12 samplings
@@ -277,12 +288,7 @@ TEST(Outliers, NonUniformBunnyWithOutliers) {
 TEST(Outliers, PullLeavesTruePointsBesideACreaseOnTheSurface) {
   std::size_t flagged = 0, inside = 0;
   for (std::uint64_t seed = 1; seed <= 12; ++seed) {
-    iires::MeshSamplingParams sp;
-    sp.count = 100000;
-    sp.densityRatio = 5;
-    sp.seed = seed;
-    const iires::PointCloud cloud = iires::sampleMesh(iires::test::cubeMesh(2.0), sp);
-    const auto r = iires::processOutliers(cloud, OutlierParams{});
+    const auto r = iires::processOutliers(gradientSampling(iires::test::cubeMesh(2.0), seed), OutlierParams{});
     flagged += r.found;
     for (std::uint32_t o : r.outliers) {
       const Eigen::Vector3d q = r.cloud.points[o];
@@ -302,13 +308,7 @@ TEST(Outliers, TruePointsBesideAnAcuteEdgeAreMostlyLeftOnTheSurface) {
   const iires::MeshDistance distance(wedge);
   std::size_t flagged = 0, movedOff = 0;
   for (std::uint64_t seed = 1; seed <= 6; ++seed) {
-    iires::MeshSamplingParams sp;
-    sp.count = 100000;
-    sp.densityRatio = 5;
-    sp.seed = seed;
-    PointCloud cloud = iires::sampleMesh(wedge, sp);
-    cloud.normals.clear();
-    const auto r = iires::processOutliers(cloud, OutlierParams{});
+    const auto r = iires::processOutliers(gradientSampling(wedge, seed), OutlierParams{});
     ASSERT_EQ(r.removed, 0u);  // clean: every flagged point is pulled or left, none removed
     flagged += r.found;
     for (std::uint32_t o : r.outliers) movedOff += distance.distances({r.cloud.points[o]}).max > 1e-3;
