@@ -333,8 +333,9 @@ TEST(Denoise, BunnyWithNoiseAndOutliersEndToEnd) {
   EXPECT_EQ(r.cloud.size() + r.outliersRemoved, noisy.size());
   EXPECT_GE(r.outliersFound, 1100u);  // 1200 injected (the bench measures recall on 100k-point clouds)
   EXPECT_LT(r.outliersFound, 1200u + 600u);
-  // Pulled, except the few whose projection would land beyond the fit's support (removed instead).
-  EXPECT_EQ(r.outliersPulled + r.outliersRemoved, r.outliersFound);
+  // Pulled, except the few whose projection would land beyond the fit's support (removed instead) and those
+  // already within the fitted plane's own scatter (left where they are).
+  EXPECT_LE(r.outliersPulled + r.outliersRemoved, r.outliersFound);
   EXPECT_GE(r.outliersPulled, 0.99 * static_cast<double>(r.outliersFound));
   // Stated bound: the mean error at least halves (input ≈ 0.35·l: σ-noise plus the 2 % outliers).
   EXPECT_LT(after, 0.5 * before) << "before/l " << before / l << " after/l " << after / l;

@@ -185,6 +185,17 @@ TEST(Outliers, DensityFallOffOfAScannerIsNotIsolation) {
   EXPECT_EQ(iires::processOutliers(cloud, p).found, 0u);
 }
 
+// Nor a separate object sampled at a tenth of the density (under a tenth of the points): its spacing is many
+// times the cloud's 90th percentile, but its points lie on a sheet. It used to lose points as isolated ones
+// that the report did not count as found.
+TEST(Outliers, SparseSeparateObjectIsNotIsolation) {
+  const PointCloud cloud = iires::test::twoDensitySpheres(10000, 23);
+  const auto r = iires::processOutliers(cloud, OutlierParams{});
+  EXPECT_EQ(r.removed, 0u);
+  EXPECT_EQ(r.cloud.size(), cloud.size());
+  EXPECT_LE(r.pulled + r.removed, r.found);
+}
+
 TEST(Outliers, RemoveDropsThem) {
   const Noisy data = noisyPlane(20000, 1.0, 0.33, 0.03, 14);
   OutlierParams p;

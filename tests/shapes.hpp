@@ -28,6 +28,17 @@ inline PointCloud sphereCloud(std::size_t n, double radius = 1.0, std::uint64_t 
   return c;
 }
 
+/// Two separate spheres sampled at very different densities, as the objects of a scan at different ranges: radius
+/// 1 at the origin with @p denseCount points and radius 3 centred at (10, 0, 0) with a tenth of them (9× the area
+/// with under a tenth of the points: a tenth of the density of the first, squared). Outward normals.
+inline PointCloud twoDensitySpheres(std::size_t denseCount, std::uint64_t seed = 1) {
+  PointCloud c = sphereCloud(denseCount, 1.0, seed);
+  const PointCloud sparse = sphereCloud(denseCount / 10, 3.0, seed + 1, Eigen::Vector3d(10, 0, 0));
+  c.points.insert(c.points.end(), sparse.points.begin(), sparse.points.end());
+  c.normals.insert(c.normals.end(), sparse.normals.begin(), sparse.normals.end());
+  return c;
+}
+
 /// Random points on the square [0,size]² in the z = 0 plane; density grows by @p ratio along x.
 inline PointCloud planeCloud(std::size_t n, double size = 1.0, double ratio = 1.0, std::uint64_t seed = 2) {
   std::mt19937_64 rng(seed);

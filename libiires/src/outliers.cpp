@@ -30,6 +30,12 @@ constexpr std::size_t kNearPlanePoints = 9;     // the nearest trusted point and
 /// A point whose spacing exceeds this many times the cloud's 90th-percentile spacing is an outlier, whatever its
 /// neighbours: sparse parts of real scans stay well within it, a point diagonals away from the object does not.
 constexpr double kIsolation = 10.0;
+/// A sheet, for the isolation test: at least kSheetPoints neighbours whose smallest covariance eigenvalue is at
+/// most kSheetVariation of the three (a noisy scan's sheet stays well under it; points scattered in space lie
+/// near 1/3), and the point within kSheetDistance local spacings of their plane.
+constexpr std::size_t kSheetPoints = 8;
+constexpr double kSheetVariation = 0.05;
+constexpr double kSheetDistance = 0.5;
 
 void checkCloud(const PointCloud& cloud, std::size_t minPoints) {
   if (cloud.empty()) throw InputError("processOutliers: the cloud is empty");
@@ -43,7 +49,7 @@ void checkCloud(const PointCloud& cloud, std::size_t minPoints) {
 
 /// Unweighted least-squares plane through points[idx]: |distance| of @p p to it.
 double planeDistance(const Eigen::Vector3d& p, const std::vector<Eigen::Vector3d>& points,
-                     const std::vector<std::uint32_t>& idx) {
+                     const std::vector<std::uint32_t>& idx, double* variation = nullptr) {
   Eigen::Vector3d c = Eigen::Vector3d::Zero();
   for (std::uint32_t j : idx) c += points[j];
   c /= static_cast<double>(idx.size());
@@ -55,6 +61,7 @@ double planeDistance(const Eigen::Vector3d& p, const std::vector<Eigen::Vector3d
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
   eig.computeDirect(cov);
   const Eigen::Vector3d n = eig.eigenvectors().col(0);
+  if (variation) *variation = eig.eigenvalues()(0) / std::max(eig.eigenvalues().sum(), 1e-300);
   return std::abs(n.dot(p - c));
 }
 
@@ -128,7 +135,7 @@ bool onSharedPlane(const std::vector<Eigen::Vector3d>& P, const std::uint32_t* r
   return false;
 }
 
-/// eq. (5): projects each outlier onto the MLS plane of its nearest trusted point q's neighbourhood. Points
+/// eq. (5): projects each outlier onto the MLS plane of its nearest trusted point q's neighbourhood. Outliers
 /// flagged in @p isolated (far from the object) have no surface to land on and are removed instead; so is an
 /// outlier whose projection lands more than twice the fit's support radius h from a(q), where the plane no
 /// longer stands for the surface. An outlier within the plane's own scatter stays where it is.
@@ -151,7 +158,8 @@ void pullOutliers(const PointCloud& input, const OutlierParams& params, const st
     if (normals) cleanNormals.push_back(input.normals[i]);
   }
   result.cloud = input;
-  std::vector<std::uint8_t> unsupported = isolated;
+  std::vector<std::uint8_t> unsupported(n, 0), moved(n, 0);
+  for (std::uint32_t o : result.outliers) unsupported[o] = isolated[o];
   const std::optional<KnnIndex> cleanTree =
       cleanPoints.size() >= 3 ? std::optional<KnnIndex>(std::in_place, cleanPoints) : std::nullopt;
   parallelFor(cleanTree ? result.found : 0, threads, [&](std::size_t a) {
@@ -179,10 +187,10 @@ void pullOutliers(const PointCloud& input, const OutlierParams& params, const st
     if ((pulled - P[o]).norm() <= 2.0 * std::sqrt(rss / static_cast<double>(f))) return;
     result.cloud.points[o] = pulled;
     if (normals) result.cloud.normals[o] = plane.normal;
+    moved[o] = 1;
   });
-  const std::size_t dropped = static_cast<std::size_t>(std::count(unsupported.begin(), unsupported.end(), 1));
-  result.pulled = cleanTree ? result.found - dropped : 0;
-  if (dropped > 0) {
+  result.pulled = static_cast<std::size_t>(std::count(moved.begin(), moved.end(), 1));
+  if (std::count(unsupported.begin(), unsupported.end(), 1) > 0) {
     const PointCloud pulledCloud = std::move(result.cloud);
     removeOutliers(pulledCloud, unsupported, result);
   }
@@ -292,7 +300,9 @@ OutlierResult processOutliers(const PointCloud& input, const OutlierParams& para
   std::vector<double> localSpacing(n, 0.0);
   // Isolated points: every local test above compares a point with its neighbours, and points scattered far from
   // the object (and from each other) are each other's neighbours. Against the whole cloud they stand out: their
-  // spacing is many times the spacing of the sparsest tenth of the cloud.
+  // spacing is many times the spacing of the sparsest tenth of the cloud, and their neighbours lie on no sheet
+  // through them. A separate object sampled sparsely (under a tenth of the points) is as sparse, but a sheet:
+  // its neighbours' plane holds them (kSheetVariation) and it (kSheetDistance).
   const double isolation = kIsolation * quantile(spacing, 0.9);
   std::vector<std::uint8_t> isolated(n, 0);
   forEachPoint([&](std::size_t i) {
@@ -318,7 +328,12 @@ OutlierResult processOutliers(const PointCloud& input, const OutlierParams& para
         if (!suspect[rq[a]]) near.push_back(rq[a]);
       off = near.size() >= 3 && planeDistance(P[i], P, near) / local > params.nearPlaneThreshold;
     }
-    isolated[i] = spacing[i] > isolation;
+    if (spacing[i] > isolation) {  // isolated, unless a sheet of its neighbours holds it (a sparse object)
+      const std::vector<std::uint32_t> around(ri + 1, ri + ki);
+      double variation = 1;
+      const double offSheet = planeDistance(P[i], P, around, &variation) / local;
+      isolated[i] = around.size() < kSheetPoints || variation > kSheetVariation || offSheet > kSheetDistance;
+    }
     outlier[i] = (suspect[i] && off) || ratio > 2 * params.planeThreshold || isolated[i];
     trusted[i] = !suspect[i] && ratio <= params.planeThreshold;
     localSpacing[i] = local;
@@ -327,10 +342,11 @@ OutlierResult processOutliers(const PointCloud& input, const OutlierParams& para
   // points of it (joint, a clean 100k sampling: 15 points by the concave edge at y ≈ −0.46, pulled onto a
   // tilted plane 0.33 output spacings below the floor). On a sheet = the small plane (it and its 8 nearest
   // trusted neighbours) of one of its kNearPlaneSheets nearest trusted points within planeThreshold passes
-  // within nearPlaneThreshold of it. An outlier between two close sheets is off both sheets' planes.
+  // within nearPlaneThreshold of it. An outlier between two close sheets is off both sheets' planes. Isolated
+  // points are not rescued: their neighbours are other scattered points, whose planes prove nothing.
   if (std::isfinite(params.nearPlaneThreshold))
     forEachPoint([&](std::size_t i) {
-      if (!outlier[i]) return;
+      if (!outlier[i] || isolated[i]) return;
       const std::uint32_t* ri = row(i);
       std::vector<std::uint32_t> near;
       for (std::size_t a = 1, tried = 0; a < count[i] && tried < kNearPlaneSheets; ++a) {
@@ -347,8 +363,7 @@ OutlierResult processOutliers(const PointCloud& input, const OutlierParams& para
           return;
         }
       }
-      if (!isolated[i] && onSharedPlane(P, ri, std::min<std::size_t>(planeK + 1, count[i]), localSpacing[i]))
-        outlier[i] = 0;
+      if (onSharedPlane(P, ri, std::min<std::size_t>(planeK + 1, count[i]), localSpacing[i])) outlier[i] = 0;
     });
 
   OutlierResult result;
