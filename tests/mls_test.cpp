@@ -43,6 +43,27 @@ TEST(MlsSurface, ProjectsOntoSphere) {
   }
 }
 
+// The kernel widths of a separate object sampled at a tenth of the density keep its own scale (a cut at the
+// cloud's 90th percentile gave it the dense object's, a fraction of its spacing: every point a step off the
+// sparse sphere then went to its nearest input point); a lone far point's width is still cut.
+TEST(MlsSurface, SparseSeparateObjectKeepsItsKernelWidth) {
+  auto cloud = iires::test::twoDensitySpheres(10000, 12);
+  cloud.points.emplace_back(0, 0, 4);  // far from both: its 8th neighbour is 3 away
+  cloud.normals.emplace_back(0, 0, 1);
+  iires::MlsSurface surface(cloud.points, cloud.normals);
+  EXPECT_LT(surface.kernelWidth(cloud.size() - 1), 0.2);
+  EXPECT_NEAR(surface.area(), 4 * M_PI * 10, 0.15 * 4 * M_PI * 10);
+  std::mt19937_64 rng(4);
+  std::normal_distribution<double> g(0.0, 1.0);
+  double worst = 0;
+  for (int i = 0; i < 200; ++i) {
+    const Eigen::Vector3d d = randomDirection(rng);
+    const Eigen::Vector3d y = surface.project(Eigen::Vector3d(10, 0, 0) + d * (3.0 + 0.03 * g(rng)));
+    worst = std::max(worst, std::abs((y - Eigen::Vector3d(10, 0, 0)).norm() - 3.0));
+  }
+  EXPECT_LT(worst, 3e-3);
+}
+
 // A borrowed tree over the same points answers like the surface's own; one projection step from a point that
 // was on the surface before a small move lands close to the full projection (the relaxation relies on it).
 TEST(MlsSurface, BorrowedIndexAndSingleStepProjection) {

@@ -38,7 +38,8 @@ struct MlsCache {
 
 /// @brief Projection onto the MLS surface of a cloud with oriented normals.
 /// The kernel is θ(d) = exp(−d²/h²) (paper eq. 2) with h per input point = its distance to its 8th
-/// neighbour, clamped to the 90th percentile so an outlier cannot inflate it (DESIGN §3.3).
+/// neighbour, over the 90th percentile cut to its neighbours' median width at most, so an outlier cannot
+/// inflate it while a sparse separate object keeps its own (DESIGN §3.3).
 /// @note Holds a k-d tree over the input (or borrows @p index, a tree over exactly these points, which must
 /// then outlive the surface); the cloud must outlive the surface. project() is thread-safe.
 class MlsSurface {
