@@ -127,6 +127,37 @@ TEST(IntrinsicRule, SphereNeighboursAcceptedMirrorPointsRejected) {
   EXPECT_GT(similarG, mirrorOf.size() / 4) << "the reflection should give nearly equal G";
 }
 
+// On a separate object sampled at a tenth of the density, samples lie up to half its input spacing from
+// their nearest input point and the graph's steps are as long — more than the tolerance set by the cloud's
+// median spacing (the dense object's) allows. Neighbours there are accepted all the same (but where the sparse
+// graph detours): the tolerance takes the sparse part's scale (GeodesicCoordinates::samplingScale). Mirror points are still rejected (the distance
+// bound from the area the dense cloud covers, its sparse part included).
+TEST(IntrinsicRule, NeighboursOnASparseSeparateObjectAccepted) {
+  const PointCloud dense = test::twoDensitySpheres(10000, 9);
+  const auto geo = geodesicOf(dense);
+  IntrinsicRule rule(geo);
+  std::vector<Eigen::Vector3d> samples = test::fibonacciSphere(1800, 3.0);  // the output spacing at N = 2000
+  for (auto& p : samples) p += Eigen::Vector3d(10, 0, 0);
+  samples.push_back(Eigen::Vector3d(13, 0, 0));
+  samples.push_back(Eigen::Vector3d(7, 0, 0));  // its mirror through the centre
+  rule.update(samples, {});
+  const KnnIndex index(samples);
+  std::size_t accepted = 0, total = 0;
+  std::vector<std::uint32_t> idx;
+  std::vector<double> d2;
+  for (std::size_t i = 0; i < 1800; ++i) {
+    index.knn(samples[i], 7, idx, d2);
+    for (std::uint32_t j : idx) {
+      if (j == i || j >= 1800) continue;
+      ++total;
+      accepted += rule.accept(i, j);
+    }
+  }
+  // A graph of 1,000 random points has a few detours of several spacings (two pairs here).
+  EXPECT_GE(static_cast<double>(accepted), 0.999 * static_cast<double>(total)) << accepted << " of " << total;
+  EXPECT_FALSE(rule.accept(1800, 1801));
+}
+
 // Two spheres 0.01 apart: two components; no pair across is ever accepted.
 TEST(IntrinsicRule, TwoSpheresNeverLinked) {
   PointCloud dense = test::sphereCloud(20000, 0.5, 5, Eigen::Vector3d(-0.505, 0, 0));

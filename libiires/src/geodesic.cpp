@@ -16,6 +16,7 @@
 #include "iires/detail/disjoint_sets.hpp"
 #include "iires/io.hpp"
 #include "io_format.hpp"
+#include "sampling_scale.hpp"
 #include "iires/knn.hpp"
 #include "iires/detail/parallel.hpp"
 
@@ -214,6 +215,8 @@ struct GeodesicCoordinates::Impl {
   std::unique_ptr<KnnIndex> index;   // over sorted
   Graph graph;
   double spacing = 0;
+  double area = 0;
+  std::vector<float> scale;  // per point (caller's order): detail::samplingScale() of its neighbourhood
   GeodesicReport report;
 
   /// The k nearest neighbours of every point (internal order, k per point, padded with kNone / kInf), each
@@ -349,6 +352,16 @@ GeodesicCoordinates::Impl::NeighbourLists GeodesicCoordinates::Impl::neighbourLi
       eig.computeDirect(cov);
       lists.normal[i] = eig.eigenvectors().col(0).cast<float>();
     }
+  });
+  area = 0;  // in a fixed order
+  for (float d : nearestDist) area += M_PI * static_cast<double>(d) * d;
+  const std::vector<double> nn(nearestDist.begin(), nearestDist.end());
+  const detail::SpacingQuantiles quantiles = detail::spacingQuantiles(nn);
+  scale.assign(n, 1.0f);
+  parallelFor(n, threads, [&](std::size_t i) {
+    std::vector<double> around{nn[i]};
+    for (std::size_t r = 0; r < k && knn[i * k + r] != kNone; ++r) around.push_back(nn[knn[i * k + r]]);
+    scale[order[i]] = static_cast<float>(detail::samplingScale(around, quantiles));
   });
   std::nth_element(nearestDist.begin(), nearestDist.begin() + static_cast<std::ptrdiff_t>(n / 2), nearestDist.end());
   spacing = nearestDist[n / 2];
@@ -683,6 +696,8 @@ const std::vector<std::uint32_t>& GeodesicCoordinates::satellites(std::size_t c)
   return impl_->satellites.at(c);
 }
 double GeodesicCoordinates::spacing() const { return impl_->spacing; }
+double GeodesicCoordinates::area() const { return impl_->area; }
+float GeodesicCoordinates::samplingScale(std::size_t i) const { return impl_->scale[i]; }
 const GeodesicReport& GeodesicCoordinates::report() const { return impl_->report; }
 
 std::vector<float> GeodesicCoordinates::distanceField(std::uint32_t source) const {

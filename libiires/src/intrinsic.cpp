@@ -57,22 +57,23 @@ void IntrinsicRule::update(const std::vector<Eigen::Vector3d>& samples, const st
     std::copy_n(&geo_->coordinates()[dense_[i] * dims], dims, &coords_[i * dims]);
     if (gapTest) near_[i] = nearSheets_[dense_[i]];
   });
-  // Sample spacing estimate: the dense cloud covers about size()·(2·spacing)² of surface (a random sampling's
-  // mean nearest-neighbour distance is half its hexagonal spacing); N samples on it are about
-  // √(area / N) apart. Generous by design: the bound only has to stop mirror points.
+  // Sample spacing estimate: N samples on the dense cloud's area are about √(area / N) apart, and never closer
+  // than the dense points (a random sampling's mean nearest-neighbour distance is half their spacing).
+  // Generous by design: the bound only has to stop mirror points.
   maxDistance_ = 0;
   if (params_.maxDistanceSpacings > 0 && n > 0) {
     const double denseSpacing = 2.0 * geo_->spacing();
-    const double sampleSpacing =
-        std::max(denseSpacing, denseSpacing * std::sqrt(static_cast<double>(geo_->size()) / static_cast<double>(n)));
+    const double sampleSpacing = std::max(denseSpacing, std::sqrt(geo_->area() / static_cast<double>(n)));
     maxDistance_ = params_.maxDistanceSpacings * sampleSpacing;
   }
 }
 
-bool IntrinsicRule::consistent(const float* ga, const float* gb, double d) const {
+bool IntrinsicRule::consistent(const float* ga, const float* gb, double d, double scale) const {
   if (maxDistance_ > 0 && d > maxDistance_) return false;
-  // |gₛ(p) − gₛ(q)| ≤ d_geo(p, q) ≈ |p − q| for true neighbours (paper §3.2).
-  const double limit = params_.slope * d + tolerance_;
+  // |gₛ(p) − gₛ(q)| ≤ d_geo(p, q) ≈ |p − q| for true neighbours (paper §3.2). The tolerance, in dense spacings,
+  // grows by @p scale where the dense points are sampled more coarsely (their mapping's and the graph's errors
+  // grow with their spacing).
+  const double limit = params_.slope * d + tolerance_ * scale;
   for (std::size_t s = 0; s < dims_; ++s)
     if (std::abs(static_cast<double>(ga[s]) - gb[s]) > limit) return false;
   return true;
@@ -81,7 +82,8 @@ bool IntrinsicRule::consistent(const float* ga, const float* gb, double d) const
 bool IntrinsicRule::accept(std::size_t i, std::size_t j) const {
   if (i == j) return true;
   const double d = (pos_[i] - pos_[j]).norm();
-  if (comp_[i] != comp_[j] || !consistent(&coords_[i * dims_], &coords_[j * dims_], d)) return false;
+  if (comp_[i] != comp_[j]) return false;
+  if (!consistent(&coords_[i * dims_], &coords_[j * dims_], d, pairScale(dense_[i], dense_[j]))) return false;
   return near_.empty() || !(near_[i] || near_[j]) ||
          !acrossGap(pos_[i], nrm_[i], pos_[j], nrm_[j], minGap_ + kGapSlope * d, kGapParallelCos);
 }
@@ -100,8 +102,9 @@ bool IntrinsicRule::acceptPoints(const Eigen::Vector3d& p, const Eigen::Vector3d
   const std::int64_t a = geo_->nearest(p), b = geo_->nearest(q);
   if (a < 0 || b < 0 || geo_->component(static_cast<std::size_t>(a)) != geo_->component(static_cast<std::size_t>(b)))
     return false;
-  return consistent(&geo_->coordinates()[static_cast<std::size_t>(a) * dims_],
-                    &geo_->coordinates()[static_cast<std::size_t>(b) * dims_], (p - q).norm());
+  const auto ua = static_cast<std::size_t>(a), ub = static_cast<std::size_t>(b);
+  return consistent(&geo_->coordinates()[ua * dims_], &geo_->coordinates()[ub * dims_], (p - q).norm(),
+                    pairScale(ua, ub));
 }
 
 }  // namespace iires

@@ -139,6 +139,14 @@ class GeodesicCoordinates {
 
   /// @brief Median nearest-neighbour distance of the cloud.
   double spacing() const;
+  /// @brief Estimated surface area: Σ over points of π·d², d the point's nearest-neighbour distance (a random
+  /// sampling's mean d is half the distance between points, whatever its density, so parts sparser than the
+  /// median count with their own spacing).
+  double area() const;
+  /// @brief 1, or where point @p i lies in a part sampled on a coarser scale than the rest (the median
+  /// nearest-neighbour distance of it and its neighbours over twice the cloud's 90th percentile: a separate
+  /// object scanned sparsely), that distance over the cloud's median.
+  float samplingScale(std::size_t i) const;
   /// @brief Undirected graph edges as (a, b), a < b, sorted — for inspection and tests.
   std::vector<std::array<std::uint32_t, 2>> edges() const;
   const GeodesicReport& report() const;

@@ -13,6 +13,7 @@
 /// far apart in space, e.g. on a sphere) are rejected by the Euclidean bound.
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <cstdint>
 #include <memory>
 #include <vector>
@@ -29,7 +30,8 @@ struct IntrinsicParams {
   /// graph distances' error and curvature between neighbours).
   double slope = 1.5;
   /// The tolerance in units of the dense cloud's spacing (median nearest-neighbour distance): covers mapping
-  /// each sample to its nearest dense point and the graph's discretisation (≥ 0).
+  /// each sample to its nearest dense point and the graph's discretisation (≥ 0). In a part sampled on a
+  /// coarser scale than the rest (GeodesicCoordinates::samplingScale) it grows by that scale.
   double toleranceSpacings = 4.0;
   /// Euclidean bound: reject pairs farther apart than this many *sample* spacings (estimated from the dense
   /// spacing and the sample count), so the rule is safe on its own against mirror points. 0 = no bound.
@@ -82,7 +84,11 @@ class IntrinsicRule final : public NeighbourRule {
 
  private:
   /// The distance and coordinate bounds between two points of one component with coordinates @p ga, @p gb.
-  bool consistent(const float* ga, const float* gb, double d) const;
+  bool consistent(const float* ga, const float* gb, double d, double scale) const;
+  /// The coarser samplingScale() of two dense points.
+  double pairScale(std::size_t a, std::size_t b) const {
+    return std::max(geo_->samplingScale(a), geo_->samplingScale(b));
+  }
 
   std::shared_ptr<const GeodesicCoordinates> geo_;
   IntrinsicParams params_;
