@@ -117,6 +117,28 @@ TEST(Resample, TwoNearlyTouchingSpheresSplitByArea) {
   for (const auto& e : r.ringEdges) EXPECT_EQ(onSmall(e[0]), onSmall(e[1])) << "a 1-ring edge links the spheres";
 }
 
+// Objects at different densities (a tenth of the points on nine times the area): the samples split by area
+// and are evenly spaced on both. Every stage used to read the sparse sphere at the dense one's scale — kernel
+// widths and the area cut at the cloud's 90th percentile, the initial samples eliminated to N among the input
+// points (the sparse sphere has fewer than its share), the neighbour rule's tolerance below the samples'
+// distance to their nearest input point: 1,070 samples on the small sphere instead of 200, cv 0.48.
+TEST(Resample, SeparateObjectsAtDifferentDensitiesSplitByArea) {
+  const auto cloud = iires::test::twoDensitySpheres(10000, 41);
+  const auto r = iires::resample(cloud, paramsFor(2000));
+  ASSERT_EQ(r.cloud.size(), 2000u);
+  std::size_t onSparse = 0;
+  double worst = 0;
+  for (const auto& p : r.cloud.points) {
+    const bool sparse = p.x() > 5;
+    onSparse += sparse;
+    worst = std::max(worst, sparse ? std::abs((p - Eigen::Vector3d(10, 0, 0)).norm() - 3.0) / 3.0
+                                   : std::abs(p.norm() - 1.0));
+  }
+  EXPECT_NEAR(static_cast<double>(onSparse) / 2000.0, 0.9, 0.02);
+  EXPECT_LT(r.spacing.cv, 0.08);
+  EXPECT_LT(worst, 2e-3);
+}
+
 // A sparse open tube (mesh-vertex-like rings of 24 points, 0.065 apart, the end rings exactly at z = 0 and
 // z = 1) upsampled ten times: samples stay within a quarter input spacing of the open ends, where the MLS
 // surface would carry on along the tube (it used to put samples 1.5 input spacings past them, like the CGAL

@@ -493,6 +493,23 @@ Rings Resampler::edgeRings(const Samples& s, double l, const Relaxation& state) 
   return computeRings(s, 1.5 * l, &wide, false);
 }
 
+/// How many samples the input points cannot stand for where the input is sparser than @p count samples: Σ over
+/// the input points of (the samples the area a point represents holds − 1) where that is positive. The area
+/// of point i is π·h_i²/8 (MlsSurface::area()); in adaptive mode divided by its size factor squared.
+std::size_t Resampler::sparseDeficit(std::size_t count) const {
+  const std::size_t m = pts_.size();
+  std::vector<double> area(m);
+  parallelFor(m, exec_.threads, [&](std::size_t i) {
+    const double h = surface_.kernelWidth(i), sz = size_ ? (*size_)[i] : 1.0;
+    area[i] = h * h / (sz * sz);
+  });
+  const double total = std::accumulate(area.begin(), area.end(), 0.0);
+  if (!(total > 0)) return 0;
+  double deficit = 0;
+  for (double a : area) deficit += std::max(0.0, static_cast<double>(count) * a / total - 1.0);
+  return static_cast<std::size_t>(deficit);
+}
+
 /// Weighted sample elimination (Yuksel 2015) of free samples down to @p count: repeatedly drop the sample whose
 /// neighbours within 2·r_max crowd it most. Gives a Poisson-disk-like set whatever the input density.
 void Resampler::eliminate(Samples& s, std::size_t count) {
@@ -659,7 +676,9 @@ Samples Resampler::initialise(const std::vector<std::uint32_t>& chosen, Resample
   hold(params_.contextSamples, Samples::kContext);
   // Candidates are input points (on the cloud already): only the survivors of the elimination are projected.
   for (std::uint32_t c : chosen) s.add(pts_[c], normals_[c], 0);
-  eliminate(s, n);
+  // Parts sparser than the output (another object sampled sparsely) hold fewer input points than samples: the
+  // rest is thinned to its own share, and the count passes split the sparse parts' edges up to N.
+  eliminate(s, n - std::min(n, sparseDeficit(n)));
   parallelFor(s.size(), exec_.threads, [&](std::size_t i) {
     if (!s.fixed[i]) s.pos[i] = surface_.project(s.pos[i], &s.nrm[i], nullptr, &s.nrm[i], &s.cache[i]);
   });

@@ -90,6 +90,7 @@ class Resampler {
   void carry(Relaxation& state, const EditMap& edits, std::size_t count) const;
   Rings edgeRings(const Samples& s, double l, const Relaxation& state) const;
   void eliminate(Samples& s, std::size_t count);
+  std::size_t sparseDeficit(std::size_t count) const;
   void forceCount(Samples& s, Relaxation& relaxation);
   /// The neighbour rule's update after a change of the sample set (or a drift, see relax()).
   void updateRule(const Samples& s);
