@@ -176,14 +176,18 @@ TEST(Geodesic, RunsIndependentWorkAlongsideTheSweeps) {
   const GeodesicCoordinates plain(c, p);
   for (int threads : {1, 2}) {
     int calls = 0, given = 0;
-    const GeodesicCoordinates g(c, p, Execution{threads}, nullptr, [&](int t, const KnnIndex*) { ++calls, given = t; });
+    const GeodesicCoordinates g(c, p, Execution{threads}, nullptr, [&](int t, const KnnIndex*, const std::vector<float>&) {
+      ++calls, given = t;
+    });
     EXPECT_EQ(calls, 1);
     EXPECT_EQ(given, 1)
         << "one component: one thread sweeps, the other is free (or, on one thread, after it)";
     EXPECT_EQ(g.coordinates(), plain.coordinates());
     EXPECT_THROW(
         GeodesicCoordinates(c, p, {}, nullptr,
-                            [](int, const KnnIndex*) { throw std::runtime_error("alongside failed"); }),
+                            [](int, const KnnIndex*, const std::vector<float>&) {
+                              throw std::runtime_error("alongside failed");
+                            }),
         std::runtime_error);
   }
 }
@@ -198,7 +202,7 @@ TEST(Geodesic, AlongsideGetsThePointIndexOfAZOrderedCloud) {
     const PointCloud& cloud = ordered ? z : c;
     const KnnIndex* seen = nullptr;
     std::int64_t nearest = -1;
-    const GeodesicCoordinates g(cloud, {}, {}, nullptr, [&](int, const KnnIndex* index) {
+    const GeodesicCoordinates g(cloud, {}, {}, nullptr, [&](int, const KnnIndex* index, const std::vector<float>&) {
       seen = index;
       if (index) nearest = index->nearest(cloud.points[1234]);
     });

@@ -130,7 +130,7 @@ TEST(IntrinsicRule, SphereNeighboursAcceptedMirrorPointsRejected) {
 // On a separate object sampled at a tenth of the density, samples lie up to half its input spacing from
 // their nearest input point and the graph's steps are as long — more than the tolerance set by the cloud's
 // median spacing (the dense object's) allows. Neighbours there are accepted all the same (but where the sparse
-// graph detours): the tolerance takes the sparse part's scale (GeodesicCoordinates::samplingScale). Mirror points are still rejected (the distance
+// graph detours): the tolerance takes the sparse part's scale (GeodesicCoordinates::samplingScales). Mirror points are still rejected (the distance
 // bound from the area the dense cloud covers, its sparse part included).
 TEST(IntrinsicRule, NeighboursOnASparseSeparateObjectAccepted) {
   const PointCloud dense = test::twoDensitySpheres(10000, 9);

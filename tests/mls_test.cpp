@@ -7,6 +7,7 @@
 
 #include <random>
 
+#include "iires/geodesic.hpp"
 #include "iires/knn.hpp"
 
 #include "shapes.hpp"
@@ -43,14 +44,19 @@ TEST(MlsSurface, ProjectsOntoSphere) {
   }
 }
 
-// The kernel widths of a separate object sampled at a tenth of the density keep its own scale (a cut at the
-// cloud's 90th percentile gave it the dense object's, a fraction of its spacing: every point a step off the
-// sparse sphere then went to its nearest input point); a lone far point's width is still cut.
+// With the sampling scales of the geodesic coordinates' components, the kernel widths of a separate object
+// sampled at a tenth of the density keep its own scale (the clamp at the cloud's 90th percentile alone gives it
+// the dense object's, a fraction of its spacing: every point a step off the sparse sphere then goes to its nearest
+// input point); a lone far point's width is still cut.
 TEST(MlsSurface, SparseSeparateObjectKeepsItsKernelWidth) {
   auto cloud = iires::test::twoDensitySpheres(10000, 12);
   cloud.points.emplace_back(0, 0, 4);  // far from both: its 8th neighbour is 3 away
   cloud.normals.emplace_back(0, 0, 1);
-  iires::MlsSurface surface(cloud.points, cloud.normals);
+  const iires::GeodesicCoordinates geo(cloud);
+  const std::vector<float>& scales = geo.samplingScales();
+  EXPECT_GT(scales[cloud.size() - 2], 5.0f);  // on the sparse sphere
+  EXPECT_EQ(scales[0], 1.0f);
+  iires::MlsSurface surface(cloud.points, cloud.normals, {}, {}, nullptr, nullptr, {}, &scales);
   EXPECT_LT(surface.kernelWidth(cloud.size() - 1), 0.2);
   EXPECT_NEAR(surface.area(), 4 * M_PI * 10, 0.15 * 4 * M_PI * 10);
   std::mt19937_64 rng(4);

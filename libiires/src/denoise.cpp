@@ -13,7 +13,6 @@
 #include "iires/knn.hpp"
 #include "iires/normals.hpp"
 #include "iires/detail/parallel.hpp"
-#include "kernel_width.hpp"
 #include "quadric_fit.hpp"
 
 namespace iires {
@@ -213,20 +212,11 @@ Rows findRows(const std::vector<Eigen::Vector3d>& in, const std::vector<std::uin
     nearest[i] = std::sqrt(d2[std::min<std::size_t>(f - 1, 1)]);
   });
   r.spacing = std::accumulate(nearest.begin(), nearest.end(), 0.0) / static_cast<double>(n);
-  // Robust kernel width (DESIGN §3.3): cut at a quantile, so one outlier's huge h_i stays local, at a scale of
-  // their own where the points around are sparser (clampWidths); a point whose own h is 0 (duplicates) gets the
-  // median.
+  // Robust kernel width (DESIGN §3.3): clamp h to a quantile, so one outlier's huge h_i stays local; a
+  // point whose own h is 0 (duplicates) gets the median.
   const double cap = quantile(r.h, kernelQuantile);
   r.medianH = quantile(r.h, 0.5);
-  detail::clampWidths(
-      r.h, nearest, cap,
-      [&](std::size_t i, std::vector<std::uint32_t>& idx) {
-        const std::uint32_t* row = r.nbr.data() + i * K;
-        idx.assign(row, row + std::min<std::size_t>(r.found[i], kernelK + 1));
-      },
-      threads);
-  for (double& hi : r.h)
-    if (!(hi > 0)) hi = r.medianH > 0 ? r.medianH : 1.0;
+  for (double& hi : r.h) hi = hi > 0 ? std::min(hi, cap) : (r.medianH > 0 ? r.medianH : 1.0);
   return r;
 }
 

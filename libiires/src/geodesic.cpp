@@ -16,7 +16,6 @@
 #include "iires/detail/disjoint_sets.hpp"
 #include "iires/io.hpp"
 #include "io_format.hpp"
-#include "sampling_scale.hpp"
 #include "iires/knn.hpp"
 #include "iires/detail/parallel.hpp"
 
@@ -216,7 +215,7 @@ struct GeodesicCoordinates::Impl {
   Graph graph;
   double spacing = 0;
   double area = 0;
-  std::vector<float> scale;  // per point (caller's order): detail::samplingScale() of its neighbourhood
+  std::vector<float> scale;  // per point (caller's order): its component's samplingScale()
   GeodesicReport report;
 
   /// The k nearest neighbours of every point (internal order, k per point, padded with kNone / kInf), each
@@ -241,6 +240,7 @@ struct GeodesicCoordinates::Impl {
   NeighbourLists neighbourLists(const NeighbourTable* table);
   std::vector<std::uint8_t> filterEdges(const NeighbourLists& lists) const;
   Components findComponents(const NeighbourLists& lists, const std::vector<std::uint8_t>& keep);
+  void componentScales(const NeighbourLists& lists, const Components& components);
   void buildGraph(const NeighbourLists& lists, const std::vector<std::uint8_t>& keep, const Components& components);
   void satellitesAndFields(const Components& components, const GeodesicCoordinates::Alongside& alongside);
   // Parts of satellitesAndFields().
@@ -264,6 +264,7 @@ void GeodesicCoordinates::Impl::build(const NeighbourTable* table,
   // 3. components and the graph
   t = Clock::now();
   const Components components = findComponents(lists, keep);
+  componentScales(lists, components);
   buildGraph(lists, keep, components);
   report.componentSeconds = secondsSince(t);
   lists = {};
@@ -355,17 +356,27 @@ GeodesicCoordinates::Impl::NeighbourLists GeodesicCoordinates::Impl::neighbourLi
   });
   area = 0;  // in a fixed order
   for (float d : nearestDist) area += M_PI * static_cast<double>(d) * d;
-  const std::vector<double> nn(nearestDist.begin(), nearestDist.end());
-  const detail::SpacingQuantiles quantiles = detail::spacingQuantiles(nn);
-  scale.assign(n, 1.0f);
-  parallelFor(n, threads, [&](std::size_t i) {
-    std::vector<double> around{nn[i]};
-    for (std::size_t r = 0; r < k && knn[i * k + r] != kNone; ++r) around.push_back(nn[knn[i * k + r]]);
-    scale[order[i]] = static_cast<float>(detail::samplingScale(around, quantiles));
-  });
   std::nth_element(nearestDist.begin(), nearestDist.begin() + static_cast<std::ptrdiff_t>(n / 2), nearestDist.end());
   spacing = nearestDist[n / 2];
   return lists;
+}
+
+/// Per point (scale), how much more coarsely than the cloud its component is sampled: the component's median
+/// nearest-neighbour distance over the cloud's (spacing), at least 1.
+void GeodesicCoordinates::Impl::componentScales(const NeighbourLists& lists, const Components& components) {
+  const std::size_t n = points.size(), k = static_cast<std::size_t>(params.k);
+  std::vector<std::vector<float>> nearest(components.count);
+  for (std::size_t i = 0; i < n; ++i)
+    if (lists.distance[i * k] < kInf) nearest[components.id[i]].push_back(lists.distance[i * k]);
+  std::vector<float> of(components.count, 1.0f);
+  for (std::uint32_t c = 0; c < components.count; ++c) {
+    std::vector<float>& d = nearest[c];
+    if (d.empty() || !(spacing > 0)) continue;
+    std::nth_element(d.begin(), d.begin() + static_cast<long>(d.size() / 2), d.end());
+    of[c] = std::max(1.0f, static_cast<float>(d[d.size() / 2] / spacing));
+  }
+  scale.resize(n);
+  for (std::size_t i = 0; i < n; ++i) scale[order[i]] = of[components.id[i]];
 }
 
 /// Which k-NN entries become edges, by symmetric tests (so both directions agree): 0 = dropped, 1 = kept and
@@ -611,7 +622,7 @@ void GeodesicCoordinates::Impl::satellitesAndFields(const Components& components
   };
   auto besides = [&](int spare) {
     if (!index) index = std::make_unique<KnnIndex>(*sorted);
-    if (alongside) alongside(spare, sortedCopy.empty() ? index.get() : nullptr);
+    if (alongside) alongside(spare, sortedCopy.empty() ? index.get() : nullptr, scale);
   };
   if (team > nThreads) {  // the sweeps on a thread of their own, the other work on the idle ones
     std::exception_ptr failure;
@@ -697,7 +708,7 @@ const std::vector<std::uint32_t>& GeodesicCoordinates::satellites(std::size_t c)
 }
 double GeodesicCoordinates::spacing() const { return impl_->spacing; }
 double GeodesicCoordinates::area() const { return impl_->area; }
-float GeodesicCoordinates::samplingScale(std::size_t i) const { return impl_->scale[i]; }
+const std::vector<float>& GeodesicCoordinates::samplingScales() const { return impl_->scale; }
 const GeodesicReport& GeodesicCoordinates::report() const { return impl_->report; }
 
 std::vector<float> GeodesicCoordinates::distanceField(std::uint32_t source) const {

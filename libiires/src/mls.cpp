@@ -8,7 +8,6 @@
 
 #include "iires/detail/parallel.hpp"
 #include "iires/sheets.hpp"
-#include "kernel_width.hpp"
 #include "quadric_fit.hpp"
 
 namespace iires {
@@ -84,7 +83,8 @@ double beyondHull(const std::vector<Eigen::Vector3d>& points, const std::vector<
 
 MlsSurface::MlsSurface(const std::vector<Eigen::Vector3d>& points,
                        const std::vector<Eigen::Vector3d>& normals, const MlsParams& params, const Execution& exec,
-                       const KnnIndex* index, const NeighbourTable* table, std::vector<std::uint8_t> nearSheets)
+                       const KnnIndex* index, const NeighbourTable* table, std::vector<std::uint8_t> nearSheets,
+                       const std::vector<float>* samplingScale)
     : points_(points),
       normals_(normals),
       params_(params),
@@ -92,6 +92,8 @@ MlsSurface::MlsSurface(const std::vector<Eigen::Vector3d>& points,
       nearSheets_(std::move(nearSheets)) {
   if (!nearSheets_.empty() && nearSheets_.size() != points.size())
     throw std::invalid_argument("MlsSurface: nearSheets must hold one flag per point");
+  if (samplingScale && samplingScale->size() != points.size())
+    throw std::invalid_argument("MlsSurface: samplingScale must hold one value per point");
   const std::size_t n = points.size();
   h_.assign(n, 0.0);
   std::vector<double> nearest(n, 0.0);
@@ -105,22 +107,15 @@ MlsSurface::MlsSurface(const std::vector<Eigen::Vector3d>& points,
     h_[i] = std::sqrt(d2[found - 1]);
     nearest[i] = std::sqrt(d2[1]);
   });
-  // Robust kernel width: cut at the 90th percentile, so a lone outlier cannot inflate it, at a scale of their
-  // own where the points around are sparser (clampWidths).
+  // Robust kernel width: clamp to the 90th percentile so a lone outlier cannot inflate it (DESIGN §3.3), the
+  // clamp scaled by the point's sampling scale (a separate object sampled more coarsely keeps its own widths).
   std::vector<double> sorted = h_;
   const std::size_t q = std::min(n - 1, static_cast<std::size_t>(0.9 * static_cast<double>(n)));
   std::nth_element(sorted.begin(), sorted.begin() + static_cast<long>(q), sorted.end());
   const double cap = sorted[q];
-  detail::clampWidths(
-      h_, nearest, cap,
-      [&](std::size_t i, std::vector<std::uint32_t>& idx) {
-        std::vector<double> d2;
-        if (table) table->get(i, MlsSurface::kWidthNeighbours, idx, d2);
-        else index_->knn(points[i], MlsSurface::kWidthNeighbours, idx, d2);
-      },
-      exec.threads);
   double area = 0, spacing = 0;
   for (std::size_t i = 0; i < n; ++i) {
+    h_[i] = std::min(h_[i], samplingScale ? cap * (*samplingScale)[i] : cap);
     area += M_PI * h_[i] * h_[i] / static_cast<double>(kKernelNeighbour);
     spacing += nearest[i];
   }

@@ -53,9 +53,7 @@ struct DenoiseParams {
   /// h_i = distance from point i to its kernelNeighbour-th neighbour [8]; noise as wide as that kernel (a first
   /// sweep moving the points by over a fifth of it) restarts the sweeps with 4× the neighbours (at most 64)
   int kernelNeighbour = 8;
-  /// h over this quantile of all h_i keeps at most its neighbours' median h, so outliers cannot inflate
-  /// it while a sparse separate object keeps its own
-  double kernelQuantile = 0.9;
+  double kernelQuantile = 0.9;  ///< h is clamped to this quantile of all h_i, so outliers cannot inflate it
   int iterations = 3;  ///< projection sweeps (Jacobi: each sweep reads the previous sweep's positions)
   /// 1 = the paper's plane (eq. 3): p moves along n_a onto the plane through a(p);
   /// 2 = the same move along n_a, onto a θ-weighted quadric height field over that plane, which removes the

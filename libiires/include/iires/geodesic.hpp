@@ -86,14 +86,16 @@ struct GeodesicReport {
 /// point index).
 class GeodesicCoordinates {
  public:
-  using Alongside = std::function<void(int threads, const KnnIndex* pointIndex)>;
+  using Alongside =
+      std::function<void(int threads, const KnnIndex* pointIndex, const std::vector<float>& samplingScales)>;
 
   /// @param cloud points, with normals (oriented) or without
   /// @param table (optional) neighbour lists of exactly cloud.points with k ≥ params.k + 1, borrowed for the
   /// build of the graph, to save its k-NN search; not read once @p alongside runs (which may free it)
   /// @param alongside (optional) work that does not need the coordinates, called once with the number of
   /// threads it may use and the k-d tree over cloud.points when they came in Z-order (mortonOrder(), as the
-  /// resampler's working cloud does), else null; the tree lives as long as this object. It runs during the
+  /// resampler's working cloud does), else null; the tree lives as long as this object; and samplingScales(). It
+  /// runs during the
   /// satellite sweeps when those leave threads idle (fewer components than threads: each component's sweeps
   /// are serial), else after them. Its exceptions propagate.
   /// @throws InputError when the cloud is empty or has non-finite coordinates; std::invalid_argument for
@@ -143,10 +145,9 @@ class GeodesicCoordinates {
   /// sampling's mean d is half the distance between points, whatever its density, so parts sparser than the
   /// median count with their own spacing).
   double area() const;
-  /// @brief 1, or where point @p i lies in a part sampled on a coarser scale than the rest (the median
-  /// nearest-neighbour distance of it and its neighbours over twice the cloud's 90th percentile: a separate
-  /// object scanned sparsely), that distance over the cloud's median.
-  float samplingScale(std::size_t i) const;
+  /// @brief Per point: how much more coarsely than the cloud its component is sampled (a separate object
+  /// scanned sparsely) — the component's median nearest-neighbour distance over the cloud's, at least 1.
+  const std::vector<float>& samplingScales() const;
   /// @brief Undirected graph edges as (a, b), a < b, sorted — for inspection and tests.
   std::vector<std::array<std::uint32_t, 2>> edges() const;
   const GeodesicReport& report() const;

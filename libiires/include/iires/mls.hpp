@@ -38,8 +38,8 @@ struct MlsCache {
 
 /// @brief Projection onto the MLS surface of a cloud with oriented normals.
 /// The kernel is θ(d) = exp(−d²/h²) (paper eq. 2) with h per input point = its distance to its 8th
-/// neighbour, over the 90th percentile cut to its neighbours' median width at most, so an outlier cannot
-/// inflate it while a sparse separate object keeps its own (DESIGN §3.3).
+/// neighbour, clamped to the 90th percentile so an outlier cannot inflate it (DESIGN §3.3) — times the point's
+/// sampling scale when given (a separate object sampled more coarsely keeps its own widths).
 /// @note Holds a k-d tree over the input (or borrows @p index, a tree over exactly these points, which must
 /// then outlive the surface); the cloud must outlive the surface. project() is thread-safe.
 class MlsSurface {
@@ -51,9 +51,12 @@ class MlsSurface {
   /// constructing, to save the kernel widths' k-NN search
   /// @param nearSheets (optional) per point, 1 where the sheet rule found another sheet near (separateSheets):
   /// the sheet gate (MlsParams::sheetGap) applies only there; without it, everywhere
+  /// @param samplingScale (optional) per point, how much more coarsely its part is sampled than the cloud
+  /// (GeodesicCoordinates::samplingScales): the widths' clamp grows by it
   MlsSurface(const std::vector<Eigen::Vector3d>& points, const std::vector<Eigen::Vector3d>& normals,
              const MlsParams& params = {}, const Execution& exec = {}, const KnnIndex* index = nullptr,
-             const NeighbourTable* table = nullptr, std::vector<std::uint8_t> nearSheets = {});
+             const NeighbourTable* table = nullptr, std::vector<std::uint8_t> nearSheets = {},
+             const std::vector<float>* samplingScale = nullptr);
   ~MlsSurface();
 
   /// @brief Project @p x onto the surface. @p normal (optional) receives the surface normal there,
