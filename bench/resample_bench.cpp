@@ -2,6 +2,9 @@
 // Resampling benchmark: iires vs Open3D farthest-point and voxel down-sampling on the same non-uniform dense
 // sampling of a CGAL model, in one run. Prints one key=value line per (model, input, N, method).
 // Usage: resample_bench MESH INPUT_COUNT N [N ...] [--density-ratio R] [--fps-limit X] [--threads T] [--no-peers]
+//        [--split-x X]
+// --split-x X adds share_beyond (the share of the output with x > X: a second object placed there) and
+// area_beyond (the same share of a uniform sampling of the mesh: the area share an isotropic output has).
 #include <open3d/geometry/PointCloud.h>
 
 #include <chrono>
@@ -21,6 +24,13 @@ namespace {
 
 double now() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
 
+/// Share of @p pts with x > @p split.
+double shareBeyond(const std::vector<Eigen::Vector3d>& pts, double split) {
+  std::size_t m = 0;
+  for (const auto& p : pts) m += p.x() > split;
+  return pts.empty() ? 0.0 : static_cast<double>(m) / static_cast<double>(pts.size());
+}
+
 void report(const std::string& prefix, const std::string& method, const std::vector<Eigen::Vector3d>& pts,
             double seconds, const iires::MeshDistance& mesh, const std::vector<Eigen::Vector3d>& reference,
             const std::string& extra = "") {
@@ -37,14 +47,19 @@ void report(const std::string& prefix, const std::string& method, const std::vec
 }  // namespace
 
 int main(int argc, char** argv) {
-  double fpsLimit = 2e10;
+  double fpsLimit = 2e10, split = std::nan("");
   bool peers = true;
   const iires::bench::GridArgs args = iires::bench::parseGridArgs(
       argc, argv, 5.0,
-      "resample_bench MESH INPUT_COUNT N [N ...] [--density-ratio R] [--fps-limit X] [--threads T] [--no-peers]",
+      "resample_bench MESH INPUT_COUNT N [N ...] [--density-ratio R] [--fps-limit X] [--threads T] [--no-peers] "
+      "[--split-x X]",
       [&](const std::string& arg, int& a) {
         if (arg == "--no-peers") {
           peers = false;
+          return true;
+        }
+        if (arg == "--split-x" && a + 1 < argc) {
+          split = std::stod(argv[++a]);
           return true;
         }
         if (arg != "--fps-limit" || a + 1 >= argc) return false;
@@ -62,6 +77,14 @@ int main(int argc, char** argv) {
   const auto reference = iires::sampleMesh(mesh, rp).points;
   const iires::MeshDistance distance(mesh);
   const std::string name = args.name();
+  // The split's extra fields for a method's output.
+  const double areaBeyond = shareBeyond(reference, split);
+  auto beyond = [&](const std::vector<Eigen::Vector3d>& pts) {
+    if (std::isnan(split)) return std::string();
+    char buf[96];
+    std::snprintf(buf, sizeof buf, " share_beyond=%.4f area_beyond=%.4f", shareBeyond(pts, split), areaBeyond);
+    return std::string(buf);
+  };
 
   open3d::geometry::PointCloud o3d;
   o3d.points_ = cloud.points;
@@ -75,12 +98,13 @@ int main(int argc, char** argv) {
     std::string stages = " working=" + std::to_string(r.thinnedPoints);  // then the time per stage
     for (const auto& s : r.timings)
       if (s.name != "total") stages += " t_" + s.name + "=" + std::to_string(s.seconds).substr(0, 6);
-    report(prefix, "iires", r.cloud.points, seconds, distance, reference, stages);
+    report(prefix, "iires", r.cloud.points, seconds, distance, reference, beyond(r.cloud.points) + stages);
     if (!peers) continue;
     if (static_cast<double>(n) * static_cast<double>(inputCount) <= fpsLimit) {
       t = now();
       const auto fps = o3d.FarthestPointDownSample(n);
-      report(prefix, "open3d_fps", fps->points_, now() - t, distance, reference);
+      const double fpsSeconds = now() - t;
+      report(prefix, "open3d_fps", fps->points_, fpsSeconds, distance, reference, beyond(fps->points_));
     } else {
       std::printf("%s method=open3d_fps skipped=n*N>%.0g\n", prefix.c_str(), fpsLimit);
     }
@@ -95,7 +119,8 @@ int main(int argc, char** argv) {
       if (std::abs(got - static_cast<double>(n)) <= 0.02 * static_cast<double>(n)) break;
       (got > static_cast<double>(n) ? lo : hi) = mid;
     }
-    report(prefix, "open3d_voxel", voxel->points_, now() - t, distance, reference);
+    const double voxelSeconds = now() - t;
+    report(prefix, "open3d_voxel", voxel->points_, voxelSeconds, distance, reference, beyond(voxel->points_));
   }
   return 0;
 }
