@@ -313,14 +313,15 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params, const Ex
   // component) leave threads idle.
   std::optional<MlsSurface> surface;
   std::vector<std::uint32_t> candidates;
-  auto independent = [&](int threads, const KnnIndex* pointIndex, const std::vector<float>* samplingScales) {
+  auto independent = [&](int threads, const KnnIndex* pointIndex, const std::vector<float>& samplingScales) {
     auto t = clock.begin("surface");
     MlsParams mp = params.mls;
     if (!params.intrinsic) mp.sheetGap = 0;  // straight-line neighbourhoods
     if (params.sharpEdges && mp.normalSigma == 0) mp.normalSigma = kSharpNormalSigma;
     result.nearSheets = nearSheets;
     surface.emplace(cloud.points, cloud.normals, mp, Execution{threads}, index ? &*index : pointIndex,
-                    neighbours ? &*neighbours : nullptr, std::move(nearSheets), samplingScales);
+                    neighbours ? &*neighbours : nullptr, std::move(nearSheets),
+                    samplingScales.empty() ? nullptr : &samplingScales);
     neighbours.reset();  // read by nothing after the surface and the geodesic graph (memory at 5M)
     clock.end("surface", t);
     t = clock.begin("candidates");
@@ -331,17 +332,14 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params, const Ex
   std::shared_ptr<NeighbourRule> rule = params.neighbourRule;
   if (geodesicRule) {
     t = clock.begin("geodesic");  // includes the independent stages where they ran during its sweeps
-    result.geodesic = std::make_shared<const GeodesicCoordinates>(
-        cloud, gp, exec, neighbours ? &*neighbours : nullptr,
-        [&](int threads, const KnnIndex* pointIndex, const std::vector<float>& scales) {
-          independent(threads, pointIndex, &scales);
-        });
+    result.geodesic = std::make_shared<const GeodesicCoordinates>(cloud, gp, exec,
+                                                                  neighbours ? &*neighbours : nullptr, independent);
     rule = std::make_shared<IntrinsicRule>(result.geodesic, params.intrinsicRule, exec, result.nearSheets);
     result.components = result.geodesic->components();
     result.satellites = result.components * static_cast<std::size_t>(gp.satellites);
     clock.end("geodesic", t);
   } else {
-    independent(exec.threads, nullptr, nullptr);
+    independent(exec.threads, nullptr, {});
   }
   if (!rule) rule = std::make_shared<EuclideanRule>();
 
