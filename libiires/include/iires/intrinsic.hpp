@@ -85,7 +85,7 @@ class IntrinsicRule final : public NeighbourRule {
  private:
   /// The distance and coordinate bounds between two points of one component with coordinates @p ga, @p gb.
   bool consistent(const float* ga, const float* gb, double d, double scale) const;
-  /// The coarser samplingScale() of two dense points.
+  /// The coarser of two dense points' sampling scales.
   double pairScale(std::size_t a, std::size_t b) const {
     return std::max(geo_->samplingScales()[a], geo_->samplingScales()[b]);
   }
