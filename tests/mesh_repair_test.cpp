@@ -666,7 +666,7 @@ TEST(RimBands, LoneSlitAlongAThinRimIsZipped) {
     for (double b = 0; b <= side + 1e-9; b += q) box->emplace_back(a, b, 0.0), box->emplace_back(a, b, t);
   for (double a = 0; a <= side + 1e-9; a += q)
     for (const double z : {0.25 * t, 0.5 * t, 0.75 * t})
-      for (const Eigen::Vector3d p : {Eigen::Vector3d(a, 0, z), Eigen::Vector3d(a, side, z), Eigen::Vector3d(0, a, z),
+      for (const Eigen::Vector3d& p : {Eigen::Vector3d(a, 0, z), Eigen::Vector3d(a, side, z), Eigen::Vector3d(0, a, z),
                                       Eigen::Vector3d(side, a, z)})
         box->push_back(p);
   const KnnIndex index(*box);
