@@ -79,6 +79,25 @@ TEST(Geodesic, FarFromTheOriginLikeAtTheOrigin) {
   EXPECT_LT(worst, 0.01);  // unit sphere: geodesic distances up to π
 }
 
+// Scan lines (dense along, sparse across): the graph links each point to the next lines too, so the distance to
+// a point on a line nearby is about the straight one (worst 1.08 here); with the k nearest alone the lines were
+// linked only where jitter brought two within reach, and those distances detoured along the lines (15×).
+TEST(Geodesic, ScanLinesAreLinkedAcross) {
+  const PointCloud cloud = test::scanLineCloud(3);
+  const GeodesicCoordinates geo(cloud);
+  EXPECT_EQ(geo.components(), 1u);
+  const std::uint32_t source = 25 * 500 + 250;  // line 25, middle
+  const std::vector<float> field = geo.distanceField(source);
+  double worst = 0;
+  for (int line = 20; line <= 30; ++line)
+    for (int a = 200; a <= 300; a += 10) {
+      const std::size_t j = static_cast<std::size_t>(line) * 500 + static_cast<std::size_t>(a);
+      if (j == source) continue;
+      worst = std::max(worst, field[j] / (cloud.points[j] - cloud.points[source]).norm());
+    }
+  EXPECT_LT(worst, 1.5) << "geodesic over straight-line distance";
+}
+
 TEST(Geodesic, SatellitesAreFarApart) {
   PointCloud c = test::sphereCloud(8000, 1.0, 3);
   const GeodesicCoordinates g(c);

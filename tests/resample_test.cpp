@@ -139,6 +139,15 @@ TEST(Resample, SeparateObjectsAtDifferentDensitiesSplitByArea) {
   EXPECT_LT(worst, 2e-3);
 }
 
+// A lidar's scan lines (0.02 apart, points 0.002 apart along them) resampled to an output spacing about the lines'
+// distance: evenly spaced. The intrinsic rule used to keep samples of neighbouring lines from seeing each other
+// (the geodesic graph linked the lines only here and there), cv 0.31.
+TEST(Resample, ScanLinesResampledEvenly) {
+  const auto r = iires::resample(iires::test::scanLineCloud(4), paramsFor(2000));
+  ASSERT_EQ(r.cloud.size(), 2000u);
+  EXPECT_LT(r.spacing.cv, 0.09);
+}
+
 // A sparse open tube (mesh-vertex-like rings of 24 points, 0.065 apart, the end rings exactly at z = 0 and
 // z = 1) upsampled ten times: samples stay within a quarter input spacing of the open ends, where the MLS
 // surface would carry on along the tube (it used to put samples 1.5 input spacings past them, like the CGAL

@@ -39,6 +39,21 @@ inline PointCloud twoDensitySpheres(std::size_t denseCount, std::uint64_t seed =
   return c;
 }
 
+/// A lidar-like sampling of the unit square (gently curved, z = 0.1·sin 3x·cos 2y): scan lines 0.02 apart along
+/// y, points 0.002 apart along each (with 0.0003 and 0.001 of jitter), 25,000 in all; no normals. A point's 16
+/// nearest all lie on its own line.
+inline PointCloud scanLineCloud(std::uint64_t seed = 1) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> g(0.0, 1.0);
+  PointCloud c;
+  for (int line = 0; line < 50; ++line)
+    for (int a = 0; a < 500; ++a) {
+      const double x = 0.002 * a + 0.0003 * g(rng), y = 0.02 * line + 0.001 * g(rng);
+      c.points.emplace_back(x, y, 0.1 * std::sin(3 * x) * std::cos(2 * y));
+    }
+  return c;
+}
+
 /// Random points on the square [0,size]² in the z = 0 plane; density grows by @p ratio along x.
 inline PointCloud planeCloud(std::size_t n, double size = 1.0, double ratio = 1.0, std::uint64_t seed = 2) {
   std::mt19937_64 rng(seed);
