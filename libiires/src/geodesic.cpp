@@ -16,6 +16,7 @@
 #include "iires/detail/disjoint_sets.hpp"
 #include "iires/io.hpp"
 #include "io_format.hpp"
+#include "scan_lines.hpp"
 #include "iires/knn.hpp"
 #include "iires/detail/parallel.hpp"
 
@@ -23,27 +24,14 @@ namespace iires {
 
 namespace {
 
-constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
-constexpr float kInf = std::numeric_limits<float>::infinity();
-/// A point's k nearest lie on a line (acrossScanLines) when their spread across it is under this share of the
-/// spread along it (the square root of the PCA's middle over its largest eigenvalue).
-constexpr double kLineSpread = 0.25;
+using detail::kInf;
+using detail::kNone;
 using Clock = std::chrono::steady_clock;
 
 double secondsSince(Clock::time_point t) {
   return std::chrono::duration<double>(Clock::now() - t).count();
 }
 
-/// Scatter matrix of @p p and the @p w points @p list of @p pts about their mean.
-Eigen::Matrix3d scatter(const std::vector<Eigen::Vector3d>& pts, const Eigen::Vector3d& p, const std::uint32_t* list,
-                        std::size_t w) {
-  Eigen::Vector3d mean = p;
-  for (std::size_t r = 0; r < w; ++r) mean += pts[list[r]];
-  mean /= static_cast<double>(w + 1);
-  Eigen::Matrix3d cov = (p - mean) * (p - mean).transpose();
-  for (std::size_t r = 0; r < w; ++r) cov += (pts[list[r]] - mean) * (pts[list[r]] - mean).transpose();
-  return cov;
-}
 
 /// Undirected graph in compressed-row form; every edge is stored in both endpoints' rows.
 struct Graph {
@@ -232,17 +220,7 @@ struct GeodesicCoordinates::Impl {
   std::vector<float> scale;  // per point (caller's order): its component's samplingScale()
   GeodesicReport report;
 
-  /// The k nearest neighbours of every point (internal order, k per point, padded with kNone / kInf), each
-  /// point's local spacing rho (distance to its spacingNeighbour-th neighbour) and unit normal (zero if unknown).
-  struct NeighbourLists {
-    std::vector<std::uint32_t> index;
-    std::vector<float> distance;
-    std::vector<float> rho;
-    std::vector<Eigen::Vector3d> line;  ///< where the k nearest lie on a line: its direction, else zero
-    std::vector<float> across;  ///< on a scan line: the distance to the nearest point off it (acrossScanLines), else 0
-    std::vector<Eigen::Vector3f> normal;
-    bool givenNormals = false;
-  };
+  using NeighbourLists = detail::NeighbourLists;
   /// Connected components of the filtered graph, numbered by their first point in the caller's order.
   struct Components {
     std::vector<std::uint32_t> id;  ///< per internal point
@@ -254,7 +232,6 @@ struct GeodesicCoordinates::Impl {
   // The steps of build(), in order.
   void sortPoints();
   NeighbourLists neighbourLists(const NeighbourTable* table);
-  void acrossScanLines(NeighbourLists& lists);
   std::vector<std::uint8_t> filterEdges(const NeighbourLists& lists) const;
   Components findComponents(const NeighbourLists& lists, const std::vector<std::uint8_t>& keep);
   void componentScales(const NeighbourLists& lists, const Components& components);
@@ -362,12 +339,17 @@ GeodesicCoordinates::Impl::NeighbourLists GeodesicCoordinates::Impl::neighbourLi
     // The PCA of the point and its k nearest: its normal (unoriented; used by the tangent test only), and whether
     // they lie on a line (acrossScanLines).
     Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
-    eig.computeDirect(scatter(zp, zp[i], &knn[i * k], w));
+    eig.computeDirect(detail::scatter(zp, zp[i], &knn[i * k], w));
     if (!given) lists.normal[i] = eig.eigenvectors().col(0).cast<float>();
     const Eigen::Vector3d ev = eig.eigenvalues();
-    if (w == k && k >= 4 && ev(1) < kLineSpread * kLineSpread * ev(2)) lists.line[i] = eig.eigenvectors().col(2);
+    if (w == k && detail::onALine(ev)) lists.line[i] = eig.eigenvectors().col(2);
   });
-  acrossScanLines(lists);
+  if (std::any_of(lists.line.begin(), lists.line.end(), [](const Eigen::Vector3d& a) { return !a.isZero(); })) {
+    if (!index) index = std::make_unique<KnnIndex>(zp);
+    detail::acrossScanLines(zp, *index, k, lists, threads);
+  } else {
+    lists.across.assign(n, 0.0f);
+  }
   area = 0;  // in a fixed order
   for (float d : nearestDist) area += M_PI * static_cast<double>(d) * d;
   std::nth_element(nearestDist.begin(), nearestDist.begin() + static_cast<std::ptrdiff_t>(n / 2), nearestDist.end());
@@ -375,58 +357,6 @@ GeodesicCoordinates::Impl::NeighbourLists GeodesicCoordinates::Impl::neighbourLi
   return lists;
 }
 
-/// A sampling dense along scan lines and sparse across them (a lidar's) gives a point's k nearest all on its own
-/// line: the graph then links neighbouring lines only where noise brings two within reach, and the distances
-/// between them detour along the lines. Where the k nearest are collinear (lists.line, kLineSpread), the search
-/// widens to kLineWiden·k points and the list keeps the k − k/2 nearest and the k/2 nearest of those off the line
-/// (farther from it than half the list's reach and than three times the spread across it), sorted by distance;
-/// the local spacing rho becomes the nearest such distance when larger (the spacing across the lines bounds the
-/// edge lengths), and the PCA normal is the widened list's. A sampling even in every direction never meets the
-/// test, and an object that is a line (a wire) has no points off it: both keep their lists.
-void GeodesicCoordinates::Impl::acrossScanLines(NeighbourLists& lists) {
-  constexpr std::size_t kLineWiden = 8;
-  const std::size_t n = points.size(), k = static_cast<std::size_t>(params.k);
-  const std::vector<Eigen::Vector3d>& zp = *sorted;
-  const std::vector<Eigen::Vector3d>& axis = lists.line;
-  lists.across.assign(n, 0.0f);
-  if (std::all_of(axis.begin(), axis.end(), [](const Eigen::Vector3d& a) { return a.isZero(); })) return;
-  if (!index) index = std::make_unique<KnnIndex>(zp);
-  parallelFor(n, threads, [&](std::size_t i) {
-    if (axis[i].isZero()) return;
-    const std::uint32_t* list = &lists.index[i * k];
-    const double reach = lists.distance[i * k + k - 1];
-    double across = 0;
-    for (std::size_t r = 0; r < k; ++r) {
-      const Eigen::Vector3d d = zp[list[r]] - zp[i];
-      across += (d - axis[i].dot(d) * axis[i]).squaredNorm();
-    }
-    const double offLine = std::max(0.5 * reach, 3.0 * std::sqrt(across / static_cast<double>(k)));
-    std::vector<std::uint32_t> idx;
-    std::vector<double> d2;
-    index->knn(zp[i], kLineWiden * k + 1, idx, d2);
-    std::vector<std::pair<float, std::uint32_t>> keep;
-    const std::size_t near = k - k / 2;
-    for (std::size_t r = 0; r < idx.size() && keep.size() < k; ++r) {
-      if (idx[r] == i) continue;
-      const Eigen::Vector3d d = zp[idx[r]] - zp[i];
-      const bool off = (d - axis[i].dot(d) * axis[i]).norm() > offLine;
-      if (keep.size() < near || off) keep.emplace_back(static_cast<float>(std::sqrt(d2[r])), idx[r]);
-    }
-    if (keep.size() == near) return;  // nothing off the line: a line of its own
-    float nearestOff = kInf;
-    for (std::size_t r = near; r < keep.size(); ++r) nearestOff = std::min(nearestOff, keep[r].first);
-    for (std::size_t r = 0; r < k; ++r) {
-      lists.index[i * k + r] = r < keep.size() ? keep[r].second : kNone;
-      lists.distance[i * k + r] = r < keep.size() ? keep[r].first : kInf;
-    }
-    lists.rho[i] = std::max(lists.rho[i], nearestOff);
-    lists.across[i] = nearestOff;
-    if (lists.givenNormals) return;
-    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;  // the normal of the widened list
-    eig.computeDirect(scatter(zp, zp[i], &lists.index[i * k], keep.size()));
-    lists.normal[i] = eig.eigenvectors().col(0).cast<float>();
-  });
-}
 
 /// Per point (scale), how much more coarsely than the cloud its component is sampled: the component's median
 /// nearest-neighbour distance over the cloud's (spacing), at least 1 — and on a scan line at least half the
