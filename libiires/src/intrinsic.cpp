@@ -49,11 +49,13 @@ void IntrinsicRule::update(const std::vector<Eigen::Vector3d>& samples, const st
   const std::size_t dims = dims_;
   dense_.assign(n, 0);
   comp_.assign(n, 0);
+  scale_.assign(n, 1.0f);
   coords_.assign(n * dims, 0.0f);
   parallelFor(n, threads_, [&](std::size_t i) {
     const std::int64_t d = geo_->nearest(samples[i]);
     dense_[i] = static_cast<std::uint32_t>(d < 0 ? 0 : d);
     comp_[i] = geo_->component(dense_[i]);
+    scale_[i] = geo_->samplingScales()[dense_[i]];
     std::copy_n(&geo_->coordinates()[dense_[i] * dims], dims, &coords_[i * dims]);
     if (gapTest) near_[i] = nearSheets_[dense_[i]];
   });
@@ -83,7 +85,7 @@ bool IntrinsicRule::accept(std::size_t i, std::size_t j) const {
   if (i == j) return true;
   const double d = (pos_[i] - pos_[j]).norm();
   if (comp_[i] != comp_[j]) return false;
-  if (!consistent(&coords_[i * dims_], &coords_[j * dims_], d, pairScale(dense_[i], dense_[j]))) return false;
+  if (!consistent(&coords_[i * dims_], &coords_[j * dims_], d, std::max(scale_[i], scale_[j]))) return false;
   return near_.empty() || !(near_[i] || near_[j]) ||
          !acrossGap(pos_[i], nrm_[i], pos_[j], nrm_[j], minGap_ + kGapSlope * d, kGapParallelCos);
 }

@@ -101,6 +101,7 @@ class IntrinsicRule final : public NeighbourRule {
   std::vector<std::uint8_t> near_;        // per sample: its dense point has another sheet near
   std::vector<Eigen::Vector3d> pos_, nrm_;
   std::vector<std::uint32_t> dense_, comp_;  // per sample: its nearest dense point and that point's component
+  std::vector<float> scale_;                 // per sample: that point's sampling scale
   std::vector<float> coords_;        // per sample: that point's geodesic coordinates, sample-major
 };
 
