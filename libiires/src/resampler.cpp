@@ -497,16 +497,16 @@ Rings Resampler::edgeRings(const Samples& s, double l, const Relaxation& state) 
 /// the input points of (the samples the area a point represents holds − 1) where that is positive. The area
 /// of point i is π·h_i²/8 (MlsSurface::area()); in adaptive mode divided by its size factor squared.
 std::size_t Resampler::sparseDeficit(std::size_t count) const {
-  const std::size_t m = pts_.size();
-  std::vector<double> area(m);
-  parallelFor(m, exec_.threads, [&](std::size_t i) {
+  auto area = [&](std::size_t i) {
     const double h = surface_.kernelWidth(i), sz = size_ ? (*size_)[i] : 1.0;
-    area[i] = h * h / (sz * sz);
-  });
-  const double total = std::accumulate(area.begin(), area.end(), 0.0);
+    return h * h / (sz * sz);
+  };
+  double total = 0;
+  for (std::size_t i = 0; i < pts_.size(); ++i) total += area(i);
   if (!(total > 0)) return 0;
   double deficit = 0;
-  for (double a : area) deficit += std::max(0.0, static_cast<double>(count) * a / total - 1.0);
+  const double perArea = static_cast<double>(count) / total;
+  for (std::size_t i = 0; i < pts_.size(); ++i) deficit += std::max(0.0, perArea * area(i) - 1.0);
   return static_cast<std::size_t>(deficit);
 }
 
