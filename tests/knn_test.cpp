@@ -6,6 +6,8 @@
 #include <algorithm>
 #include <random>
 
+#include "shapes.hpp"
+
 namespace {
 
 std::vector<Eigen::Vector3d> randomPoints(std::size_t n, std::uint64_t seed) {
@@ -96,6 +98,48 @@ TEST(NeighbourTable, TruncatedRowsKeepTheirPrefixes) {
     }
   cut.truncate(30);  // wider than the table: no effect
   EXPECT_EQ(cut.k(), 17u);
+}
+
+// Scan lines (a lidar's sampling: points 0.002 apart along lines 0.02 apart): every row away from the lines' ends
+// reaches the next lines within its first nine entries (the MLS kernel width's 8th neighbour) and knows how far
+// they are; with the k nearest alone every row lay on its own line. (At a line's end its 16 nearest already
+// reach the next lines: no line there.)
+TEST(NeighbourTable, RowsOnScanLinesReachTheNextLines) {
+  const iires::PointCloud cloud = iires::test::scanLineCloud(5);
+  const iires::KnnIndex index(cloud.points);
+  const iires::NeighbourTable table(index, cloud.points, 17);
+  std::vector<std::uint32_t> idx;
+  std::vector<double> d2;
+  std::size_t inner = 0, reach = 0, across = 0;
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    if (i % 500 < 25 || i % 500 >= 475) continue;  // 500 points per line
+    ++inner;
+    table.get(i, 9, idx, d2);
+    reach += std::any_of(idx.begin(), idx.end(),
+                         [&](std::uint32_t j) { return std::abs(cloud.points[j].y() - cloud.points[i].y()) > 0.01; });
+    across += table.acrossLines(i) > 0.015 && table.acrossLines(i) < 0.03;
+  }
+  EXPECT_GT(reach, 0.99 * static_cast<double>(inner));
+  EXPECT_GT(across, 0.99 * static_cast<double>(inner));
+}
+
+// An even sampling keeps the tree's rows exactly, even where a few points happen to line up (sphere seed 12: one
+// point's 16 nearest lie on a line; its neighbours' do not, so it is no scan line).
+TEST(NeighbourTable, AnEvenSamplingKeepsItsRows) {
+  for (std::uint64_t seed : {11, 12, 13}) {
+    const iires::PointCloud cloud = iires::test::sphereCloud(20000, 1.0, seed);
+    const iires::KnnIndex index(cloud.points);
+    const iires::NeighbourTable table(index, cloud.points, 17);
+    std::vector<std::uint32_t> idx, expected;
+    std::vector<double> d2;
+    std::size_t changed = 0;
+    for (std::size_t i = 0; i < cloud.size(); ++i) {
+      table.get(i, 17, idx, d2);
+      index.knn(cloud.points[i], 17, expected, d2);
+      changed += idx != expected || table.acrossLines(i) != 0.0f;
+    }
+    EXPECT_EQ(changed, 0u) << "seed " << seed;
+  }
 }
 
 }  // namespace

@@ -179,6 +179,18 @@ TEST(Reconstruct, SphereCloudClosedGenus0) {
   EXPECT_NE(r.toJson().find("\"method\": \"local\""), std::string::npos);
 }
 
+// A lidar's scan lines (positions only: 0.02 apart, points 0.002 apart along them) meshed at an edge length about
+// the lines' distance: one piece of well-shaped triangles. With every stage's neighbours on one line the normals
+// came out oriented line by line (two pieces) and the samples uneven (Q_avg 0.84).
+TEST(Reconstruct, ScanLinesMeshedInOnePiece) {
+  ReconstructParams p;
+  p.targetCount = 5000;
+  const ReconstructResult r = reconstruct(test::scanLineCloud(6), p);
+  EXPECT_EQ(r.quality.components, 1u);
+  EXPECT_GE(r.quality.qualityMean, 0.90);
+  EXPECT_GE(r.quality.qualityMin, 0.4);
+}
+
 TEST(Reconstruct, TorusCloudClosedGenus1) {
   ReconstructParams p;
   p.targetCount = 3000;

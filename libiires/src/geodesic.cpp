@@ -294,32 +294,39 @@ void GeodesicCoordinates::Impl::sortPoints() {
   }
 }
 
-/// The k-NN lists from @p table (when it fits) or a k-d tree, each point's spacing and normal, and the median
-/// nearest-neighbour distance (spacing).
+/// The k-NN lists from @p table (when it fits; else a table of its own over a k-d tree) — widened across scan
+/// lines as the table's rows are —, each point's spacing and normal, and the median nearest-neighbour distance
+/// (spacing).
 GeodesicCoordinates::Impl::NeighbourLists GeodesicCoordinates::Impl::neighbourLists(const NeighbourTable* table) {
   const std::size_t n = points.size();
   const std::size_t k = static_cast<std::size_t>(params.k);
   const std::vector<Eigen::Vector3d>& zp = *sorted;
+  std::optional<NeighbourTable> own;
   if (table && (table->k() < k + 1 || table->size() != n)) table = nullptr;
-  if (!table) index = std::make_unique<KnnIndex>(zp);  // with a table only nearest() needs it: built later
+  if (!table) {  // with a table only nearest() needs the tree: built later
+    index = std::make_unique<KnnIndex>(zp);
+    own.emplace(*index, zp, k + 1, threads);
+  }
   NeighbourLists lists;
   std::vector<std::uint32_t>& knn = lists.index;
   std::vector<float>& knnDist = lists.distance;
   knn.assign(n * k, kNone);
   knnDist.assign(n * k, kInf);
   lists.rho.assign(n, 0.0f);
+  lists.across.assign(n, 0.0f);
   std::vector<float> nearestDist(n, 0.0f);
   const bool given = lists.givenNormals = normals.size() == n;
   lists.normal.assign(n, Eigen::Vector3f::Zero());
-  lists.line.assign(n, Eigen::Vector3d::Zero());
   parallelFor(n, threads, [&](std::size_t i) {
     std::vector<std::uint32_t> idx;
     std::vector<double> d2;
     if (table) {  // the caller's order: map the neighbours to ours
       table->get(order[i], k + 1, idx, d2);
       for (std::uint32_t& j : idx) j = rank[j];
+      lists.across[i] = table->acrossLines(order[i]);
     } else {
-      index->knn(zp[i], k + 1, idx, d2);
+      own->get(i, k + 1, idx, d2);
+      lists.across[i] = own->acrossLines(i);
     }
     std::size_t w = 0;
     for (std::size_t r = 0; r < idx.size() && w < k; ++r) {
@@ -330,33 +337,25 @@ GeodesicCoordinates::Impl::NeighbourLists GeodesicCoordinates::Impl::neighbourLi
     }
     if (w == 0) return;
     nearestDist[i] = knnDist[i * k];
-    lists.rho[i] = knnDist[i * k + std::min<std::size_t>(w, static_cast<std::size_t>(params.spacingNeighbour)) - 1];
+    // On a scan line the spacing across the lines bounds the edge lengths.
+    lists.rho[i] = std::max(
+        knnDist[i * k + std::min<std::size_t>(w, static_cast<std::size_t>(params.spacingNeighbour)) - 1],
+        lists.across[i]);
     if (given) {
       const double len = normals[order[i]].norm();
       if (len > 0) lists.normal[i] = (normals[order[i]] / len).cast<float>();
+    } else if (w >= 2) {  // the PCA normal of the point and its k nearest (unoriented; the tangent test only)
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
+      eig.computeDirect(detail::scatter(zp, zp[i], &knn[i * k], w));
+      lists.normal[i] = eig.eigenvectors().col(0).cast<float>();
     }
-    if (w < 2) return;
-    // The PCA of the point and its k nearest: its normal (unoriented; used by the tangent test only), and whether
-    // they lie on a line (acrossScanLines).
-    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
-    eig.computeDirect(detail::scatter(zp, zp[i], &knn[i * k], w));
-    if (!given) lists.normal[i] = eig.eigenvectors().col(0).cast<float>();
-    const Eigen::Vector3d ev = eig.eigenvalues();
-    if (w == k && detail::onALine(ev)) lists.line[i] = eig.eigenvectors().col(2);
   });
-  if (std::any_of(lists.line.begin(), lists.line.end(), [](const Eigen::Vector3d& a) { return !a.isZero(); })) {
-    if (!index) index = std::make_unique<KnnIndex>(zp);
-    detail::acrossScanLines(zp, *index, k, lists, threads);
-  } else {
-    lists.across.assign(n, 0.0f);
-  }
   area = 0;  // in a fixed order
   for (float d : nearestDist) area += M_PI * static_cast<double>(d) * d;
   std::nth_element(nearestDist.begin(), nearestDist.begin() + static_cast<std::ptrdiff_t>(n / 2), nearestDist.end());
   spacing = nearestDist[n / 2];
   return lists;
 }
-
 
 /// Per point (scale), how much more coarsely than the cloud its component is sampled: the component's median
 /// nearest-neighbour distance over the cloud's (spacing), at least 1 — and on a scan line at least half the

@@ -6,6 +6,7 @@
 
 #include "iires/detail/parallel.hpp"
 #include "iires/detail/radix_sort.hpp"
+#include "scan_lines.hpp"
 
 namespace iires {
 namespace {
@@ -99,6 +100,7 @@ NeighbourTable::NeighbourTable(const KnnIndex& index, const std::vector<Eigen::V
     std::copy_n(idx.begin(), f, rows_.begin() + static_cast<long>(i * k_));
     found_[i] = static_cast<std::uint8_t>(f);
   });
+  across_ = detail::widenAcrossScanLines(points, index, k_, rows_.data(), found_.data(), threads);
 }
 
 std::size_t NeighbourTable::get(std::size_t i, std::size_t k, std::vector<std::uint32_t>& indices,

@@ -113,13 +113,37 @@ MlsSurface::MlsSurface(const std::vector<Eigen::Vector3d>& points,
   const std::size_t q = std::min(n - 1, static_cast<std::size_t>(0.9 * static_cast<double>(n)));
   std::nth_element(sorted.begin(), sorted.begin() + static_cast<long>(q), sorted.end());
   const double cap = sorted[q];
-  double area = 0, spacing = 0;
-  for (std::size_t i = 0; i < n; ++i) {
+  // The area each point stands for: π·h²/8, h holding its 8 nearest; on a scan line (a row widened across the
+  // lines, NeighbourTable) h holds many more of its own line's points: counted there.
+  std::vector<double> share(n, 0.0);
+  parallelFor(n, exec.threads, [&](std::size_t i) {
     h_[i] = std::min(h_[i], samplingScale ? cap * (*samplingScale)[i] : cap);
-    area += M_PI * h_[i] * h_[i] / static_cast<double>(kKernelNeighbour);
-    spacing += nearest[i];
-  }
+    double within = static_cast<double>(kKernelNeighbour);
+    if (table && table->acrossLines(i) > 0) {
+      thread_local std::vector<std::uint32_t> idx;
+      thread_local std::vector<double> d2;
+      within = static_cast<double>(std::max<std::size_t>(index_->radius(points[i], h_[i], idx, d2), 2) - 1);
+    }
+    share[i] = M_PI * h_[i] * h_[i] / within;
+  });
+  double area = 0, spacing = 0;
+  for (std::size_t i = 0; i < n; ++i) area += share[i], spacing += nearest[i];
   if (cap <= 0) std::fill(h_.begin(), h_.end(), 1.0);
+  bool onLines = false;
+  for (std::size_t i = 0; table && i < n && !onLines; ++i) onLines = table->acrossLines(i) > 0;
+  if (onLines) {
+    acrossStart_.assign(n + 1, 0);
+    std::vector<std::uint32_t> idx;
+    std::vector<double> d2;
+    for (std::size_t i = 0; i < n; ++i) {
+      if (table->acrossLines(i) > 0) {
+        table->get(i, table->k(), idx, d2);
+        for (std::uint32_t j : idx)
+          if (j != i) acrossRows_.push_back(j);
+      }
+      acrossStart_[i + 1] = acrossRows_.size();
+    }
+  }
   area_ = area;
   meanSpacing_ = n ? spacing / static_cast<double>(n) : 0.0;
 }
@@ -148,6 +172,17 @@ Eigen::Vector3d MlsSurface::project(const Eigen::Vector3d& x0, Eigen::Vector3d* 
     // Re-centre the neighbourhood only when the estimate moved by more than a quarter kernel width.
     if (lastH == 0 || (x - queried).squaredNorm() > 0.0625 * lastH * lastH) {
       index_->knn(x, static_cast<std::size_t>(params_.k), idx, d2);
+      if (!acrossStart_.empty() && !idx.empty()) {  // on a scan line: the nearest point's row reaches across
+        const std::uint32_t nearest = idx[0];
+        const std::size_t k = idx.size();
+        for (std::size_t e = acrossStart_[nearest]; e < acrossStart_[nearest + 1]; ++e) {
+          const std::uint32_t j = acrossRows_[e];
+          if (std::find(idx.begin(), idx.begin() + static_cast<long>(k), j) != idx.begin() + static_cast<long>(k))
+            continue;
+          idx.push_back(j);
+          d2.push_back((points_[j] - x).squaredNorm());
+        }
+      }
       queried = x;
       lastH = 0;
     } else {

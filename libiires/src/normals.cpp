@@ -19,15 +19,17 @@
 namespace iires {
 namespace {
 
-/// The k + 1 nearest of each point (itself normally first), flat with stride k + 1; missing entries = i.
+/// The k + 1 nearest of each point (itself normally first; widened across scan lines as NeighbourTable's rows
+/// are), flat with stride k + 1; missing entries = i.
 std::vector<std::uint32_t> knnLists(const std::vector<Eigen::Vector3d>& points, std::size_t k, int threads) {
-  KnnIndex index(points);
+  const KnnIndex index(points);
   const std::size_t stride = k + 1;
+  const NeighbourTable table(index, points, stride, threads);
   std::vector<std::uint32_t> lists(points.size() * stride);
   parallelFor(points.size(), threads, [&](std::size_t i) {
-    std::vector<std::uint32_t> idx;
-    std::vector<double> d2;
-    const std::size_t f = index.knn(points[i], stride, idx, d2);
+    thread_local std::vector<std::uint32_t> idx;
+    thread_local std::vector<double> d2;
+    const std::size_t f = table.get(i, stride, idx, d2);
     for (std::size_t a = 0; a < stride; ++a)
       lists[i * stride + a] = a < f ? idx[a] : static_cast<std::uint32_t>(i);
   });

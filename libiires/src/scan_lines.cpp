@@ -22,47 +22,106 @@ Eigen::Matrix3d scatter(const std::vector<Eigen::Vector3d>& pts, const Eigen::Ve
   return cov;
 }
 
-void acrossScanLines(const std::vector<Eigen::Vector3d>& zp, const KnnIndex& index, std::size_t k, NeighbourLists& lists,
-                     int threads) {
-  constexpr std::size_t kLineWiden = 8;
-  const std::size_t n = zp.size();
-  const std::vector<Eigen::Vector3d>& axis = lists.line;
-  lists.across.assign(n, 0.0f);
+namespace {
+constexpr std::size_t kLineTest = 16;  // neighbours the line test reads
+
+/// The line test's neighbours of point @p i: the first kLineTest of its @p row (@p found entries) besides itself,
+/// or a search where the row is shorter.
+void testNeighbours(const std::vector<Eigen::Vector3d>& points, const KnnIndex& index, std::size_t i,
+                    const std::uint32_t* row, std::size_t found, std::vector<std::uint32_t>& test) {
+  thread_local std::vector<std::uint32_t> idx;
+  thread_local std::vector<double> d2;
+  if (found < kLineTest + 1) {
+    index.knn(points[i], kLineTest + 1, idx, d2);
+    row = idx.data(), found = idx.size();
+  }
+  test.clear();
+  for (std::size_t r = 0; r < found && test.size() < kLineTest; ++r)
+    if (row[r] != i) test.push_back(row[r]);
+}
+
+/// The direction along which point @p i and its neighbours @p test spread most, and whether they lie on a line
+/// (onALine); @p quick: give up (false, zero) early where a cheap test rules a line out.
+bool lineAxis(const std::vector<Eigen::Vector3d>& points, std::size_t i, const std::vector<std::uint32_t>& test,
+              bool quick, Eigen::Vector3d& axis) {
+  axis.setZero();
+  if (test.size() < kLineTest) return false;
+  const Eigen::Matrix3d cov = scatter(points, points[i], test.data(), test.size());
+  // Cheap first: on a line the second invariant (λ1λ2 + λ2λ3 + λ3λ1) stays under 0.13 of the trace squared; an
+  // even sampling of a surface has about a quarter.
+  const double tr = cov.trace();
+  const double s2 = cov(0, 0) * cov(1, 1) + cov(1, 1) * cov(2, 2) + cov(2, 2) * cov(0, 0) - cov(0, 1) * cov(0, 1) -
+                    cov(1, 2) * cov(1, 2) - cov(0, 2) * cov(0, 2);
+  if (!(tr > 0) || (quick && s2 >= 0.13 * tr * tr)) return false;
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
+  eig.computeDirect(cov);
+  axis = eig.eigenvectors().col(2);
+  return onALine(eig.eigenvalues());
+}
+}  // namespace
+
+std::vector<float> widenAcrossScanLines(const std::vector<Eigen::Vector3d>& points, const KnnIndex& index,
+                                       std::size_t k, std::uint32_t* rows, std::uint8_t* found, int threads) {
+  constexpr std::size_t kAlong = 4;      // kept on the point's own line: two each way
+  constexpr std::size_t kLineWiden = 8;      // candidates: 8·k nearest,
+  constexpr std::size_t kMaxCandidates = 128;  // up to 128·k
+  const std::size_t n = points.size();
+  if (k <= kAlong + 1) return {};
+  std::vector<std::uint8_t> onLine(n, 0);
   parallelFor(n, threads, [&](std::size_t i) {
-    if (axis[i].isZero()) return;
-    const std::uint32_t* list = &lists.index[i * k];
-    const double reach = lists.distance[i * k + k - 1];
-    double across = 0;
-    for (std::size_t r = 0; r < k; ++r) {
-      const Eigen::Vector3d d = zp[list[r]] - zp[i];
-      across += (d - axis[i].dot(d) * axis[i]).squaredNorm();
-    }
-    const double offLine = std::max(0.5 * reach, 3.0 * std::sqrt(across / static_cast<double>(k)));
-    std::vector<std::uint32_t> idx;
-    std::vector<double> d2;
-    index.knn(zp[i], kLineWiden * k + 1, idx, d2);
-    std::vector<std::pair<float, std::uint32_t>> keep;
-    const std::size_t near = k - k / 2;
-    for (std::size_t r = 0; r < idx.size() && keep.size() < k; ++r) {
-      if (idx[r] == i) continue;
-      const Eigen::Vector3d d = zp[idx[r]] - zp[i];
-      const bool off = (d - axis[i].dot(d) * axis[i]).norm() > offLine;
-      if (keep.size() < near || off) keep.emplace_back(static_cast<float>(std::sqrt(d2[r])), idx[r]);
-    }
-    if (keep.size() == near) return;  // nothing off the line: a line of its own
-    float nearestOff = kInf;
-    for (std::size_t r = near; r < keep.size(); ++r) nearestOff = std::min(nearestOff, keep[r].first);
-    for (std::size_t r = 0; r < k; ++r) {
-      lists.index[i * k + r] = r < keep.size() ? keep[r].second : kNone;
-      lists.distance[i * k + r] = r < keep.size() ? keep[r].first : kInf;
-    }
-    lists.rho[i] = std::max(lists.rho[i], nearestOff);
-    lists.across[i] = nearestOff;
-    if (lists.givenNormals) return;
-    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;  // the normal of the widened list
-    eig.computeDirect(scatter(zp, zp[i], &lists.index[i * k], keep.size()));
-    lists.normal[i] = eig.eigenvectors().col(0).cast<float>();
+    thread_local std::vector<std::uint32_t> test;
+    Eigen::Vector3d axis;
+    testNeighbours(points, index, i, rows + i * k, found[i], test);
+    onLine[i] = lineAxis(points, i, test, true, axis);
   });
+  if (std::none_of(onLine.begin(), onLine.end(), [](std::uint8_t b) { return b != 0; })) return {};
+  std::vector<float> across(n, 0.0f);
+  parallelFor(n, threads, [&](std::size_t i) {
+    thread_local std::vector<std::uint32_t> test, idx, keep;
+    thread_local std::vector<double> d2;
+    testNeighbours(points, index, i, rows + i * k, found[i], test);
+    // A scan line is a structure, not one point's neighbourhood: a point is on one where most of its neighbours
+    // pass the test (a point of an even sampling whose neighbours happen to line up, one in 20,000 of a random
+    // one, is not; a point of a jittered line that narrowly fails it is).
+    const auto lined = std::count_if(test.begin(), test.end(), [&](std::uint32_t j) { return onLine[j] != 0; });
+    if (test.size() < kLineTest || 2 * static_cast<std::size_t>(lined) < test.size()) return;
+    const Eigen::Vector3d& p = points[i];
+    Eigen::Vector3d axis;
+    lineAxis(points, i, test, false, axis);
+    auto fromLine = [&](std::uint32_t j) {
+      const Eigen::Vector3d d = points[j] - p;
+      return (d - axis.dot(d) * axis).norm();
+    };
+    double spread = 0, reach = 0;
+    for (std::uint32_t j : test) spread += fromLine(j) * fromLine(j), reach = std::max(reach, (points[j] - p).norm());
+    const double offLine = std::max(0.5 * reach, 3.0 * std::sqrt(spread / static_cast<double>(test.size())));
+    // Candidates: the 8·k nearest, four times as many while they leave the row short (lines far apart for their
+    // spacing along: the rings of a rotating scanner near its axis).
+    double nearestOff = 0;
+    for (std::size_t candidates = kLineWiden * k;; candidates *= 4) {
+      index.knn(p, candidates, idx, d2);
+      keep.assign(1, static_cast<std::uint32_t>(i));
+      std::size_t along = 0;
+      nearestOff = 0;
+      for (std::size_t r = 0; r < idx.size() && keep.size() < k; ++r) {
+        if (idx[r] == i) continue;
+        if (fromLine(idx[r]) > offLine) {
+          if (nearestOff == 0) nearestOff = std::sqrt(d2[r]);
+          keep.push_back(idx[r]);
+        } else if (along < kAlong) {
+          ++along;
+          keep.push_back(idx[r]);
+        }
+      }
+      if (keep.size() == k || idx.size() < candidates || candidates >= kMaxCandidates * k) break;
+    }
+    if (nearestOff == 0) return;  // nothing off the line: a line of its own (a wire)
+    std::copy(keep.begin(), keep.end(), rows + i * k);
+    found[i] = static_cast<std::uint8_t>(keep.size());
+    across[i] = static_cast<float>(nearestOff);
+  });
+  if (std::all_of(across.begin(), across.end(), [](float d) { return d == 0.0f; })) across.clear();
+  return across;
 }
 
 }  // namespace iires::detail

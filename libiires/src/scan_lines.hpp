@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 #pragma once
-// The geodesic graph's k-NN lists (geodesic.cpp) and their widening across scan lines.
+// The geodesic graph's k-NN lists (geodesic.cpp), and neighbour rows widened across scan lines (NeighbourTable).
 
 #include <Eigen/Core>
 #include <cstdint>
@@ -20,8 +20,7 @@ struct NeighbourLists {
   std::vector<std::uint32_t> index;
   std::vector<float> distance;
   std::vector<float> rho;
-  std::vector<Eigen::Vector3d> line;  ///< where the k nearest lie on a line (onALine): its direction, else zero
-  std::vector<float> across;          ///< on a scan line: the distance to the nearest point off it, else 0
+  std::vector<float> across;  ///< on a scan line: the distance to the nearest point off it, else 0
   std::vector<Eigen::Vector3f> normal;
   bool givenNormals = false;
 };
@@ -34,16 +33,18 @@ Eigen::Matrix3d scatter(const std::vector<Eigen::Vector3d>& pts, const Eigen::Ve
 /// root of the middle over the largest eigenvalue) under a quarter of the spread along it.
 inline bool onALine(const Eigen::Vector3d& ev) { return ev(1) < 0.0625 * ev(2); }
 
-/// A sampling dense along scan lines and sparse across them (a lidar's) gives a point's k nearest all on its own
-/// line: the graph then links neighbouring lines only where noise brings two within reach, and the distances
-/// between them detour along the lines. Where the k nearest are collinear (lists.line), the search widens to 8·k
-/// points and the list keeps the k − k/2 nearest and the k/2 nearest of those off the line (farther from it than
-/// half the list's reach and than three times the spread across it), sorted by distance; the local spacing rho
-/// becomes the nearest such distance when larger (the spacing across the lines bounds the edge lengths), lists.across
-/// records it, and the PCA normal is the widened list's. A sampling even in every direction never meets the test,
-/// and an object that is a line (a wire) has no points off it: both keep their lists. @p zp the points (internal
-/// order), @p index a k-d tree over them.
-void acrossScanLines(const std::vector<Eigen::Vector3d>& zp, const KnnIndex& index, std::size_t k, NeighbourLists& lists,
-                     int threads);
+/// A sampling dense along scan lines and sparse across them (a lidar's) gives a point's nearest neighbours all on
+/// its own line: a fit over them has no extent across it (its normal turns freely about the line), the normals'
+/// orientation and the geodesic graph link neighbouring lines only where noise brings two within reach, and kernel
+/// widths read from the 8th neighbour do not reach the next line. Where a point's kLineTest nearest lie on a line
+/// (onALine), its row is rebuilt from its 8·k nearest (more where the lines are far apart): the point, its kAlong nearest on its line, then the
+/// nearest off the line (farther from it than half the test's reach and than three times the spread across it),
+/// nearest first, k in all — so that every prefix of six entries or more reaches across. A sampling even in every
+/// direction never meets the test, and a line with nothing off it (a wire) keeps its row.
+/// @param rows   k entries per point (the point itself among them, nearest first), @p found per point how many
+/// @return per point, the distance to the nearest point off its line where its row was rebuilt, else 0; empty
+///         when no row was
+std::vector<float> widenAcrossScanLines(const std::vector<Eigen::Vector3d>& points, const KnnIndex& index,
+                                       std::size_t k, std::uint32_t* rows, std::uint8_t* found, int threads);
 
 }  // namespace iires::detail

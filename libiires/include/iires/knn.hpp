@@ -45,8 +45,11 @@ class KnnIndex {
 
 /// @brief The k nearest neighbours of every point of a set, found once for the stages that each read the
 /// first few of every row (outlier test, denoising, geodesic graph, MLS kernel widths: one k-NN pass instead
-/// of four). Row i holds what KnnIndex::knn(points[i], k) returns (point i itself among them, nearest first);
-/// get() hands out a prefix with the squared distances recomputed, so the table costs 4 bytes per neighbour.
+/// of four). Row i holds what KnnIndex::knn(points[i], k) returns (point i itself among them, nearest first) —
+/// except where its nearest lie on a scan line (a lidar's sampling, dense along lines and sparse across): that
+/// row keeps four of its line's points and fills up with the nearest off the line, so that fits, kernel widths
+/// and graphs over any prefix of six or more reach across (scan_lines.hpp). get() hands out a prefix with the
+/// squared distances recomputed, so the table costs 4 bytes per neighbour.
 /// @note The points must outlive the table and stay unchanged (the index is only read while constructing).
 class NeighbourTable {
  public:
@@ -59,6 +62,9 @@ class NeighbourTable {
   /// @pre k ≤ k()
   std::size_t get(std::size_t i, std::size_t k, std::vector<std::uint32_t>& indices,
                   std::vector<double>& sqDists) const;
+  /// @brief Where row @p i was widened across scan lines: the distance from point i to the nearest point off its
+  /// line (the spacing across the lines there); else 0.
+  float acrossLines(std::size_t i) const { return across_.empty() ? 0.0f : across_[i]; }
   /// @brief Keeps the first @p k neighbours of every row and frees the rest, for readers that need no more
   /// (get() with up to @p k gives what it gave). No effect when k ≥ k().
   void truncate(std::size_t k);
@@ -75,6 +81,7 @@ class NeighbourTable {
   std::size_t k_;
   std::vector<std::uint32_t> rows_;  // size()·k, row-major
   std::vector<std::uint8_t> found_;  // per row (≤ k ≤ 255)
+  std::vector<float> across_;        // acrossLines() per row; empty when no row was widened
 };
 
 /// @brief A permutation that puts points in Morton (Z-curve) order: points close in space end up close in

@@ -39,7 +39,9 @@ struct MlsCache {
 /// @brief Projection onto the MLS surface of a cloud with oriented normals.
 /// The kernel is θ(d) = exp(−d²/h²) (paper eq. 2) with h per input point = its distance to its 8th
 /// neighbour, clamped to the 90th percentile so an outlier cannot inflate it (DESIGN §3.3) — times the point's
-/// sampling scale when given (a separate object sampled more coarsely keeps its own widths).
+/// sampling scale when given (a separate object sampled more coarsely keeps its own widths). On scan lines
+/// (a lidar's sampling: rows the table widened across the lines) the 8th entry of the point's row, and each
+/// projection's neighbours include the nearest input point's row, so fits reach the next lines.
 /// @note Holds a k-d tree over the input (or borrows @p index, a tree over exactly these points, which must
 /// then outlive the surface); the cloud must outlive the surface. project() is thread-safe.
 class MlsSurface {
@@ -93,6 +95,10 @@ class MlsSurface {
   const KnnIndex* index_;
   std::vector<double> h_;
   std::vector<std::uint8_t> nearSheets_;  // empty: the sheet gate everywhere
+  // Points on scan lines (a row of the table widened across the lines): their rows, which every projection whose
+  // nearest input point is one of them adds to its k nearest (all on that line); empty when no row was widened.
+  std::vector<std::size_t> acrossStart_;
+  std::vector<std::uint32_t> acrossRows_;
   double meanSpacing_ = 0;
   double area_ = 0;
 };
