@@ -54,6 +54,23 @@ inline PointCloud scanLineCloud(std::uint64_t seed = 1) {
   return c;
 }
 
+/// A rotating scanner's rings on the ground: a sensor 1.7 above the z = 0 plane, 17 beams from 30° to 10°
+/// below the horizon, a point every 0.3° of azimuth (jittered), so that the rings lie 0.15 apart near the
+/// sensor and 1.1 apart at the outer ones (radius 2.9 to 9.7) while points along a ring are 0.015–0.05 apart.
+/// Positions only.
+inline PointCloud groundRings(std::uint64_t seed = 1) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> g(0.0, 1.0);
+  PointCloud c;
+  for (int beam = 0; beam <= 16; ++beam)
+    for (int a = 0; a < 1200; ++a) {
+      const double elevation = (30.0 - 1.25 * beam) * M_PI / 180.0 + 0.0005 * g(rng);
+      const double azimuth = (0.3 * a) * M_PI / 180.0 + 0.0005 * g(rng), r = 1.7 / std::tan(elevation);
+      c.points.emplace_back(r * std::cos(azimuth), r * std::sin(azimuth), 0.003 * g(rng));
+    }
+  return c;
+}
+
 /// Random points on the square [0,size]² in the z = 0 plane; density grows by @p ratio along x.
 inline PointCloud planeCloud(std::size_t n, double size = 1.0, double ratio = 1.0, std::uint64_t seed = 2) {
   std::mt19937_64 rng(seed);

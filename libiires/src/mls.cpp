@@ -113,39 +113,42 @@ MlsSurface::MlsSurface(const std::vector<Eigen::Vector3d>& points,
   const std::size_t q = std::min(n - 1, static_cast<std::size_t>(0.9 * static_cast<double>(n)));
   std::nth_element(sorted.begin(), sorted.begin() + static_cast<long>(q), sorted.end());
   const double cap = sorted[q];
-  // The area each point stands for: π·h²/8, h holding its 8 nearest; on a scan line (a row widened across the
-  // lines, NeighbourTable) h holds many more of its own line's points: counted there.
-  std::vector<double> share(n, 0.0);
-  parallelFor(n, exec.threads, [&](std::size_t i) {
-    h_[i] = std::min(h_[i], samplingScale ? cap * (*samplingScale)[i] : cap);
-    double within = static_cast<double>(kKernelNeighbour);
-    if (table && table->acrossLines(i) > 0) {
-      thread_local std::vector<std::uint32_t> idx;
-      thread_local std::vector<double> d2;
-      within = static_cast<double>(std::max<std::size_t>(index_->radius(points[i], h_[i], idx, d2), 2) - 1);
-    }
-    share[i] = M_PI * h_[i] * h_[i] / within;
-  });
-  double area = 0, spacing = 0;
-  for (std::size_t i = 0; i < n; ++i) area += share[i], spacing += nearest[i];
-  if (cap <= 0) std::fill(h_.begin(), h_.end(), 1.0);
+  for (std::size_t i = 0; i < n; ++i) h_[i] = std::min(h_[i], samplingScale ? cap * (*samplingScale)[i] : cap);
   bool onLines = false;
   for (std::size_t i = 0; table && i < n && !onLines; ++i) onLines = table->acrossLines(i) > 0;
-  if (onLines) {
-    acrossStart_.assign(n + 1, 0);
-    std::vector<std::uint32_t> idx;
-    std::vector<double> d2;
-    for (std::size_t i = 0; i < n; ++i) {
-      if (table->acrossLines(i) > 0) {
-        table->get(i, table->k(), idx, d2);
-        for (std::uint32_t j : idx)
-          if (j != i) acrossRows_.push_back(j);
-      }
-      acrossStart_[i + 1] = acrossRows_.size();
-    }
+  if (onLines) readScanLines(*table, exec.threads);
+  double area = 0, spacing = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    area += M_PI * h_[i] * h_[i] / (within_.empty() ? static_cast<double>(kKernelNeighbour) : within_[i]);
+    spacing += nearest[i];
   }
+  if (cap <= 0) std::fill(h_.begin(), h_.end(), 1.0);
   area_ = area;
   meanSpacing_ = n ? spacing / static_cast<double>(n) : 0.0;
+}
+
+void MlsSurface::readScanLines(const NeighbourTable& table, int threads) {
+  const std::size_t n = points_.size();
+  // The points each kernel width holds: 8 off the lines, many more of their own line on them.
+  within_.assign(n, static_cast<double>(kKernelNeighbour));
+  parallelFor(n, threads, [&](std::size_t i) {
+    if (!(table.acrossLines(i) > 0)) return;
+    thread_local std::vector<std::uint32_t> idx;
+    thread_local std::vector<double> d2;
+    within_[i] = static_cast<double>(std::max<std::size_t>(index_->radius(points_[i], h_[i], idx, d2), 2) - 1);
+  });
+  // The rows that reach across, for the projections' neighbourhoods.
+  acrossStart_.assign(n + 1, 0);
+  std::vector<std::uint32_t> idx;
+  std::vector<double> d2;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (table.acrossLines(i) > 0) {
+      table.get(i, table.k(), idx, d2);
+      for (std::uint32_t j : idx)
+        if (j != i) acrossRows_.push_back(j);
+    }
+    acrossStart_[i + 1] = acrossRows_.size();
+  }
 }
 
 MlsSurface::~MlsSurface() = default;

@@ -495,11 +495,12 @@ Rings Resampler::edgeRings(const Samples& s, double l, const Relaxation& state) 
 
 /// How many samples the input points cannot stand for where the input is sparser than @p count samples: Σ over
 /// the input points of (the samples the area a point represents holds − 1) where that is positive. The area
-/// of point i is π·h_i²/8 (MlsSurface::area()); in adaptive mode divided by its size factor squared.
+/// of point i is π/8 · MlsSurface::pointArea(i) (as in MlsSurface::area()); in adaptive mode divided by its size
+/// factor squared.
 std::size_t Resampler::sparseDeficit(std::size_t count) const {
   auto area = [&](std::size_t i) {
-    const double h = surface_.kernelWidth(i), sz = size_ ? (*size_)[i] : 1.0;
-    return h * h / (sz * sz);
+    const double sz = size_ ? (*size_)[i] : 1.0;
+    return surface_.pointArea(i) / (sz * sz);
   };
   double total = 0;
   for (std::size_t i = 0; i < pts_.size(); ++i) total += area(i);
@@ -728,8 +729,23 @@ void Resampler::run(Samples& s, ResampleResult& result) {
   // maxPasses bounds the passes at N; passes that still change the count (upsampling doubles it at most once
   // per pass) come on top, up to kMaxCountPasses of them.
   constexpr int kMaxCountPasses = 8;
-  for (int pass = 0, atN = 0; atN < params_.maxPasses && pass < params_.maxPasses + kMaxCountPasses; ++pass) {
-    exec_.report("resample", 0.8 * atN / params_.maxPasses);
+  // A density gradient larger than the edits at N can even out within maxPasses (an input much sparser in some
+  // parts than the output there, as a lidar's outer rings: each pass moves 1 % of the samples from the
+  // densest spots to the sparsest) keeps the spacing cv falling pass after pass: the passes go on while it
+  // falls by over 5 % a pass (under 0.9 of its value two passes before), up to 4 × maxPasses.
+  constexpr double kStillFalling = 0.9;
+  constexpr int kMaxPassFactor = 4;
+  std::vector<double> passCv;
+  auto stillFalling = [&] {
+    const std::size_t m = passCv.size();
+    return m >= 3 && passCv[m - 1] < kStillFalling * passCv[m - 3];
+  };
+  auto another = [&](int pass, int atN) {
+    if (atN < params_.maxPasses) return pass < params_.maxPasses + kMaxCountPasses;
+    return atN < kMaxPassFactor * params_.maxPasses && stillFalling();
+  };
+  for (int pass = 0, atN = 0; another(pass, atN); ++pass) {
+    exec_.report("resample", 0.8 * std::min(atN, params_.maxPasses) / params_.maxPasses);
     // At N, or off by what one balanced round of edits can leave (a collapse may find its samples taken).
     atN += static_cast<double>(s.size() > n ? s.size() - n : n - s.size()) <= params_.maxEditShare * countD + 1;
     const std::vector<Edge> e = sortedEdges(edgeRings(s, l, relaxation));
@@ -761,7 +777,7 @@ void Resampler::run(Samples& s, ResampleResult& result) {
     }
     edit(e, splits, minSplit, collapses, maxCollapse);
     // One projection step per move while the passes still edit the set; the final relaxation below projects fully.
-    relax(s, l, params_.relaxPerPass, relaxation, 1);
+    passCv.push_back(relax(s, l, params_.relaxPerPass, relaxation, 1));
     result.relaxIterations += params_.relaxPerPass;
   }
   // Exact-count finish: collapse the shortest or split the longest edges until |S| == N.

@@ -24,6 +24,7 @@ Eigen::Matrix3d scatter(const std::vector<Eigen::Vector3d>& pts, const Eigen::Ve
 
 namespace {
 constexpr std::size_t kLineTest = 16;  // neighbours the line test reads
+constexpr std::size_t kAlong = 4;      // a widened row keeps this many of its point's own line: two each way
 
 /// The line test's neighbours of point @p i: the first kLineTest of its @p row (@p found entries) besides itself,
 /// or a search where the row is shorter.
@@ -58,11 +59,48 @@ bool lineAxis(const std::vector<Eigen::Vector3d>& points, std::size_t i, const s
   axis = eig.eigenvectors().col(2);
   return onALine(eig.eigenvalues());
 }
+
+/// The row of point @p i on a line along @p axis from the candidates @p idx (squared distances @p d2, nearest
+/// first): the point, its kAlong nearest on the line, then the nearest farther than @p offLine from it — half of
+/// them from either side of the line where both sides have points among the candidates (@p bothSides), so that
+/// the lines on both sides list each other (else a line's neighbour farther on one side is nobody's), the rest
+/// from the nearer —, nearest first, @p k entries at most, in @p row.
+/// @return the distance to the nearest point off the line; 0 when there is none among the candidates
+double pickRow(const std::vector<Eigen::Vector3d>& points, std::size_t i, const Eigen::Vector3d& axis, double offLine,
+               const std::vector<std::uint32_t>& idx, const std::vector<double>& d2, std::size_t k,
+               std::vector<std::uint32_t>& row, bool& bothSides) {
+  thread_local std::vector<std::size_t> along, side[2];
+  along.clear(), side[0].clear(), side[1].clear();
+  Eigen::Vector3d first = Eigen::Vector3d::Zero();
+  for (std::size_t r = 0; r < idx.size(); ++r) {
+    if (idx[r] == i) continue;
+    Eigen::Vector3d across = points[idx[r]] - points[i];
+    across -= axis.dot(across) * axis;
+    if (across.norm() <= offLine) {
+      if (along.size() < kAlong) along.push_back(r);
+      continue;
+    }
+    if (first.isZero()) first = across;
+    side[across.dot(first) >= 0 ? 0 : 1].push_back(r);
+  }
+  bothSides = !side[0].empty() && !side[1].empty();
+  const std::size_t slots = k - 1 - along.size();
+  std::size_t take1 = std::min(side[1].size(), slots / 2);
+  const std::size_t take0 = std::min(side[0].size(), slots - take1);
+  take1 = std::min(side[1].size(), slots - take0);
+  thread_local std::vector<std::size_t> picked;
+  picked.assign(along.begin(), along.end());
+  picked.insert(picked.end(), side[0].begin(), side[0].begin() + static_cast<long>(take0));
+  picked.insert(picked.end(), side[1].begin(), side[1].begin() + static_cast<long>(take1));
+  std::sort(picked.begin(), picked.end());  // candidate order: nearest first
+  row.assign(1, static_cast<std::uint32_t>(i));
+  for (std::size_t r : picked) row.push_back(idx[r]);
+  return side[0].empty() ? 0.0 : std::sqrt(d2[side[0].front()]);
+}
 }  // namespace
 
 std::vector<float> widenAcrossScanLines(const std::vector<Eigen::Vector3d>& points, const KnnIndex& index,
                                        std::size_t k, std::uint32_t* rows, std::uint8_t* found, int threads) {
-  constexpr std::size_t kAlong = 4;      // kept on the point's own line: two each way
   constexpr std::size_t kLineWiden = 8;      // candidates: 8·k nearest,
   constexpr std::size_t kMaxCandidates = 128;  // up to 128·k
   const std::size_t n = points.size();
@@ -95,25 +133,16 @@ std::vector<float> widenAcrossScanLines(const std::vector<Eigen::Vector3d>& poin
     double spread = 0, reach = 0;
     for (std::uint32_t j : test) spread += fromLine(j) * fromLine(j), reach = std::max(reach, (points[j] - p).norm());
     const double offLine = std::max(0.5 * reach, 3.0 * std::sqrt(spread / static_cast<double>(test.size())));
-    // Candidates: the 8·k nearest, four times as many while they leave the row short (lines far apart for their
-    // spacing along: the rings of a rotating scanner near its axis).
+    // Candidates: the 8·k nearest, four times as many while they leave the row short or find one side of the line
+    // empty (lines far apart for their spacing along: the outer rings of a rotating scanner).
     double nearestOff = 0;
     for (std::size_t candidates = kLineWiden * k;; candidates *= 4) {
       index.knn(p, candidates, idx, d2);
-      keep.assign(1, static_cast<std::uint32_t>(i));
-      std::size_t along = 0;
-      nearestOff = 0;
-      for (std::size_t r = 0; r < idx.size() && keep.size() < k; ++r) {
-        if (idx[r] == i) continue;
-        if (fromLine(idx[r]) > offLine) {
-          if (nearestOff == 0) nearestOff = std::sqrt(d2[r]);
-          keep.push_back(idx[r]);
-        } else if (along < kAlong) {
-          ++along;
-          keep.push_back(idx[r]);
-        }
-      }
-      if (keep.size() == k || idx.size() < candidates || candidates >= kMaxCandidates * k) break;
+      bool bothSides = false;
+      nearestOff = pickRow(points, i, axis, offLine, idx, d2, k, keep, bothSides);
+      if ((keep.size() == k && bothSides) || idx.size() < candidates ||
+          candidates >= (keep.size() < k ? kMaxCandidates : kMaxCandidates / 4) * k)
+        break;
     }
     if (nearestOff == 0) return;  // nothing off the line: a line of its own (a wire)
     std::copy(keep.begin(), keep.end(), rows + i * k);

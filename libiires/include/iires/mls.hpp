@@ -86,8 +86,16 @@ class MlsSurface {
   double area() const { return area_; }
   /// @brief Kernel width h at input point i.
   double kernelWidth(std::size_t i) const { return h_[i]; }
+  /// The area input point i stands for, over π/8: h² (its kernel width holds its 8 nearest); on a scan line, where
+  /// the width reaches the next lines, h² times 8 over the points it holds.
+  double pointArea(std::size_t i) const {
+    return within_.empty() ? h_[i] * h_[i] : h_[i] * h_[i] * static_cast<double>(kWidthNeighbours - 1) / within_[i];
+  }
 
  private:
+  /// The constructor's part on scan lines: within_ and the rows of acrossStart_ / acrossRows_.
+  void readScanLines(const NeighbourTable& table, int threads);
+
   const std::vector<Eigen::Vector3d>& points_;
   const std::vector<Eigen::Vector3d>& normals_;
   MlsParams params_;
@@ -99,6 +107,7 @@ class MlsSurface {
   // nearest input point is one of them adds to its k nearest (all on that line); empty when no row was widened.
   std::vector<std::size_t> acrossStart_;
   std::vector<std::uint32_t> acrossRows_;
+  std::vector<double> within_;  // points within each kernel width (8 off scan lines); empty when no row was widened
   double meanSpacing_ = 0;
   double area_ = 0;
 };
