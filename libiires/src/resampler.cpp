@@ -732,9 +732,9 @@ void Resampler::run(Samples& s, ResampleResult& result) {
   // A density gradient larger than the edits at N can even out within maxPasses (an input much sparser in some
   // parts than the output there, as a lidar's outer rings: each pass moves 1 % of the samples from the
   // densest spots to the sparsest) keeps the spacing cv falling pass after pass: the passes go on while it
-  // falls by over 5 % a pass (under 0.9 of its value two passes before), up to 4 × maxPasses.
+  // falls by over 5 % a pass (under 0.9 of its value two passes before), up to 8 × maxPasses.
   constexpr double kStillFalling = 0.9;
-  constexpr int kMaxPassFactor = 4;
+  constexpr int kMaxPassFactor = 8;
   std::vector<double> passCv;
   auto stillFalling = [&] {
     const std::size_t m = passCv.size();

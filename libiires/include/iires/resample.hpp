@@ -43,7 +43,7 @@ struct ResampleParams {
   double splitRatio = 1.6;          ///< split edges longer than splitRatio·l [paper 1.6; Botsch–Kobbelt 4/3]
   double collapseRatio = 0.8;       ///< collapse edges shorter than collapseRatio·l [0.8]
   int maxPasses = 5;                ///< split/collapse + relaxation passes at N (count control, then clean-up; up
-                                    ///< to 4× as many while the spacing still evens out by 5 % a pass)
+                                    ///< to 8× as many while the spacing still evens out by 5 % a pass)
   int relaxPerPass = 2;             ///< Lloyd iterations after each pass's edge operations
   double maxEditShare = 0.01;       ///< at N, a pass replaces at most this share of samples (collapse + split)
   int maxRelaxIterations = 8;       ///< cap on the final Lloyd relaxation iterations (run in rounds of 4)
