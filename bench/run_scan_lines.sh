@@ -7,7 +7,7 @@
 # about: on the ground, 0.15 apart near the sensor and 1.1 apart at the outer ones (20.4k points). cv = spacing cv;
 # about: components = parts found (truth 1); outer_share_err = the share of the points beyond radius 7 against
 # about: that band's share of the area (%); mesh rows: mesh_parts, q_avg, q_min, lt30 (% of angles under 30°).
-# columns: case input N points cv components mesh_parts q_avg q_min lt30 outer_share_err time_s status
+# columns: case seed input N points cv components mesh_parts q_avg q_min lt30 outer_share_err time_s status
 # quick: seed 1, one count per case; full: seeds 1–3 and several counts, meshes too.
 cd "$(dirname "$0")/.."
 B=${BUILD:-build-bench}/bin/scan_line_bench

@@ -77,7 +77,8 @@ int main(int argc, char** argv) {
   if (!writeInput.empty()) iires::writePointCloud(writeInput, cloud);
   const iires::Execution exec{threads};
   for (std::size_t n : ns) {
-    std::printf("case=%s input=%zu N=%zu", name.c_str(), cloud.size(), n);
+    std::printf("case=%s seed=%llu input=%zu N=%zu", name.c_str(), static_cast<unsigned long long>(seed), cloud.size(),
+                n);
     try {
       const double t0 = now();
       if (mesh) {

@@ -727,22 +727,15 @@ void Resampler::run(Samples& s, ResampleResult& result) {
     carry(relaxation, map, s.size());
   };
   // maxPasses bounds the passes at N; passes that still change the count (upsampling doubles it at most once
-  // per pass) come on top, up to kMaxCountPasses of them.
-  constexpr int kMaxCountPasses = 8;
-  // A density gradient larger than the edits at N can even out within maxPasses (an input much sparser in some
-  // parts than the output there, as a lidar's outer rings: each pass moves 1 % of the samples from the
-  // densest spots to the sparsest) keeps the spacing cv falling pass after pass: the passes go on while it
-  // falls by over 5 % a pass (under 0.9 of its value two passes before), up to 8 × maxPasses.
-  constexpr double kStillFalling = 0.9;
-  constexpr int kMaxPassFactor = 8;
+  // per pass) come on top, up to kMaxCountPasses of them. While the spacing cv still falls by over 5 % a pass
+  // (under 0.9 of its value two passes before) the passes at N go on, up to 8 × maxPasses: each moves 1 % of the
+  // samples from the densest spots to the sparsest, too few where the density varies widely (a scanner's rings).
+  constexpr int kMaxCountPasses = 8, kMaxPassFactor = 8;
   std::vector<double> passCv;
-  auto stillFalling = [&] {
-    const std::size_t m = passCv.size();
-    return m >= 3 && passCv[m - 1] < kStillFalling * passCv[m - 3];
-  };
   auto another = [&](int pass, int atN) {
     if (atN < params_.maxPasses) return pass < params_.maxPasses + kMaxCountPasses;
-    return atN < kMaxPassFactor * params_.maxPasses && stillFalling();
+    const std::size_t m = passCv.size();
+    return atN < kMaxPassFactor * params_.maxPasses && m >= 3 && passCv[m - 1] < 0.9 * passCv[m - 3];
   };
   for (int pass = 0, atN = 0; another(pass, atN); ++pass) {
     exec_.report("resample", 0.8 * std::min(atN, params_.maxPasses) / params_.maxPasses);
