@@ -142,4 +142,25 @@ TEST(NeighbourTable, AnEvenSamplingKeepsItsRows) {
   }
 }
 
+// A wire standing on a sphere (an antenna: points 0.0025 apart along it) is a line with no other line beside it:
+// its rows stay on the wire, and in particular never reach the sphere it stands on (its rows reached sphere points
+// up to 1.0 away when any point beside the line counted).
+TEST(NeighbourTable, AWireStandingOnASurfaceDoesNotReachIt) {
+  iires::PointCloud cloud = iires::test::sphereCloud(20000, 1.0, 2);
+  std::mt19937_64 rng(3);
+  std::normal_distribution<double> g(0.0, 0.001);
+  for (int a = 0; a < 400; ++a) cloud.points.emplace_back(g(rng), g(rng), 1.0 + a / 399.0 + g(rng));
+  const iires::KnnIndex index(cloud.points);
+  const iires::NeighbourTable table(index, cloud.points, 17);
+  std::vector<std::uint32_t> idx;
+  std::vector<double> d2;
+  std::size_t reaching = 0;
+  for (std::size_t i = 20000; i < cloud.size(); ++i) {
+    if (cloud.points[i].z() < 1.1) continue;  // the wire's foot is among sphere points anyway
+    table.get(i, 17, idx, d2);
+    reaching += std::any_of(idx.begin(), idx.end(), [](std::uint32_t j) { return j < 20000; });
+  }
+  EXPECT_EQ(reaching, 0u);
+}
+
 }  // namespace

@@ -61,25 +61,33 @@ bool lineAxis(const std::vector<Eigen::Vector3d>& points, std::size_t i, const s
 }
 
 /// The row of point @p i on a line along @p axis from the candidates @p idx (squared distances @p d2, nearest
-/// first): the point, its kAlong nearest on the line, then the nearest farther than @p offLine from it — half of
+/// first): the point, its kAlong nearest on the line, then the nearest farther than @p offLine from it, more across
+/// it than along, on other lines (@p lined) or on a surface whose plane (normal @p flat) holds the line — half of
 /// them from either side of the line where both sides have points among the candidates (@p bothSides), so that
 /// the lines on both sides list each other (else a line's neighbour farther on one side is nobody's), the rest
 /// from the nearer —, nearest first, @p k entries at most, in @p row.
 /// @return the distance to the nearest point off the line; 0 when there is none among the candidates
 double pickRow(const std::vector<Eigen::Vector3d>& points, std::size_t i, const Eigen::Vector3d& axis, double offLine,
                const std::vector<std::uint32_t>& idx, const std::vector<double>& d2, std::size_t k,
+               const std::vector<std::uint8_t>& lined, const std::vector<Eigen::Vector3f>& flat,
                std::vector<std::uint32_t>& row, bool& bothSides) {
   thread_local std::vector<std::size_t> along, side[2];
   along.clear(), side[0].clear(), side[1].clear();
   Eigen::Vector3d first = Eigen::Vector3d::Zero();
   for (std::size_t r = 0; r < idx.size(); ++r) {
     if (idx[r] == i) continue;
-    Eigen::Vector3d across = points[idx[r]] - points[i];
-    across -= axis.dot(across) * axis;
+    const Eigen::Vector3d d = points[idx[r]] - points[i];
+    const Eigen::Vector3d across = d - axis.dot(d) * axis;
     if (across.norm() <= offLine) {
       if (along.size() < kAlong) along.push_back(r);
       continue;
     }
+    // Beside the point, more across its line than along it (not its own line farther on, where the local axis has
+    // drifted), and on a surface the line could lie in: another line, or a surface whose plane holds the line's
+    // direction (a sampling even across, beside the lines), not a surface the line stands on (a wire's).
+    const std::uint32_t j = idx[r];
+    if (across.norm() < std::abs(axis.dot(d)) || (!lined[j] && std::abs(flat[j].cast<double>().dot(axis)) > 0.5))
+      continue;
     if (first.isZero()) first = across;
     side[across.dot(first) >= 0 ? 0 : 1].push_back(r);
   }
@@ -113,16 +121,33 @@ std::vector<float> widenAcrossScanLines(const std::vector<Eigen::Vector3d>& poin
     onLine[i] = lineAxis(points, i, test, true, axis);
   });
   if (std::none_of(onLine.begin(), onLine.end(), [](std::uint8_t b) { return b != 0; })) return {};
+  // A scan line is a structure, not one point's neighbourhood: a point is on one where most of its neighbours
+  // pass the test (a point of an even sampling whose neighbours happen to line up, one in 20,000 of a random one,
+  // is not; a point of a jittered line that narrowly fails it is).
+  std::vector<std::uint8_t> lined(n, 0);
+  parallelFor(n, threads, [&](std::size_t i) {
+    thread_local std::vector<std::uint32_t> test;
+    testNeighbours(points, index, i, rows + i * k, found[i], test);
+    const auto passed = std::count_if(test.begin(), test.end(), [&](std::uint32_t j) { return onLine[j] != 0; });
+    lined[i] = test.size() == kLineTest && 2 * static_cast<std::size_t>(passed) >= test.size();
+  });
+  // The normals of the points off the lines (of their 16 nearest's plane), for pickRow's test.
+  std::vector<Eigen::Vector3f> flat(n, Eigen::Vector3f::Zero());
+  parallelFor(n, threads, [&](std::size_t i) {
+    if (lined[i]) return;
+    thread_local std::vector<std::uint32_t> test;
+    testNeighbours(points, index, i, rows + i * k, found[i], test);
+    if (test.size() < 2) return;
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
+    eig.computeDirect(scatter(points, points[i], test.data(), test.size()));
+    flat[i] = eig.eigenvectors().col(0).cast<float>();
+  });
   std::vector<float> across(n, 0.0f);
   parallelFor(n, threads, [&](std::size_t i) {
+    if (!lined[i]) return;
     thread_local std::vector<std::uint32_t> test, idx, keep;
     thread_local std::vector<double> d2;
     testNeighbours(points, index, i, rows + i * k, found[i], test);
-    // A scan line is a structure, not one point's neighbourhood: a point is on one where most of its neighbours
-    // pass the test (a point of an even sampling whose neighbours happen to line up, one in 20,000 of a random
-    // one, is not; a point of a jittered line that narrowly fails it is).
-    const auto lined = std::count_if(test.begin(), test.end(), [&](std::uint32_t j) { return onLine[j] != 0; });
-    if (test.size() < kLineTest || 2 * static_cast<std::size_t>(lined) < test.size()) return;
     const Eigen::Vector3d& p = points[i];
     Eigen::Vector3d axis;
     lineAxis(points, i, test, false, axis);
@@ -139,7 +164,7 @@ std::vector<float> widenAcrossScanLines(const std::vector<Eigen::Vector3d>& poin
     for (std::size_t candidates = kLineWiden * k;; candidates *= 4) {
       index.knn(p, candidates, idx, d2);
       bool bothSides = false;
-      nearestOff = pickRow(points, i, axis, offLine, idx, d2, k, keep, bothSides);
+      nearestOff = pickRow(points, i, axis, offLine, idx, d2, k, lined, flat, keep, bothSides);
       if ((keep.size() == k && bothSides) || idx.size() < candidates ||
           candidates >= (keep.size() < k ? kMaxCandidates : kMaxCandidates / 4) * k)
         break;

@@ -36,11 +36,13 @@ inline bool onALine(const Eigen::Vector3d& ev) { return ev(1) < 0.0625 * ev(2); 
 /// A sampling dense along scan lines and sparse across them (a lidar's) gives a point's nearest neighbours all on
 /// its own line: a fit over them has no extent across it (its normal turns freely about the line), the normals'
 /// orientation and the geodesic graph link neighbouring lines only where noise brings two within reach, and kernel
-/// widths read from the 8th neighbour do not reach the next line. Where a point's kLineTest nearest lie on a line
-/// (onALine), its row is rebuilt from its 8·k nearest (more where the lines are far apart): the point, its kAlong nearest on its line, then the
-/// nearest off the line (farther from it than half the test's reach and than three times the spread across it),
-/// nearest first, k in all — so that every prefix of six entries or more reaches across. A sampling even in every
-/// direction never meets the test, and a line with nothing off it (a wire) keeps its row.
+/// widths read from the 8th neighbour do not reach the next line. A point is on a scan line where most of its 16
+/// nearest pass the line test (onALine over their own 16 nearest: a structure, not a chance alignment); its row
+/// is then rebuilt from its 8·k nearest (more where the lines are far apart): the point, four of its line's
+/// points, then the nearest points of other lines (farther from its line than half the test's reach and than
+/// three times the spread across it) from both sides of it, nearest first, k in all — so that every prefix of six
+/// entries or more reaches across. A sampling even in every direction never meets the test, and a line with no
+/// other line near (a wire standing off a surface) keeps its row.
 /// @param rows   k entries per point (the point itself among them, nearest first), @p found per point how many
 /// @return per point, the distance to the nearest point off its line where its row was rebuilt, else 0; empty
 ///         when no row was
