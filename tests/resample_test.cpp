@@ -150,7 +150,9 @@ TEST(Resample, ScanLinesResampledEvenly) {
     ASSERT_EQ(r.cloud.size(), n);
     EXPECT_EQ(r.components, 1u) << n;
     EXPECT_LT(r.spacing.cv, 0.08) << n;
+    EXPECT_GT(r.scanLinePoints, 23000u) << n;  // of 25,000; the lines' ends reach the next lines anyway
   }
+  EXPECT_EQ(iires::resample(iires::test::sphereCloud(5000), paramsFor(500)).scanLinePoints, 0u);
 }
 
 // A rotating scanner's rings on the ground (positions only; rings 0.15 apart near the sensor and 1.1 apart at the

@@ -223,7 +223,8 @@ std::string ResampleResult::toJson() const {
   detail::JsonWriter j;
   j.beginObject(true).member("input_points", inputPoints).member("duplicates_merged", duplicatesMerged);
   j.member("requested_points", requestedPoints).member("output_points", cloud.size());
-  j.member("working_points", thinnedPoints).member("initial_samples", initialSamples).member("passes", passes);
+  j.member("working_points", thinnedPoints).member("scan_line_points", scanLinePoints);
+  j.member("initial_samples", initialSamples).member("passes", passes);
   j.member("relax_iterations", relaxIterations).member("splits", splits).member("collapses", collapses);
   j.member("target_length", targetLength).member("components", components).member("satellites", satellites);
   j.key("sheets").embed(sheets.toJson());
@@ -299,6 +300,7 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params, const Ex
     result.preprocessing.cloud = {};
     clock.end("preprocess", t);
   }
+  if (neighbours) result.scanLinePoints = neighbours->linePoints();
   // The geodesic graph builds a k-d tree of these (Z-ordered) points as well and hands it to the surface: one
   // tree, not two (memory at 5M).
   const bool geodesicRule = !params.neighbourRule && params.intrinsic;

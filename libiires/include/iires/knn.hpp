@@ -4,6 +4,7 @@
 /// @brief k-nearest-neighbour and radius search over a fixed set of 3-D points (nanoflann behind a PImpl).
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -65,6 +66,10 @@ class NeighbourTable {
   /// @brief Where row @p i was widened across scan lines: the distance from point i to the nearest point off its
   /// line (the spacing across the lines there); else 0.
   float acrossLines(std::size_t i) const { return across_.empty() ? 0.0f : across_[i]; }
+  /// @brief How many rows were widened across scan lines.
+  std::size_t linePoints() const {
+    return static_cast<std::size_t>(std::count_if(across_.begin(), across_.end(), [](float d) { return d > 0; }));
+  }
   /// @brief Keeps the first @p k neighbours of every row and frees the rest, for readers that need no more
   /// (get() with up to @p k gives what it gave). No effect when k ≥ k().
   void truncate(std::size_t k);

@@ -95,6 +95,7 @@ struct ResampleResult {
   std::size_t duplicatesMerged = 0;  ///< exact duplicates merged during validation
   std::size_t requestedPoints = 0;   ///< N
   std::size_t thinnedPoints = 0;     ///< input points the pipeline worked on (after validation and thinning)
+  std::size_t scanLinePoints = 0;    ///< of those, points on scan lines (neighbours taken across the lines too)
   std::size_t initialSamples = 0;    ///< samples after density initialisation
   int passes = 0;                    ///< count-control passes run
   int relaxIterations = 0;           ///< Lloyd relaxation iterations run in total
