@@ -257,8 +257,7 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params, const Ex
   }
 
   auto t = clock.begin("validate");
-  const ValidationReport report = validateCloud(cloud, 4, "input", exec.threads);
-  result.duplicatesMerged = report.duplicatesMerged;
+  result.duplicatesMerged = validateCloud(cloud, 4, "input", exec.threads).duplicatesMerged;
   clock.end("validate", t);
 
   cloud = workingCloud(std::move(cloud), params, exec, clock);
