@@ -182,16 +182,16 @@ void workingNormals(PointCloud& cloud, const NormalParams& params, bool sheetRul
 }
 
 /// After pre-processing moved or dropped points: the later stages' table (@p laterK columns) on the final
-/// positions, through the sheet rule again (on rows as long as the first time, @p tableK: shorter ones would not
-/// reach a sheet as far off); returns which points have another sheet near.
+/// positions, through the sheet rule (@p params; null: it did not run) again, on rows as long as the first time
+/// (@p tableK: shorter ones would not reach a sheet as far off); returns which points have another sheet near.
 std::vector<std::uint8_t> refilter(const PointCloud& cloud, std::optional<KnnIndex>& index,
                                    std::optional<NeighbourTable>& neighbours, std::size_t tableK, std::size_t laterK,
-                                   const SheetParams& params, const Execution& exec) {
+                                   const SheetParams* params, const Execution& exec) {
   index.emplace(cloud.points);
   neighbours.emplace(*index, cloud.points, tableK, exec.threads);
   std::vector<std::uint8_t> near;
   std::vector<Eigen::Vector3d> normals;
-  separateSheets(cloud.points, *neighbours, normals, params, exec, &cloud.normals, &near);
+  if (params) separateSheets(cloud.points, *neighbours, normals, *params, exec, &cloud.normals, &near);
   neighbours->truncate(laterK);
   return near;
 }
@@ -294,7 +294,7 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params, const Ex
       neighbours.reset();
       index.reset();
       cloud = std::move(result.preprocessing.cloud);
-      if (sheets) nearSheets = refilter(cloud, index, neighbours, tableK, laterK, sp, exec);
+      nearSheets = refilter(cloud, index, neighbours, sheets ? tableK : laterK, laterK, sheets ? &sp : nullptr, exec);
     }
     result.preprocessing.cloud = {};
     clock.end("preprocess", t);
