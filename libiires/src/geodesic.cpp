@@ -32,7 +32,6 @@ double secondsSince(Clock::time_point t) {
   return std::chrono::duration<double>(Clock::now() - t).count();
 }
 
-
 /// Undirected graph in compressed-row form; every edge is stored in both endpoints' rows.
 struct Graph {
   std::vector<std::uint64_t> offset;  // n + 1

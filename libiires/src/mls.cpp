@@ -114,9 +114,7 @@ MlsSurface::MlsSurface(const std::vector<Eigen::Vector3d>& points,
   std::nth_element(sorted.begin(), sorted.begin() + static_cast<long>(q), sorted.end());
   const double cap = sorted[q];
   for (std::size_t i = 0; i < n; ++i) h_[i] = std::min(h_[i], samplingScale ? cap * (*samplingScale)[i] : cap);
-  bool onLines = false;
-  for (std::size_t i = 0; table && i < n && !onLines; ++i) onLines = table->acrossLines(i) > 0;
-  if (onLines) readScanLines(*table, exec.threads);
+  if (table && table->linePoints() > 0) readScanLines(*table, exec.threads);
   double area = 0, spacing = 0;
   for (std::size_t i = 0; i < n; ++i) {
     area += M_PI * h_[i] * h_[i] / (within_.empty() ? static_cast<double>(kKernelNeighbour) : within_[i]);

@@ -131,6 +131,7 @@ std::vector<float> widenAcrossScanLines(const std::vector<Eigen::Vector3d>& poin
     const auto passed = std::count_if(test.begin(), test.end(), [&](std::uint32_t j) { return onLine[j] != 0; });
     lined[i] = test.size() == kLineTest && 2 * static_cast<std::size_t>(passed) >= test.size();
   });
+  if (std::none_of(lined.begin(), lined.end(), [](std::uint8_t b) { return b != 0; })) return {};
   // The normals of the points off the lines (of their 16 nearest's plane), for pickRow's test.
   std::vector<Eigen::Vector3f> flat(n, Eigen::Vector3f::Zero());
   parallelFor(n, threads, [&](std::size_t i) {

@@ -93,11 +93,10 @@ class GeodesicCoordinates {
   /// @param table (optional) neighbour lists of exactly cloud.points with k ≥ params.k + 1, borrowed for the
   /// build of the graph, to save its k-NN search; not read once @p alongside runs (which may free it)
   /// @param alongside (optional) work that does not need the coordinates, called once with the number of
-  /// threads it may use and the k-d tree over cloud.points when they came in Z-order (mortonOrder(), as the
-  /// resampler's working cloud does), else null; the tree lives as long as this object; and samplingScales(). It
-  /// runs during the
-  /// satellite sweeps when those leave threads idle (fewer components than threads: each component's sweeps
-  /// are serial), else after them. Its exceptions propagate.
+  /// threads it may use, the k-d tree over cloud.points when they came in Z-order (mortonOrder(), as the
+  /// resampler's working cloud does), else null (the tree lives as long as this object), and samplingScales().
+  /// It runs during the satellite sweeps when those leave threads idle (fewer components than threads: each
+  /// component's sweeps are serial), else after them. Its exceptions propagate.
   /// @throws InputError when the cloud is empty or has non-finite coordinates; std::invalid_argument for
   /// bad params.
   explicit GeodesicCoordinates(const PointCloud& cloud, const GeodesicParams& params = {}, const Execution& exec = {},
