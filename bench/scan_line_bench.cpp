@@ -5,7 +5,9 @@
 // Usage: scan_line_bench CASE [N ...] [--seed S] [--threads T] [--mesh] [--write-input FILE.xyz]
 //   CASE: lines — 50 parallel lines 0.02 apart on a gently curved sheet, points 0.002 apart along them;
 //         rings — a rotating scanner's rings on the ground, 0.15 apart near the sensor and 1.1 apart at the
-//                 outer ones, points 0.015–0.05 apart along them.
+//                 outer ones, points 0.015–0.05 apart along them;
+//         slices:MESH — a profile scanner's slices of a closed mesh: 60 planes across its longest axis, points
+//                 a tenth of the planes' distance apart along each contour (random, 3 % jitter), positions only.
 // Columns: points, cv (nearest-neighbour spacing cv), components (the geodesic coordinates' parts; the truth is
 // 1), outer_share_err (rings: the share of the points beyond radius 7 against that band's share of the area,
 // in % of it), time_s; with --mesh: mesh_parts, q_avg, q_min, lt30 (% of triangles with an angle under 30°).
@@ -14,6 +16,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -32,6 +35,36 @@ constexpr double kOuterRadius = 7.0;  // rings: the band whose share of the poin
 double outerAreaShare() {
   const double inner = 1.7 / std::tan(30.0 * M_PI / 180.0), outer = 1.7 / std::tan(10.0 * M_PI / 180.0);
   return (outer * outer - kOuterRadius * kOuterRadius) / (outer * outer - inner * inner);
+}
+
+/// The contours of @p mesh cut by `planes` planes evenly across its longest axis, sampled at random along each
+/// contour segment (mean step a tenth of the planes' distance) with Gaussian jitter of 3 % of the step.
+iires::PointCloud sliceContours(const iires::TriangleMesh& mesh, int planes, std::uint64_t seed) {
+  Eigen::Vector3d lo = mesh.vertices.front(), hi = lo;
+  for (const auto& v : mesh.vertices) lo = lo.cwiseMin(v), hi = hi.cwiseMax(v);
+  int axis = 0;
+  (hi - lo).maxCoeff(&axis);
+  const double gap = (hi[axis] - lo[axis]) / planes, step = 0.1 * gap;
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> jitter(0.0, 0.03 * step);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  iires::PointCloud c;
+  for (int s = 0; s < planes; ++s) {
+    const double level = lo[axis] + gap * (s + 0.5);
+    for (const auto& t : mesh.triangles) {
+      std::vector<Eigen::Vector3d> ends;
+      for (int e = 0; e < 3; ++e) {
+        const Eigen::Vector3d &a = mesh.vertices[t[e]], &b = mesh.vertices[t[(e + 1) % 3]];
+        if ((a[axis] < level) != (b[axis] < level)) ends.push_back(a + (level - a[axis]) / (b[axis] - a[axis]) * (b - a));
+      }
+      if (ends.size() != 2) continue;
+      std::poisson_distribution<int> count((ends[1] - ends[0]).norm() / step);
+      for (int k = count(rng); k > 0; --k)
+        c.points.push_back(ends[0] + u(rng) * (ends[1] - ends[0]) +
+                           Eigen::Vector3d(jitter(rng), jitter(rng), jitter(rng)));
+    }
+  }
+  return c;
 }
 
 double outerShareError(const iires::PointCloud& c) {
@@ -68,12 +101,14 @@ int main(int argc, char** argv) {
       ns.push_back(std::stoul(arg));
     }
   }
-  if (name != "lines" && name != "rings") {
+  const bool rings = name == "rings", slices = name.rfind("slices:", 0) == 0;
+  if (name != "lines" && !rings && !slices) {
     std::fprintf(stderr, "scan_line_bench: error: unknown case '%s'\n", name.c_str());
     return 2;
   }
-  const bool rings = name == "rings";
-  const iires::PointCloud cloud = rings ? iires::test::groundRings(seed) : iires::test::scanLineCloud(seed);
+  const iires::PointCloud cloud = rings    ? iires::test::groundRings(seed)
+                                  : slices ? sliceContours(iires::readMesh(name.substr(7)), 60, seed)
+                                           : iires::test::scanLineCloud(seed);
   if (!writeInput.empty()) iires::writePointCloud(writeInput, cloud);
   const iires::Execution exec{threads};
   for (std::size_t n : ns) {
