@@ -37,36 +37,6 @@ double outerAreaShare() {
   return (outer * outer - kOuterRadius * kOuterRadius) / (outer * outer - inner * inner);
 }
 
-/// The contours of @p mesh cut by `planes` planes evenly across its longest axis, sampled at random along each
-/// contour segment (mean step a tenth of the planes' distance) with Gaussian jitter of 3 % of the step.
-iires::PointCloud sliceContours(const iires::TriangleMesh& mesh, int planes, std::uint64_t seed) {
-  Eigen::Vector3d lo = mesh.vertices.front(), hi = lo;
-  for (const auto& v : mesh.vertices) lo = lo.cwiseMin(v), hi = hi.cwiseMax(v);
-  int axis = 0;
-  (hi - lo).maxCoeff(&axis);
-  const double gap = (hi[axis] - lo[axis]) / planes, step = 0.1 * gap;
-  std::mt19937_64 rng(seed);
-  std::normal_distribution<double> jitter(0.0, 0.03 * step);
-  std::uniform_real_distribution<double> u(0.0, 1.0);
-  iires::PointCloud c;
-  for (int s = 0; s < planes; ++s) {
-    const double level = lo[axis] + gap * (s + 0.5);
-    for (const auto& t : mesh.triangles) {
-      std::vector<Eigen::Vector3d> ends;
-      for (int e = 0; e < 3; ++e) {
-        const Eigen::Vector3d &a = mesh.vertices[t[e]], &b = mesh.vertices[t[(e + 1) % 3]];
-        if ((a[axis] < level) != (b[axis] < level)) ends.push_back(a + (level - a[axis]) / (b[axis] - a[axis]) * (b - a));
-      }
-      if (ends.size() != 2) continue;
-      std::poisson_distribution<int> count((ends[1] - ends[0]).norm() / step);
-      for (int k = count(rng); k > 0; --k)
-        c.points.push_back(ends[0] + u(rng) * (ends[1] - ends[0]) +
-                           Eigen::Vector3d(jitter(rng), jitter(rng), jitter(rng)));
-    }
-  }
-  return c;
-}
-
 double outerShareError(const iires::PointCloud& c) {
   std::size_t far = 0;
   for (const auto& p : c.points) far += p.head<2>().norm() > kOuterRadius;
@@ -107,7 +77,7 @@ int main(int argc, char** argv) {
     return 2;
   }
   const iires::PointCloud cloud = rings    ? iires::test::groundRings(seed)
-                                  : slices ? sliceContours(iires::readMesh(name.substr(7)), 60, seed)
+                                  : slices ? iires::test::sliceContours(iires::readMesh(name.substr(7)), 60, seed)
                                            : iires::test::scanLineCloud(seed);
   if (!writeInput.empty()) iires::writePointCloud(writeInput, cloud);
   const iires::Execution exec{threads};

@@ -185,6 +185,34 @@ TEST(Resample, ScannerRingsOnTheGroundResampledEvenly) {
   EXPECT_NEAR(static_cast<double>(far) / 2000.0, share, 0.05);
 }
 
+// A profile scanner's 30 slices of a torus across its ring (positions only; contours 0.093 apart, points a tenth
+// of that apart along them): where the tube turns parallel to the planes the contours lie far apart, where a
+// plane grazes the tube they turn tightly. One part, even spacing, whatever links the contours:
+// - rows across the contours link them one way only (their points' own rows list their nearest on this
+//   contour): kept (dropped as not mutual: cv 0.15–0.17);
+// - on a thinner tube two contours lie a fraction of their distance apart along the normal, more than the
+//   spacing along them: the sheet rule reads the contours' distance as the resolution (with the spacing along
+//   them it found sheets between contours: three parts, cv 0.087–0.107);
+// - with points 0.15 of the contours' distance apart along them a point's 16 nearest reach the next contour:
+//   the line test reads 8 (with 16 under half the points passed it: cv 0.26–0.27).
+TEST(Resample, ProfileSlicesResampledEvenly) {
+  struct Case {
+    double tube, step;
+  };
+  for (const Case c : {Case{0.4, 0.1}, Case{0.2, 0.1}, Case{0.4, 0.15}}) {
+    const iires::PointCloud cloud =
+        iires::test::sliceContours(iires::test::torusMesh(1.0, c.tube, 96, 48), 30, 3, c.step);
+    for (std::size_t n : {1000, 3000}) {
+      const auto r = iires::resample(cloud, paramsFor(n));
+      SCOPED_TRACE(testing::Message() << "tube " << c.tube << " step " << c.step << " N " << n);
+      ASSERT_EQ(r.cloud.size(), n);
+      EXPECT_EQ(r.components, 1u);
+      EXPECT_LT(r.spacing.cv, 0.08);
+      EXPECT_GT(r.scanLinePoints, 9 * cloud.size() / 10);
+    }
+  }
+}
+
 // A sparse open tube (mesh-vertex-like rings of 24 points, 0.065 apart, the end rings exactly at z = 0 and
 // z = 1) upsampled ten times: samples stay within a quarter input spacing of the open ends, where the MLS
 // surface would carry on along the tube (it used to put samples 1.5 input spacings past them, like the CGAL

@@ -200,6 +200,56 @@ inline TriangleMesh uvSphereMesh(int rings, int segments) {
   return m;
 }
 
+/// A closed torus about the z axis (ring radius @p ring, tube radius @p tube), @p around × @p across quads as
+/// triangles, outward.
+inline TriangleMesh torusMesh(double ring, double tube, int around, int across) {
+  TriangleMesh m;
+  for (int i = 0; i < around; ++i)
+    for (int j = 0; j < across; ++j) {
+      const double u = 2 * M_PI * i / around, v = 2 * M_PI * j / across, rho = ring + tube * std::cos(v);
+      m.vertices.emplace_back(rho * std::cos(u), rho * std::sin(u), tube * std::sin(v));
+    }
+  auto at = [&](int i, int j) { return (i % around) * across + (j % across); };
+  for (int i = 0; i < around; ++i)
+    for (int j = 0; j < across; ++j) {
+      m.triangles.emplace_back(at(i, j), at(i + 1, j), at(i + 1, j + 1));
+      m.triangles.emplace_back(at(i, j), at(i + 1, j + 1), at(i, j + 1));
+    }
+  return m;
+}
+
+/// A profile scanner's slices of @p mesh: the contours cut by @p planes planes evenly across its longest axis,
+/// sampled at random along each contour segment (mean step @p step times the planes' distance) with Gaussian
+/// jitter of 3 % of the step. Positions only.
+inline PointCloud sliceContours(const TriangleMesh& mesh, int planes, std::uint64_t seed, double step = 0.1) {
+  Eigen::Vector3d lo = mesh.vertices.front(), hi = lo;
+  for (const auto& v : mesh.vertices) lo = lo.cwiseMin(v), hi = hi.cwiseMax(v);
+  int axis = 0;
+  (hi - lo).maxCoeff(&axis);
+  const double gap = (hi[axis] - lo[axis]) / planes;
+  step *= gap;
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> jitter(0.0, 0.03 * step);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  PointCloud c;
+  for (int s = 0; s < planes; ++s) {
+    const double level = lo[axis] + gap * (s + 0.5);
+    for (const auto& t : mesh.triangles) {
+      std::vector<Eigen::Vector3d> ends;
+      for (int e = 0; e < 3; ++e) {
+        const Eigen::Vector3d &a = mesh.vertices[t[e]], &b = mesh.vertices[t[(e + 1) % 3]];
+        if ((a[axis] < level) != (b[axis] < level)) ends.push_back(a + (level - a[axis]) / (b[axis] - a[axis]) * (b - a));
+      }
+      if (ends.size() != 2) continue;
+      std::poisson_distribution<int> count((ends[1] - ends[0]).norm() / step);
+      for (int k = count(rng); k > 0; --k)
+        c.points.push_back(ends[0] + u(rng) * (ends[1] - ends[0]) +
+                           Eigen::Vector3d(jitter(rng), jitter(rng), jitter(rng)));
+    }
+  }
+  return c;
+}
+
 /// A closed genus-1 polyhedron with sharp creases: a ring of triangular cross-section (outer corner at radius 1 in
 /// the plane z = 0, inner corners at radius 0.4 and z = ±h) swept around an equilateral triangle; 9 vertices, 9
 /// planar quads as 18 triangles, outward. The rims of its triangular hole are convex edges of 41° (the faces'

@@ -399,7 +399,10 @@ std::vector<std::uint8_t> GeodesicCoordinates::Impl::filterEdges(const Neighbour
       const std::uint32_t j = knn[i * k + r];
       if (j == kNone) break;
       const bool mutual = inList(j, static_cast<std::uint32_t>(i));
-      if (params.mutualNeighbours && !mutual) continue;
+      // A row widened across scan lines lists a few chosen points of the next lines, whose own rows list
+      // their nearest on this line: the same two lines linked, seldom the same two points. Such a link stands
+      // one way.
+      if (params.mutualNeighbours && !mutual && !(lists.across[i] > 0)) continue;
       const float d = lists.distance[i * k + r];
       if (ratio > 0 && d > ratio * std::min(lists.rho[i], lists.rho[j])) continue;
       if (d > 0) {

@@ -23,7 +23,10 @@ Eigen::Matrix3d scatter(const std::vector<Eigen::Vector3d>& pts, const Eigen::Ve
 }
 
 namespace {
-constexpr std::size_t kLineTest = 16;  // neighbours the line test reads
+constexpr std::size_t kLineTest = 16;   // neighbours a line's axis and the majority over the line test read
+// Neighbours the line test itself reads: four spacings along either way, short of the next line wherever the lines
+// lie eight spacings or more apart (also where a contour turns tightly or thinning spaced its points out).
+constexpr std::size_t kLineWindow = 8;
 constexpr std::size_t kAlong = 4;      // a widened row keeps this many of its point's own line: two each way
 
 /// The line test's neighbours of point @p i: the first kLineTest of its @p row (@p found entries) besides itself,
@@ -41,13 +44,13 @@ void testNeighbours(const std::vector<Eigen::Vector3d>& points, const KnnIndex& 
     if (row[r] != i) test.push_back(row[r]);
 }
 
-/// The direction along which point @p i and its neighbours @p test spread most, and whether they lie on a line
-/// (onALine); @p quick: give up (false, zero) early where a cheap test rules a line out.
+/// The direction along which point @p i and the first @p window of its neighbours @p test spread most, and
+/// whether they lie on a line (onALine); @p quick: give up (false, zero) early where a cheap test rules a line out.
 bool lineAxis(const std::vector<Eigen::Vector3d>& points, std::size_t i, const std::vector<std::uint32_t>& test,
-              bool quick, Eigen::Vector3d& axis) {
+              std::size_t window, bool quick, Eigen::Vector3d& axis) {
   axis.setZero();
   if (test.size() < kLineTest) return false;
-  const Eigen::Matrix3d cov = scatter(points, points[i], test.data(), test.size());
+  const Eigen::Matrix3d cov = scatter(points, points[i], test.data(), std::min(window, test.size()));
   // Cheap first: on a line the second invariant (λ1λ2 + λ2λ3 + λ3λ1) stays under 0.13 of the trace squared; an
   // even sampling of a surface has about a quarter.
   const double tr = cov.trace();
@@ -118,7 +121,7 @@ std::vector<float> widenAcrossScanLines(const std::vector<Eigen::Vector3d>& poin
     thread_local std::vector<std::uint32_t> test;
     Eigen::Vector3d axis;
     testNeighbours(points, index, i, rows + i * k, found[i], test);
-    onLine[i] = lineAxis(points, i, test, true, axis);
+    onLine[i] = lineAxis(points, i, test, kLineWindow, true, axis);
   });
   if (std::none_of(onLine.begin(), onLine.end(), [](std::uint8_t b) { return b != 0; })) return {};
   // A scan line is a structure, not one point's neighbourhood: a point is on one where most of its neighbours
@@ -151,7 +154,7 @@ std::vector<float> widenAcrossScanLines(const std::vector<Eigen::Vector3d>& poin
     testNeighbours(points, index, i, rows + i * k, found[i], test);
     const Eigen::Vector3d& p = points[i];
     Eigen::Vector3d axis;
-    lineAxis(points, i, test, false, axis);
+    lineAxis(points, i, test, kLineTest, false, axis);
     auto fromLine = [&](std::uint32_t j) {
       const Eigen::Vector3d d = points[j] - p;
       return (d - axis.dot(d) * axis).norm();

@@ -32,7 +32,9 @@ namespace iires {
 /// @brief Parameters of the geodesic graph and fields.
 struct GeodesicParams {
   int k = 16;              ///< graph neighbours per point before filtering (8–32; 16 is accurate and fast)
-  bool mutualNeighbours = true;  ///< keep an edge only when each endpoint is among the other's k nearest
+  /// keep an edge only when each endpoint is among the other's k nearest (a row widened across scan lines
+  /// excepted: its links to the next lines stand one way)
+  bool mutualNeighbours = true;
   int spacingNeighbour = 6;      ///< local spacing ρ(p) = distance to this nearest neighbour (1 ≤ · ≤ k)
   /// An edge pq is dropped when |p − q| > maxEdgeRatio · min(ρ(p), ρ(q)) (0 = no length bound).
   double maxEdgeRatio = 3.0;
