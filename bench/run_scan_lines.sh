@@ -10,7 +10,8 @@
 # about: components = parts found (truth 1); outer_share_err = the share of the points beyond radius 7 against
 # about: that band's share of the area (%); mesh rows: mesh_parts, q_avg, q_min, lt30 (% of angles under 30°).
 # columns: case seed input N points cv components mesh_parts q_avg q_min lt30 outer_share_err time_s status
-# quick: seed 1, one count per case; full: seeds 1–3 and several counts, meshes too, and the slices of four models.
+# quick: seed 1, one count per case; full: seeds 1–3 and several counts, meshes too, and the slices of four models
+# (meshed at 3000 too).
 cd "$(dirname "$0")/.."
 B=${BUILD:-build-bench}/bin/scan_line_bench
 if [ "${1:-quick}" = full ]; then
@@ -22,6 +23,7 @@ if [ "${1:-quick}" = full ]; then
   done
   for m in bunny00 armadillo hand fandisk; do
     "$B" "slices:datasets/cache/meshes/$m.off" 3000 10000 --threads 2
+    "$B" "slices:datasets/cache/meshes/$m.off" 3000 --mesh --threads 2
   done
 else
   "$B" lines 10000 --threads 2
