@@ -98,6 +98,20 @@ TEST(Geodesic, ScanLinesAreLinkedAcross) {
   EXPECT_LT(worst, 1.5) << "geodesic over straight-line distance";
 }
 
+// A profile scanner's 20 slices of a cube: the contours' corners (where a contour turns 90° the line test fails)
+// sample the surface as coarsely as the lines beside them — no point's sampling scale is under half the median
+// (the corners' points had scale 1: the intrinsic rule's tolerance was a few spacings along the contours there,
+// and rejected neighbours across them).
+TEST(Geodesic, ScanLineCornersTakeTheLinesScale) {
+  const PointCloud cloud = test::sliceContours(test::cubeMesh(), 20, 1);
+  const GeodesicCoordinates geo(cloud);
+  std::vector<float> scale = geo.samplingScales();
+  ASSERT_EQ(scale.size(), cloud.size());
+  std::sort(scale.begin(), scale.end());
+  EXPECT_GT(scale.front(), 0.5f * scale[scale.size() / 2]);
+  EXPECT_GT(scale.front(), 5.0f);  // the contours lie ten spacings apart
+}
+
 TEST(Geodesic, SatellitesAreFarApart) {
   PointCloud c = test::sphereCloud(8000, 1.0, 3);
   const GeodesicCoordinates g(c);

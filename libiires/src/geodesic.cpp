@@ -357,8 +357,10 @@ GeodesicCoordinates::Impl::NeighbourLists GeodesicCoordinates::Impl::neighbourLi
 }
 
 /// Per point (scale), how much more coarsely than the cloud its component is sampled: the component's median
-/// nearest-neighbour distance over the cloud's (spacing), at least 1 — and on a scan line at least half the
-/// distance to the next line over the spacing (a point between two lines lies that far from the nearest one).
+/// nearest-neighbour distance over the cloud's (spacing), at least 1 — and on or beside scan lines at least half
+/// the largest distance to the next line among the point and its k nearest over the spacing (a point between two
+/// lines lies that far from the nearest one; a point that noise or a tight turn kept off the lines, or whose
+/// nearest line lies on one side while the other side's is farther, takes its neighbours' spacing).
 void GeodesicCoordinates::Impl::componentScales(const NeighbourLists& lists, const Components& components) {
   const std::size_t n = points.size(), k = static_cast<std::size_t>(params.k);
   std::vector<std::vector<float>> nearest(components.count);
@@ -372,9 +374,12 @@ void GeodesicCoordinates::Impl::componentScales(const NeighbourLists& lists, con
     of[c] = std::max(1.0f, static_cast<float>(d[d.size() / 2] / spacing));
   }
   scale.resize(n);
-  for (std::size_t i = 0; i < n; ++i)
-    scale[order[i]] = std::max(of[components.id[i]], spacing > 0 ? static_cast<float>(0.5 * lists.across[i] / spacing)
-                                                                  : 1.0f);
+  for (std::size_t i = 0; i < n; ++i) {
+    float across = lists.across[i];
+    for (std::size_t r = 0; r < k && lists.index[i * k + r] != kNone; ++r)
+      across = std::max(across, lists.across[lists.index[i * k + r]]);
+    scale[order[i]] = std::max(of[components.id[i]], spacing > 0 ? static_cast<float>(0.5 * across / spacing) : 1.0f);
+  }
 }
 
 /// Which k-NN entries become edges, by symmetric tests (so both directions agree): 0 = dropped, 1 = kept and
