@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "iires/reconstruct/mesh_quality.hpp"
+#include "shapes.hpp"
 
 namespace iires {
 namespace {
@@ -143,24 +144,6 @@ TEST(MeshQuality, BowtieVertexIsNonManifold) {
   EXPECT_FALSE(q.manifold);
 }
 
-/// A closed torus of n × m quads (two triangles each), outward.
-TriangleMesh torusMesh(int n, int m, double major = 1.0, double minor = 0.4) {
-  TriangleMesh t;
-  for (int i = 0; i < n; ++i)
-    for (int j = 0; j < m; ++j) {
-      const double u = 2 * M_PI * i / n, v = 2 * M_PI * j / m;
-      t.vertices.emplace_back((major + minor * std::cos(v)) * std::cos(u), (major + minor * std::cos(v)) * std::sin(u),
-                              minor * std::sin(v));
-    }
-  auto at = [&](int i, int j) { return (i % n) * m + (j % m); };
-  for (int i = 0; i < n; ++i)
-    for (int j = 0; j < m; ++j) {
-      t.triangles.emplace_back(at(i, j), at(i + 1, j), at(i + 1, j + 1));
-      t.triangles.emplace_back(at(i, j), at(i + 1, j + 1), at(i, j + 1));
-    }
-  return t;
-}
-
 /// An open k × k grid of the unit square in z = 0 (edge 1/k).
 TriangleMesh gridSquare(int k) {
   TriangleMesh g;
@@ -209,7 +192,7 @@ TEST(MeshQuality, PinchedVertexIsReported) {
 }
 
 TEST(MeshQuality, GenusPerClosedComponent) {
-  TriangleMesh m = torusMesh(24, 12);
+  TriangleMesh m = test::torusMesh(1.0, 0.4, 24, 12);
   append(m, tetrahedron(), V(5, 0, 0));
   const MeshQuality q = evaluateMesh(m);
   ASSERT_EQ(q.parts.size(), 2u);
@@ -227,7 +210,7 @@ TEST(MeshQuality, GenusPerClosedComponent) {
 // An open component: its boundary loops, and the genus of a surface with boundary (χ = 2 − 2g − b), never −1.
 TEST(MeshQuality, OpenComponentsPrintBoundaryLoops) {
   TriangleMesh m = gridSquare(4);
-  TriangleMesh annulus = torusMesh(24, 12);  // a torus cut open along two meridians: a cylinder, b = 2
+  TriangleMesh annulus = test::torusMesh(1.0, 0.4, 24, 12);  // a torus cut open along two meridians: a cylinder, b = 2
   annulus.triangles.erase(annulus.triangles.begin(), annulus.triangles.begin() + 24);
   append(m, annulus, V(5, 0, 0));
   const MeshQuality q = evaluateMesh(m);
@@ -275,7 +258,7 @@ TEST(MeshQuality, SelfIntersectionsAreCounted) {
   EXPECT_EQ(q.selfIntersections, 1u);
   EXPECT_FALSE(q.valid());
   EXPECT_NE(q.toJson().find("\"self_intersecting_face_pairs\": 1"), std::string::npos);
-  EXPECT_EQ(evaluateMesh(torusMesh(24, 12)).selfIntersections, 0u);
+  EXPECT_EQ(evaluateMesh(test::torusMesh(1.0, 0.4, 24, 12)).selfIntersections, 0u);
 }
 
 // Reference points farther than two output spacings (2 × mean edge length) from the mesh are uncovered.
