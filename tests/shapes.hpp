@@ -220,8 +220,9 @@ inline TriangleMesh torusMesh(double ring, double tube, int around, int across) 
 
 /// A profile scanner's slices of @p mesh: the contours cut by @p planes planes evenly across its longest axis,
 /// sampled at random along each contour segment (mean step @p step times the planes' distance) with Gaussian
-/// jitter of 3 % of the step. Positions only.
-inline PointCloud sliceContours(const TriangleMesh& mesh, int planes, std::uint64_t seed, double step = 0.1) {
+/// jitter (each coordinate) of @p jitter times the step. Positions only.
+inline PointCloud sliceContours(const TriangleMesh& mesh, int planes, std::uint64_t seed, double step = 0.1,
+                                double jitter = 0.03) {
   Eigen::Vector3d lo = mesh.vertices.front(), hi = lo;
   for (const auto& v : mesh.vertices) lo = lo.cwiseMin(v), hi = hi.cwiseMax(v);
   int axis = 0;
@@ -229,7 +230,7 @@ inline PointCloud sliceContours(const TriangleMesh& mesh, int planes, std::uint6
   const double gap = (hi[axis] - lo[axis]) / planes;
   step *= gap;
   std::mt19937_64 rng(seed);
-  std::normal_distribution<double> jitter(0.0, 0.03 * step);
+  std::normal_distribution<double> noise(0.0, jitter * step);
   std::uniform_real_distribution<double> u(0.0, 1.0);
   PointCloud c;
   for (int s = 0; s < planes; ++s) {
@@ -244,7 +245,7 @@ inline PointCloud sliceContours(const TriangleMesh& mesh, int planes, std::uint6
       std::poisson_distribution<int> count((ends[1] - ends[0]).norm() / step);
       for (int k = count(rng); k > 0; --k)
         c.points.push_back(ends[0] + u(rng) * (ends[1] - ends[0]) +
-                           Eigen::Vector3d(jitter(rng), jitter(rng), jitter(rng)));
+                           Eigen::Vector3d(noise(rng), noise(rng), noise(rng)));
     }
   }
   return c;

@@ -23,9 +23,11 @@ Eigen::Matrix3d scatter(const std::vector<Eigen::Vector3d>& pts, const Eigen::Ve
 }
 
 namespace {
-constexpr std::size_t kLineTest = 16;   // neighbours a line's axis and the majority over the line test read
-// Neighbours the line test itself reads: four spacings along either way, short of the next line wherever the lines
-// lie eight spacings or more apart (also where a contour turns tightly or thinning spaced its points out).
+// Neighbours a line's axis and the majority over the line test read; the line test reads them too, and passes
+// where they or the first kLineWindow of them lie on a line: 16 see through noise across the line (their extent
+// along it is twice the 8's), 8 stay short of the next line wherever the lines lie eight spacings or more apart
+// (also where a contour turns tightly or thinning spaced its points out).
+constexpr std::size_t kLineTest = 16;
 constexpr std::size_t kLineWindow = 8;
 constexpr std::size_t kAlong = 4;      // a widened row keeps this many of its point's own line: two each way
 
@@ -121,7 +123,7 @@ std::vector<float> widenAcrossScanLines(const std::vector<Eigen::Vector3d>& poin
     thread_local std::vector<std::uint32_t> test;
     Eigen::Vector3d axis;
     testNeighbours(points, index, i, rows + i * k, found[i], test);
-    onLine[i] = lineAxis(points, i, test, kLineWindow, true, axis);
+    onLine[i] = lineAxis(points, i, test, kLineWindow, true, axis) || lineAxis(points, i, test, kLineTest, true, axis);
   });
   if (std::none_of(onLine.begin(), onLine.end(), [](std::uint8_t b) { return b != 0; })) return {};
   // A scan line is a structure, not one point's neighbourhood: a point is on one where most of its neighbours

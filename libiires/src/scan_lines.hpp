@@ -37,7 +37,7 @@ inline bool onALine(const Eigen::Vector3d& ev) { return ev(1) < 0.0625 * ev(2); 
 /// its own line: a fit over them has no extent across it (its normal turns freely about the line), the normals'
 /// orientation and the geodesic graph link neighbouring lines only where noise brings two within reach, and kernel
 /// widths read from the 8th neighbour do not reach the next line. A point is on a scan line where most of its 16
-/// nearest pass the line test (onALine over their own 8 nearest: a structure, not a chance alignment); its row
+/// nearest pass the line test (onALine over their own 8 or 16 nearest: a structure, not a chance alignment); its row
 /// is then rebuilt from its 8·k nearest (more where the lines are far apart): the point, four of its line's
 /// points, then the nearest points of other lines (farther from its line than half the test's reach and than
 /// three times the spread across it) from both sides of it, nearest first, k in all — so that every prefix of six
