@@ -210,7 +210,8 @@ TEST(MeshQuality, GenusPerClosedComponent) {
 // An open component: its boundary loops, and the genus of a surface with boundary (χ = 2 − 2g − b), never −1.
 TEST(MeshQuality, OpenComponentsPrintBoundaryLoops) {
   TriangleMesh m = gridSquare(4);
-  TriangleMesh annulus = test::torusMesh(1.0, 0.4, 24, 12);  // a torus cut open along two meridians: a cylinder, b = 2
+  // A torus cut open along two meridians: a cylinder, b = 2.
+  TriangleMesh annulus = test::torusMesh(1.0, 0.4, 24, 12);
   annulus.triangles.erase(annulus.triangles.begin(), annulus.triangles.begin() + 24);
   append(m, annulus, V(5, 0, 0));
   const MeshQuality q = evaluateMesh(m);

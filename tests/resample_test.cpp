@@ -206,7 +206,8 @@ TEST(Resample, ProfileSlicesResampledEvenly) {
         iires::test::sliceContours(iires::test::torusMesh(1.0, c.tube, 96, 48), 30, 3, c.step, c.noise);
     for (std::size_t n : {1000, 3000}) {
       const auto r = iires::resample(cloud, paramsFor(n));
-      SCOPED_TRACE(testing::Message() << "tube " << c.tube << " step " << c.step << " noise " << c.noise << " N " << n);
+      SCOPED_TRACE(testing::Message() << "tube " << c.tube << " step " << c.step << " noise " << c.noise
+                                      << " N " << n);
       ASSERT_EQ(r.cloud.size(), n);
       EXPECT_EQ(r.components, 1u);
       EXPECT_LT(r.spacing.cv, 0.08);

@@ -239,7 +239,8 @@ inline PointCloud sliceContours(const TriangleMesh& mesh, int planes, std::uint6
       std::vector<Eigen::Vector3d> ends;
       for (int e = 0; e < 3; ++e) {
         const Eigen::Vector3d &a = mesh.vertices[t[e]], &b = mesh.vertices[t[(e + 1) % 3]];
-        if ((a[axis] < level) != (b[axis] < level)) ends.push_back(a + (level - a[axis]) / (b[axis] - a[axis]) * (b - a));
+        if ((a[axis] < level) != (b[axis] < level))
+          ends.push_back(a + (level - a[axis]) / (b[axis] - a[axis]) * (b - a));
       }
       if (ends.size() != 2) continue;
       std::poisson_distribution<int> count((ends[1] - ends[0]).norm() / step);

@@ -123,7 +123,8 @@ std::vector<float> widenAcrossScanLines(const std::vector<Eigen::Vector3d>& poin
     thread_local std::vector<std::uint32_t> test;
     Eigen::Vector3d axis;
     testNeighbours(points, index, i, rows + i * k, found[i], test);
-    onLine[i] = lineAxis(points, i, test, kLineWindow, true, axis) || lineAxis(points, i, test, kLineTest, true, axis);
+    onLine[i] =
+        lineAxis(points, i, test, kLineWindow, true, axis) || lineAxis(points, i, test, kLineTest, true, axis);
   });
   if (std::none_of(onLine.begin(), onLine.end(), [](std::uint8_t b) { return b != 0; })) return {};
   // A scan line is a structure, not one point's neighbourhood: a point is on one where most of its neighbours
