@@ -54,6 +54,20 @@ inline PointCloud scanLineCloud(std::uint64_t seed = 1) {
   return c;
 }
 
+/// A thin plate's two faces scanned by lines: the squares z = 0 and z = @p gap over [0,1]², each scanned along x by
+/// 50 lines 0.02 apart (the top face's lines offset by 0.01 in y), points 0.002 apart along each (with 0.0003 and
+/// 0.0005 of jitter), 50,000 in all; no normals.
+inline PointCloud scannedSheets(double gap, std::uint64_t seed = 1) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> g(0.0, 1.0);
+  PointCloud c;
+  for (int face = 0; face < 2; ++face)
+    for (int line = 0; line < 50; ++line)
+      for (int a = 0; a < 500; ++a)
+        c.points.emplace_back(0.002 * a + 0.0003 * g(rng), 0.02 * line + 0.01 * face + 0.0005 * g(rng), gap * face);
+  return c;
+}
+
 /// A rotating scanner's rings on the ground: a sensor 1.7 above the z = 0 plane, 17 beams from 30° to 10°
 /// below the horizon, a point every 0.3° of azimuth (jittered), so that the rings lie 0.15 apart near the
 /// sensor and 1.1 apart at the outer ones (radius 2.9 to 9.7) while points along a ring are 0.015–0.05 apart.

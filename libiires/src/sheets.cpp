@@ -200,8 +200,7 @@ struct SheetState {
 };
 
 /// Rows, nearest-neighbour distances and the local spacing (the mean nearest-neighbour distance over the point
-/// and its kSpacingRow nearest: a random sampling's nearest-neighbour distances vary by half their mean; on a
-/// scan line at least the distance across to the next).
+/// and its kSpacingRow nearest: a random sampling's nearest-neighbour distances vary by half their mean).
 void readRows(SheetState& st, const NeighbourTable& table, int threads) {
   const std::size_t n = st.n, K = st.K;
   st.rows.resize(n * K);
@@ -226,9 +225,7 @@ void readRows(SheetState& st, const NeighbourTable& table, int threads) {
     const std::size_t m = std::min<std::size_t>(st.found[i], kSpacingRow);
     double sum = 0;
     for (std::size_t a = 0; a < m; ++a) sum += nearest[st.row(i)[a]];
-    // On a scan line the sampling resolves nothing finer than the distance to the next line: two lines on one
-    // curved surface lie a fraction of it apart along the normal.
-    st.spacing[i] = std::max(m ? sum / static_cast<double>(m) : 0.0, static_cast<double>(table.acrossLines(i)));
+    st.spacing[i] = m ? sum / static_cast<double>(m) : 0.0;
   });
 }
 
