@@ -457,6 +457,7 @@ void refillGaps(const PointCloud& cloud, const KnnIndex& index, double h, const 
   if (out.size() == settled) return;
   std::vector<Eigen::Vector3d> added(out.begin() + static_cast<long>(settled), out.end());
   refineOnCurvedSheets(cloud, index, h, params, added, threads);
+  ontoSheets(cloud, index, h, params, added, threads);
   std::copy(added.begin(), added.end(), out.begin() + static_cast<long>(settled));
 }
 
@@ -546,7 +547,8 @@ void separateSamples(double h, std::vector<Eigen::Vector3d>& out, std::vector<st
 //     are left out (more: a third sheet, as at a corner) and the move is at most maxLineDistance local spacings.
 //  6b. Off the surface: a sample that the steps above left off it (a chord across a bend, a line followed past
 //     the end of a sheet, a biased fit next to a corner) moves onto the input's sheets around it, modelled as
-//     one, two or three planes, each bounded by the lines where it meets the others (ontoSheets).
+//     planes (a face, a crease, a band, a corner of any valence), each bounded by the lines where it meets the
+//     others (ontoSheets).
 //  7. Separation once more (steps 6 and 6b moved samples).
 //  8. Gaps once more, as in 5, up to 2.5 steps long: step 5's own samples, the moves of 6 and 6b (a corner
 //     sample placed off its corner and moved onto it) and the separation of 7 may leave a gap of about two

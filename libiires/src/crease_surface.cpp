@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
-// Held samples onto the surface: the input around a sample as up to three planar sheets, each bounded by the
-// lines where it meets the others, and the sample moved to the nearest point of them when it is off.
+// Held samples onto the surface: the input around a sample as planar sheets (one, two, a band between two, or
+// a corner of any valence), each bounded by the lines where it meets the others, and the sample moved to the
+// nearest point of them when it is off.
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
@@ -15,12 +16,12 @@ namespace iires::detail {
 
 namespace {
 
-constexpr int kMaxSheets = 3;
+constexpr int kMaxSheets = 5;                // a corner where up to five faces meet
 constexpr std::size_t kMinModelPoints = 40;  // the sheets are fitted on at least this many input points
 
-/// A planar sheet of the neighbourhood: its plane and, in it, the lines where it meets the other sheets (up
-/// to two), which cut the plane into cells (the sign of w·(x − at) per line); the sheet covers the cells its
-/// points lie in (a half-plane at a crease, a quarter at a convex corner, three quarters at a concave one).
+/// A planar sheet of the neighbourhood: its plane and, in it, the lines where it meets the other sheets, which
+/// cut the plane into cells (the sign of w·(x − at) per line); the sheet covers the cells its points lie in (a
+/// half-plane at a crease, a wedge at a corner, the rest of the plane around a concave one).
 struct Sheet {
   Eigen::Vector3d n = Eigen::Vector3d::Zero();
   double o = 0;
@@ -32,6 +33,18 @@ struct Sheet {
     int c = 0;
     for (int b = 0; b < lines; ++b) c |= (w[b].dot(x - at[b]) > 0 ? 1 : 0) << b;
     return c;
+  }
+  /// Whether @p x (in the plane) lies in a covered cell or on its border: within @p eps of a line counts as
+  /// either side of it.
+  bool inCovered(const Eigen::Vector3d& x, double eps) const {
+    int fixedBits = 0, side = 0;
+    for (int b = 0; b < lines; ++b) {
+      const double t = w[b].dot(x - at[b]);
+      if (std::abs(t) > eps) fixedBits |= 1 << b, side |= (t > 0 ? 1 : 0) << b;
+    }
+    for (int c = 0; c < (1 << lines); ++c)
+      if (covered[c] && (c & fixedBits) == side) return true;
+    return false;
   }
 };
 
@@ -73,13 +86,45 @@ std::vector<Eigen::Vector3d> normalSeeds(const std::vector<Eigen::Vector3d>& nrm
   return seed;
 }
 
+/// The seeds of a corner where any number of faces meet, one per plane found greedily in @p nbr: the tangent
+/// plane (a point and its normal) that explains the most points not yet explained (within 3·maxResidual local
+/// spacings @p hl), its normal by the detector's angle from the seeds before, while it explains 5 points, up to
+/// kMaxSheets. Normals blurred across a crease or a corner (the normals' farthest-point seeds take those) have
+/// tangent planes that cut the faces and explain few of their points.
+std::vector<Eigen::Vector3d> planeSeeds(const PointCloud& cloud, const std::vector<std::uint32_t>& nbr, double hl,
+                                        const FeatureParams& params) {
+  const double tol = 3.0 * params.maxResidual * hl, cosSharp = std::cos(params.angle * kDeg);
+  const auto& P = cloud.points;
+  const auto& nrm = cloud.normals;
+  std::vector<char> explained(nbr.size(), 0);
+  std::vector<Eigen::Vector3d> seed;
+  while (seed.size() < static_cast<std::size_t>(kMaxSheets)) {
+    std::size_t best = nbr.size(), bestCount = 0;
+    for (std::size_t t = 0; t < nbr.size(); ++t) {
+      if (explained[t] || std::any_of(seed.begin(), seed.end(), [&](const Eigen::Vector3d& s) {
+            return std::abs(nrm[nbr[t]].dot(s)) > cosSharp;
+          }))
+        continue;
+      std::size_t count = 0;
+      for (std::size_t u = 0; u < nbr.size(); ++u)
+        count += !explained[u] && std::abs(nrm[nbr[t]].dot(P[nbr[u]] - P[nbr[t]])) <= tol;
+      if (count > bestCount) best = t, bestCount = count;
+    }
+    if (bestCount < 5) break;
+    const Eigen::Vector3d n = nrm[nbr[best]], at = P[nbr[best]];
+    for (std::size_t u = 0; u < nbr.size(); ++u) explained[u] |= std::abs(n.dot(P[nbr[u]] - at)) <= tol;
+    seed.push_back(n);
+  }
+  return seed;
+}
+
 /// The neighbourhood @p nbr of @p y as one planar sheet per normal in @p seed: the input normals clustered
 /// around the seeds (k-means), a plane fitted to each cluster and the points reassigned to the nearest plane,
 /// three times. False unless every sheet keeps 5 points and fits within maxResidual local spacings @p hl,
 /// 90 % of the points lie within 3·maxResidual of a sheet (else more sheets, or curved ones, than the model
 /// has), no two sheets are within the detector's angle (a band and a face: half of it) and a third one either
-/// crosses the first two's line (a corner) or lies between them along it where their line is off the surface
-/// (a band: a chamfer or a small fillet; @p band says so).
+/// crosses the first two's line (a corner, as do any further ones) or lies between them along it where their
+/// line is off the surface (a band: a chamfer or a small fillet; @p band says so).
 bool fitSheets(const PointCloud& cloud, const std::vector<std::uint32_t>& nbr, const Eigen::Vector3d& y,
                double hl, const FeatureParams& params, std::vector<Eigen::Vector3d> seed,
                std::vector<Sheet>& sheets, bool& band) {
@@ -89,7 +134,7 @@ bool fitSheets(const PointCloud& cloud, const std::vector<std::uint32_t>& nbr, c
   const double cosSharp = std::cos(params.angle * kDeg);
   const int k = static_cast<int>(seed.size());
   std::vector<int> side(m, 0);
-  for (int it = 0; it < 5; ++it) {  // 2-/3-means on the normals
+  for (int it = 0; it < 5; ++it) {  // k-means on the normals
     std::vector<Eigen::Vector3d> sum(k, Eigen::Vector3d::Zero());
     for (std::size_t t = 0; t < m; ++t) {
       int best = 0;
@@ -184,24 +229,25 @@ bool fitSheets(const PointCloud& cloud, const std::vector<std::uint32_t>& nbr, c
 }
 
 /// The point of @p sh (the cells it covers of its plane) nearest @p q: q's foot on the plane if that is in a
-/// covered cell, else the nearest point of a line on a covered cell's border, or the lines' crossing.
-Eigen::Vector3d nearestOnSheet(const Sheet& sh, const Eigen::Vector3d& q) {
+/// covered cell, else the nearest of the feet on its lines and the lines' crossings that border a covered cell
+/// (@p hl, the local spacing, sets the tolerance of "on a line").
+Eigen::Vector3d nearestOnSheet(const Sheet& sh, const Eigen::Vector3d& q, double hl) {
+  const double eps = 1e-6 * hl;
   const Eigen::Vector3d x = q - sh.n * (sh.n.dot(q) - sh.o);
-  if (sh.covered[sh.cell(x)]) return x;
+  if (sh.inCovered(x, eps)) return x;
   Eigen::Vector3d best = x;
   double bd = std::numeric_limits<double>::infinity();
+  auto consider = [&](const Eigen::Vector3d& e) {
+    if ((e - q).norm() < bd && sh.inCovered(e, eps)) bd = (e - q).norm(), best = e;
+  };
   for (int b = 0; b < sh.lines; ++b) {
-    const Eigen::Vector3d e = sh.at[b] + sh.dir[b] * (x - sh.at[b]).dot(sh.dir[b]);
-    const int c = sh.cell(e) & ~(1 << b);  // e lies on line b: either side of it
-    if ((sh.covered[c] || sh.covered[c | (1 << b)]) && (e - q).norm() < bd) bd = (e - q).norm(), best = e;
-  }
-  if (sh.lines == 2) {  // the crossing of the two lines borders every cell
-    const double c = sh.dir[0].dot(sh.dir[1]);
-    if (1.0 - c * c > 1e-9) {
-      const Eigen::Vector3d r = sh.at[0] - sh.at[1];
-      const double t = (c * sh.dir[1].dot(r) - sh.dir[0].dot(r)) / (1.0 - c * c);
-      const Eigen::Vector3d v = sh.at[0] + t * sh.dir[0];
-      if ((v - q).norm() < bd) bd = (v - q).norm(), best = v;
+    consider(sh.at[b] + sh.dir[b] * (x - sh.at[b]).dot(sh.dir[b]));
+    for (int b2 = 0; b2 < b; ++b2) {
+      const double c = sh.dir[b].dot(sh.dir[b2]);
+      if (1.0 - c * c <= 1e-9) continue;  // parallel lines do not cross
+      const Eigen::Vector3d r = sh.at[b] - sh.at[b2];
+      const double t = (c * sh.dir[b2].dot(r) - sh.dir[b].dot(r)) / (1.0 - c * c);
+      consider(sh.at[b] + t * sh.dir[b]);
     }
   }
   return best;
@@ -219,6 +265,7 @@ void ontoSheets(const PointCloud& cloud, const KnnIndex& index, double h, const 
     std::vector<Sheet> sheets;
     const Eigen::Vector3d q = out[i];
     const double hl = localSpacing(index, q, h);
+    bool fitted = false, band = false;
     index.radius(q, params.radius * hl, idx, d2);
     if (idx.size() > kMaxFitPoints) idx.resize(kMaxFitPoints);
     if (idx.size() < kMinModelPoints)
@@ -227,15 +274,23 @@ void ontoSheets(const PointCloud& cloud, const KnnIndex& index, double h, const 
     // Three sheets where the normals say so, else (or where those do not fit) two; one only where the normals
     // see no second.
     const std::vector<Eigen::Vector3d> seed = normalSeeds(cloud.normals, idx, params);
-    bool fitted = false, band = false;
     for (std::size_t k = seed.size(); k >= 1 && !fitted && !(k == 1 && seed.size() > 1); --k)
       fitted = fitSheets(cloud, idx, q, hl, params, {seed.begin(), seed.begin() + static_cast<long>(k)},
                          sheets, band);
+    // Where no model fits, a corner where more faces meet, or whose faces are too small in those points: the
+    // three to five planes found greedily in twice as many points.
+    if (!fitted) {
+      if (idx.size() < 2 * kMinModelPoints) index.knn(q, 2 * kMinModelPoints, idx, d2);
+      const std::vector<Eigen::Vector3d> planes = planeSeeds(cloud, idx, hl, params);
+      for (std::size_t k = planes.size(); k >= 3 && !fitted; --k)
+        fitted = fitSheets(cloud, idx, q, hl, params, {planes.begin(), planes.begin() + static_cast<long>(k)},
+                           sheets, band);
+    }
     if (!fitted) return;
     Eigen::Vector3d best = q;
     double bd = std::numeric_limits<double>::infinity();
     for (const Sheet& sh : sheets) {
-      const Eigen::Vector3d x = nearestOnSheet(sh, q);
+      const Eigen::Vector3d x = nearestOnSheet(sh, q, hl);
       if ((x - q).norm() < bd) bd = (x - q).norm(), best = x;
     }
     // A move onto the surface brings the sample nearer the input; one away from it (a model biased by a sheet

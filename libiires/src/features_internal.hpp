@@ -130,9 +130,11 @@ void fillCreaseGaps(const PointCloud& cloud, const KnnIndex& index, double h, co
 /// from both: a chamfer or small fillet narrower than the fits, where no input point lies within 0.2 local
 /// spacings of the first two's line; where three do not fit, two), a plane
 /// fitted to each cluster and the points reassigned to the nearest plane; the model holds where each plane fits
-/// within maxResidual and 90 % of the points lie within 3·maxResidual of one. Each sheet covers the cells of its
-/// plane, cut by the lines where it meets the other sheets, that its points within the radius lie in (a
-/// half-plane at a crease, a quarter or three quarters at a convex or concave corner, a band's strip). A sample
+/// within maxResidual and 90 % of the points lie within 3·maxResidual of one. Where none holds (a corner where
+/// more faces meet, or whose faces are too small in those points), the 80 nearest points are modelled as the
+/// three to five planes found greedily in them (the tangent plane explaining most points not yet explained).
+/// Each sheet covers the cells of its plane, cut by the lines where it meets the other sheets, that its points
+/// within the radius lie in (a half-plane at a crease, a wedge at a corner, a band's strip). A sample
 /// farther than 0.3 local spacings from every sheet, or any distance where the model has a band (the two faces'
 /// line, where the crease fits put samples, is then off the surface), moves to the nearest point of them (a
 /// crease line or corner where that is nearest) if that is at most 2 local spacings away and nearer the input
