@@ -442,13 +442,12 @@ void addCorners(const KnnIndex& index, double h, const FeatureParams& params, st
 }
 
 /// Step 8 of snapToCreases(): the gaps left next to the samples that steps 5–7 placed or moved, filled as in
-/// step 5, the new samples moved onto curved sheets' creases as in step 6. Step 5 sees only the gaps between the
-/// samples it started with: its own samples (a gap filled up to a point short of a corner), the moves of 6 and
-/// 6b (a corner sample placed off its corner and moved onto it) and the separation of 7 each leave a gap of
-/// about two steps. Longer gaps were there at step 5, which left them open (no fit holds and the chains do not
-/// run on in line: a bend, two creases meeting), and stay open. The new samples skip 6b: the fill keeps them
-/// within 1.5·maxOffCrease local spacings of the input, and next to a corner in a sparse part 6b's sheets can
-/// move a sample on the edge into the corner, which reopens the gap.
+/// step 5, the new samples moved onto curved sheets' creases as in step 6 and onto the surface as in 6b (a
+/// chord from a sample that 6b moved into a corner can cut across a face beside it). Step 5 sees only the gaps
+/// between the samples it started with: its own samples (a gap filled up to a point short of a corner), the
+/// moves of 6 and 6b (a corner sample placed off its corner and moved onto it) and the separation of 7 each
+/// leave a gap of about two steps. Longer gaps were there at step 5, which left them open (no fit holds and the
+/// chains do not run on in line: a bend, two creases meeting), and stay open.
 void refillGaps(const PointCloud& cloud, const KnnIndex& index, double h, const FeatureParams& params,
                 std::vector<Eigen::Vector3d>& out, std::vector<std::uint32_t>& owner, int threads) {
   constexpr double kOpenedGap = 2.5;  // steps: the longest gap a new, moved or dropped sample leaves
@@ -552,7 +551,7 @@ void separateSamples(double h, std::vector<Eigen::Vector3d>& out, std::vector<st
 //  7. Separation once more (steps 6 and 6b moved samples).
 //  8. Gaps once more, as in 5, up to 2.5 steps long: step 5's own samples, the moves of 6 and 6b (a corner
 //     sample placed off its corner and moved onto it) and the separation of 7 may leave a gap of about two
-//     steps next to them. The new samples go through step 6 (refillGaps).
+//     steps next to them. The new samples go through steps 6 and 6b (refillGaps).
 std::vector<Eigen::Vector3d> snapToCreases(const PointCloud& cloud, const std::vector<Eigen::Vector3d>& samples,
                                            const std::vector<std::uint32_t>& chainOfSample, double spacing,
                                            const FeatureParams& params, const Execution& exec,
