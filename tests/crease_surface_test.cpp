@@ -6,6 +6,8 @@
 
 #include <array>
 #include <cmath>
+#include <cstdint>
+#include <limits>
 #include <vector>
 
 #include "../libiires/src/features_internal.hpp"  // ontoSheets(): step 6b on its own
@@ -177,4 +179,40 @@ TEST(Features, HeldSamplesBesideAFourFaceCornerMoveOntoIt) {
   iires::detail::ontoSheets(cloud, index, h, FeatureParams{}, out, 2);
   for (std::size_t i = 0; i < out.size(); ++i)
     EXPECT_LE(surface.distance(out[i]), 0.2 * h) << given[i].transpose() << " -> " << out[i].transpose();
+}
+
+// Step 4c (addSheetCorners) at the pyramid's apex, a corner of four faces: four chains come up its edges and
+// stop two to three steps short of it (the tracing's three-sheet corner model does not hold there). The apex
+// gets a sample, within 0.1 input spacings of it, and each edge's gap is filled: no point of an edge near the
+// apex is farther than 0.6 steps from a sample.
+TEST(Features, CornerOfFourFacesGetsItsSampleAndTheGapsToIt) {
+  iires::TriangleMesh pyramid;
+  pyramid.vertices = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0.5, 0.5, 0.5}};
+  pyramid.triangles = {{0, 1, 4}, {1, 2, 4}, {2, 3, 4}, {3, 0, 4}, {0, 2, 1}, {0, 3, 2}};
+  const auto cloud = sampled(pyramid, 60000);
+  const double h = iires::estimateSpacing(cloud.points), step = 3.0 * h;
+  const iires::KnnIndex index(cloud.points);
+  const Eigen::Vector3d apex(0.5, 0.5, 0.5);
+  std::vector<Eigen::Vector3d> out;
+  std::vector<std::uint32_t> owner;
+  for (std::uint32_t c = 0; c < 4; ++c) {  // chain c up the edge from base corner c, ending 2 + c/3 steps short
+    const Eigen::Vector3d down = (pyramid.vertices[c] - apex).normalized();
+    for (int k = 12; k >= 0; --k) {
+      out.push_back(apex + (2.0 + c / 3.0 + k) * step * down);
+      owner.push_back(c);
+    }
+  }
+  iires::detail::addSheetCorners(cloud, index, h, FeatureParams{}, out, owner, 2);
+  ASSERT_EQ(out.size(), owner.size());
+  double atApex = std::numeric_limits<double>::infinity();
+  for (const Eigen::Vector3d& q : out) atApex = std::min(atApex, (q - apex).norm());
+  EXPECT_LE(atApex, 0.1 * h);
+  for (int c = 0; c < 4; ++c) {
+    const Eigen::Vector3d down = (pyramid.vertices[c] - apex).normalized();
+    for (double t = 0; t <= 3.0 * step; t += 0.05 * step) {
+      double nearest = std::numeric_limits<double>::infinity();
+      for (const Eigen::Vector3d& q : out) nearest = std::min(nearest, (q - (apex + t * down)).norm());
+      EXPECT_LE(nearest, 0.6 * step) << "edge " << c << ", " << t / step << " steps from the apex";
+    }
+  }
 }

@@ -530,6 +530,9 @@ void separateSamples(double h, std::vector<Eigen::Vector3d>& out, std::vector<st
 //     within half a spacing of it (tracing placed most corners already), a corner sample is added there, and
 //     the gap from each of those chain ends to the corner gets samples at the chain's spacing on the straight
 //     line.
+//  4a. Corners of any valence: where the sheets at a chain end, or a little ahead of it, are three or more
+//     planes meeting at a point the end's crease leads to, a corner sample there and the gap to it filled
+//     (addSheetCorners).
 //  4b. Separation: a sample closer than half the chains' median step to an earlier one is dropped (separateSamples).
 //  5. Gaps: two samples 1.5–6 × the chains' median spacing apart with no sample between them (within 0.45 × their
 //     distance of the midpoint and half a spacing of their line) get samples at ≤ that spacing between them: on
@@ -642,6 +645,7 @@ std::vector<Eigen::Vector3d> snapToCreases(const PointCloud& cloud, const std::v
   traceChainEnds(cloud, index, h, params, out, owner);
   placeCreaseTips(cloud, index, h, params, out, owner);
   addCorners(index, h, params, out, owner);  // 4.
+  addSheetCorners(cloud, index, h, params, out, owner, exec.threads);  // 4a.
   separateSamples(h, out, owner);
   fillCreaseGaps(cloud, index, h, params, out, owner);
   refineOnCurvedSheets(cloud, index, h, params, out, exec.threads);

@@ -1,8 +1,9 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
-// Held samples onto the surface: the input around a sample as planar sheets (one, two, a band between two, or
-// a corner of any valence), each bounded by the lines where it meets the others, and the sample moved to the
-// nearest point of them when it is off.
+// The input around a held sample as planar sheets (one, two, a band between two, or a corner of any valence),
+// each bounded by the lines where it meets the others: held samples off the surface move onto them
+// (ontoSheets), and chain ends short of a corner get the corner, the sheets' common point (addSheetCorners).
 #include <Eigen/Geometry>
+#include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -253,6 +254,40 @@ Eigen::Vector3d nearestOnSheet(const Sheet& sh, const Eigen::Vector3d& q, double
   return best;
 }
 
+/// The sheets around @p q (local spacing @p hl): the input within the radius, at least the 40 nearest, as three
+/// sheets where the normals say so, else (or where those do not fit) two, one only where the normals see no
+/// second; where none of those fits (a corner where more faces meet, or whose faces are too small in those
+/// points), the three to five planes found greedily in the 80 nearest. @p cornerFirst: the greedy planes
+/// first (a corner's faces, none blended into another). False where no model fits.
+bool sheetsAround(const PointCloud& cloud, const KnnIndex& index, const Eigen::Vector3d& q, double hl,
+                  const FeatureParams& params, bool cornerFirst, std::vector<Sheet>& sheets, bool& band) {
+  std::vector<std::uint32_t> idx;
+  std::vector<double> d2;
+  auto byNormals = [&] {
+    index.radius(q, params.radius * hl, idx, d2);
+    if (idx.size() > kMaxFitPoints) idx.resize(kMaxFitPoints);
+    if (idx.size() < kMinModelPoints) index.knn(q, kMinModelPoints, idx, d2);  // a sparse part: fits need points
+    if (idx.size() < 12) return false;
+    const std::vector<Eigen::Vector3d> seed = normalSeeds(cloud.normals, idx, params);
+    for (std::size_t k = seed.size(); k >= 1 && !(k == 1 && seed.size() > 1); --k)
+      if (fitSheets(cloud, idx, q, hl, params, {seed.begin(), seed.begin() + static_cast<long>(k)}, sheets, band))
+        return true;
+    return false;
+  };
+  auto byPlanes = [&] {
+    index.radius(q, params.radius * hl, idx, d2);
+    if (idx.size() > kMaxFitPoints) idx.resize(kMaxFitPoints);
+    if (idx.size() < 2 * kMinModelPoints) index.knn(q, 2 * kMinModelPoints, idx, d2);
+    const std::vector<Eigen::Vector3d> planes = planeSeeds(cloud, idx, hl, params);
+    for (std::size_t k = planes.size(); k >= 3; --k)
+      if (fitSheets(cloud, idx, q, hl, params, {planes.begin(), planes.begin() + static_cast<long>(k)}, sheets,
+                    band))
+        return true;
+    return false;
+  };
+  return cornerFirst ? byPlanes() || byNormals() : byNormals() || byPlanes();
+}
+
 }  // namespace
 
 void ontoSheets(const PointCloud& cloud, const KnnIndex& index, double h, const FeatureParams& params,
@@ -260,33 +295,11 @@ void ontoSheets(const PointCloud& cloud, const KnnIndex& index, double h, const 
   constexpr double kOff = 0.3;   // local spacings: a sample farther than this from the sheets moves
   constexpr double kMove = 2.0;  // local spacings: and by at most this much (farther: not its own model)
   parallelFor(out.size(), threads, [&](std::size_t i) {
-    std::vector<std::uint32_t> idx;
-    std::vector<double> d2;
     std::vector<Sheet> sheets;
     const Eigen::Vector3d q = out[i];
     const double hl = localSpacing(index, q, h);
-    bool fitted = false, band = false;
-    index.radius(q, params.radius * hl, idx, d2);
-    if (idx.size() > kMaxFitPoints) idx.resize(kMaxFitPoints);
-    if (idx.size() < kMinModelPoints)
-      index.knn(q, kMinModelPoints, idx, d2);  // a sparse part: fits need points
-    if (idx.size() < 12) return;
-    // Three sheets where the normals say so, else (or where those do not fit) two; one only where the normals
-    // see no second.
-    const std::vector<Eigen::Vector3d> seed = normalSeeds(cloud.normals, idx, params);
-    for (std::size_t k = seed.size(); k >= 1 && !fitted && !(k == 1 && seed.size() > 1); --k)
-      fitted = fitSheets(cloud, idx, q, hl, params, {seed.begin(), seed.begin() + static_cast<long>(k)},
-                         sheets, band);
-    // Where no model fits, a corner where more faces meet, or whose faces are too small in those points: the
-    // three to five planes found greedily in twice as many points.
-    if (!fitted) {
-      if (idx.size() < 2 * kMinModelPoints) index.knn(q, 2 * kMinModelPoints, idx, d2);
-      const std::vector<Eigen::Vector3d> planes = planeSeeds(cloud, idx, hl, params);
-      for (std::size_t k = planes.size(); k >= 3 && !fitted; --k)
-        fitted = fitSheets(cloud, idx, q, hl, params, {planes.begin(), planes.begin() + static_cast<long>(k)},
-                           sheets, band);
-    }
-    if (!fitted) return;
+    bool band = false;
+    if (!sheetsAround(cloud, index, q, hl, params, false, sheets, band)) return;
     Eigen::Vector3d best = q;
     double bd = std::numeric_limits<double>::infinity();
     for (const Sheet& sh : sheets) {
@@ -302,6 +315,98 @@ void ontoSheets(const PointCloud& cloud, const KnnIndex& index, double h, const 
         localSpacing(index, best, 0) < localSpacing(index, q, 0))
       out[i] = best;
   });
+}
+
+void addSheetCorners(const PointCloud& cloud, const KnnIndex& index, double h, const FeatureParams& params,
+                     std::vector<Eigen::Vector3d>& out, std::vector<std::uint32_t>& owner, int threads) {
+  constexpr double kReach = 4.0;  // steps: an end this far short of its corner
+  constexpr int kMaxProbes = 8;   // sheet models on the way there
+  struct End {
+    std::size_t sample;
+    Eigen::Vector3d direction;  // forward, off the end of the run
+    double step;                // the run's median spacing
+  };
+  std::vector<End> ends;
+  for (const auto& [a, b] : ownerRuns(owner)) {
+    if (b == a) continue;
+    std::vector<double> gaps;
+    for (std::size_t t = a; t < b; ++t) gaps.push_back((out[t + 1] - out[t]).norm());
+    std::nth_element(gaps.begin(), gaps.begin() + static_cast<long>(gaps.size() / 2), gaps.end());
+    const double step = gaps[gaps.size() / 2];
+    if (!(step > 0)) continue;
+    // The direction from the first sample back at least half a step away (two samples at one spot say none).
+    for (const auto& [end, inward] : {std::pair{a, 1L}, std::pair{b, -1L}}) {
+      std::size_t back = end + inward;
+      while (back != (inward > 0 ? b : a) && (out[back] - out[end]).norm() < 0.5 * step) back += inward;
+      const Eigen::Vector3d d = out[end] - out[back];
+      ends.push_back({end, d.norm() > 1e-9 * h ? d.normalized() : Eigen::Vector3d::Zero(), step});
+    }
+  }
+  std::vector<Eigen::Vector3d> corner(ends.size());
+  std::vector<char> found(ends.size(), 0);
+  parallelFor(ends.size(), threads, [&](std::size_t e) {
+    const Eigen::Vector3d q = out[ends[e].sample];
+    const double hl = localSpacing(index, q, h), reach = kReach * ends[e].step;
+    // The sheets at the end and on ahead of it, a local spacing at a time, until they show a corner.
+    const int probes = std::min(kMaxProbes, static_cast<int>(reach / hl) + 1);
+    for (int j = 0; j < probes && !found[e]; ++j) {
+      const Eigen::Vector3d y = q + (j * hl) * ends[e].direction;
+      std::vector<Sheet> sheets;
+      bool band = false;
+      if (!sheetsAround(cloud, index, y, hl, params, true, sheets, band) || band || sheets.size() < 3) continue;
+      // The planes' common point (least squares), where their normals span space: a corner, not a fan of
+      // faces around one line.
+      Eigen::MatrixX3d a(sheets.size(), 3);
+      Eigen::VectorXd o(sheets.size());
+      for (std::size_t k = 0; k < sheets.size(); ++k) a.row(static_cast<long>(k)) = sheets[k].n, o(k) = sheets[k].o;
+      const Eigen::JacobiSVD<Eigen::MatrixX3d> svd(a, Eigen::ComputeThinU | Eigen::ComputeThinV);
+      if (svd.singularValues()(2) < 0.3) continue;
+      const Eigen::Vector3d c = svd.solve(o);
+      if ((c - q).norm() > reach) continue;
+      double nearest = 0;
+      index.nearest(c, &nearest);
+      if (std::sqrt(nearest) > params.maxOffCrease * localSpacing(index, c, h)) continue;  // off the surface
+      corner[e] = c;
+      found[e] = 1;
+    }
+  });
+  // In end order: the corner, unless a sample lies within half a step of it (a corner placed already: that
+  // sample stands for it); then, where the end's run leads into it, the gap between them filled on the straight
+  // line at the run's step.
+  const std::size_t given = out.size();
+  const KnnIndex placed(out);
+  std::vector<std::uint32_t> idx;
+  std::vector<double> d2;
+  auto sampleNear = [&](const Eigen::Vector3d& x, double r, Eigen::Vector3d* at) {
+    double best = r;
+    bool any = false;
+    placed.radius(x, r, idx, d2);
+    for (std::size_t k = 0; k < idx.size(); ++k)
+      if (std::sqrt(d2[k]) < best) best = std::sqrt(d2[k]), any = true, *at = out[idx[k]];
+    for (std::size_t t = given; t < out.size(); ++t)
+      if ((out[t] - x).norm() < best) best = (out[t] - x).norm(), any = true, *at = out[t];
+    return any;
+  };
+  const double cosTurn = std::cos(params.maxChainTurn * kDeg);
+  for (std::size_t e = 0; e < ends.size(); ++e) {
+    if (!found[e]) continue;
+    const End& end = ends[e];
+    const Eigen::Vector3d from = out[end.sample];
+    const std::uint32_t chain = owner[end.sample];
+    Eigen::Vector3d target = corner[e], other;
+    const bool taken = sampleNear(target, 0.5 * end.step, &other);
+    if (taken) target = other;
+    const double gap = (target - from).norm();
+    if (end.direction.dot(target - from) < cosTurn * gap) continue;  // the end's crease does not lead there
+    if (!taken) out.push_back(target), owner.push_back(chain);
+    if (gap < 1.5 * end.step) continue;
+    const int pieces = static_cast<int>(std::ceil(gap / end.step - 0.25));
+    for (int k = 1; k < pieces; ++k) {
+      const Eigen::Vector3d x = from + (target - from) * (static_cast<double>(k) / pieces);
+      if (sampleNear(x, 0.5 * end.step, &other)) break;  // something lies between: not this end's gap
+      out.push_back(x), owner.push_back(chain);
+    }
+  }
 }
 
 }  // namespace iires::detail

@@ -142,4 +142,16 @@ void fillCreaseGaps(const PointCloud& cloud, const KnnIndex& index, double h, co
 void ontoSheets(const PointCloud& cloud, const KnnIndex& index, double h, const FeatureParams& params,
                 std::vector<Eigen::Vector3d>& out, int threads);
 
+/// Step 4a of snapToCreases(): corners of any valence. At each end of a run of chain samples in @p out
+/// (consecutive samples of one chain in @p owner), and on ahead of it a local spacing at a time (up to 8 times),
+/// the input is modelled as planar sheets (the three to five planes found greedily first, then as ontoSheets()
+/// does) until three or more fit with normals that span space (a corner, not a fan of faces around one line).
+/// Their common point (least squares), if within 4 of the run's steps of the end, within params.maxOffCrease
+/// local spacings of an input point and where the end's run leads (within maxChainTurn), gets a corner sample
+/// owned by the end's chain, unless a sample lies within half a step of it (a corner placed already, which then
+/// stands for it); the gap from the end to the corner is filled on the straight line at the run's step.
+/// Deterministic: the models in parallel, the samples added in end order.
+void addSheetCorners(const PointCloud& cloud, const KnnIndex& index, double h, const FeatureParams& params,
+                     std::vector<Eigen::Vector3d>& out, std::vector<std::uint32_t>& owner, int threads);
+
 }  // namespace iires::detail
