@@ -802,3 +802,27 @@ TEST(Features, BareCornerIsPlacedFromTheEndLines) {
   EXPECT_LE(toCorner, 0.5 * step);
   for (const auto& q : out) EXPECT_LE(iires::distanceToSegments(q, sampledCube().edges), 0.5 * h) << q.transpose();
 }
+
+// A crease that runs off the ends of the input (a roof, two faces at 90° meeting along the x axis, the scan cut
+// at x = 0 and x = 0.5, open boundaries): chain samples along it from x = 0.1 to 0.3. The tracing follows the
+// crease to both cuts and stops there. Its fits' ball (a few local spacings, read where the next sample would
+// go) grows as that point leaves the input, the points behind it still fit the two planes, and before, a trace
+// stopped only at its budget (as many samples as input points; 54 s here), samples lying up to hundreds of
+// spacings past the cut (a real scan then failed: "output points left the input's bounding box").
+TEST(Features, TraceStopsWhereTheInputEnds) {
+  iires::TriangleMesh roof;
+  roof.vertices = {{0, 0, 0}, {0.5, 0, 0}, {0.5, 0.3, -0.3}, {0, 0.3, -0.3}, {0.5, -0.3, -0.3}, {0, -0.3, -0.3}};
+  roof.triangles = {{0, 1, 2}, {0, 2, 3}, {0, 4, 1}, {0, 5, 4}};
+  const auto cloud = sampledWithEstimatedNormals(roof, 20000);
+  const double h = iires::estimateSpacing(cloud.points);
+  std::vector<Eigen::Vector3d> samples;
+  for (double x = 0.1; x <= 0.3; x += 3 * h) samples.emplace_back(x, 0, 0);
+  const auto out = iires::snapToCreases(cloud, samples, std::vector<std::uint32_t>(samples.size(), 0u), h,
+                                        FeatureParams{});
+  double first = 1, last = 0;
+  for (const auto& q : out) first = std::min(first, q.x()), last = std::max(last, q.x());
+  EXPECT_LT(first, 3 * h);  // followed to the cuts
+  EXPECT_GT(last, 0.5 - 3 * h);
+  EXPECT_GE(first, -2 * h) << "a sample " << -first / h << " spacings past the input's end";
+  EXPECT_LE(last, 0.5 + 2 * h) << "a sample " << (last - 0.5) / h << " spacings past the input's end";
+}

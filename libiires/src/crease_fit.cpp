@@ -35,6 +35,13 @@ double localSpacing(const KnnIndex& index, const Eigen::Vector3d& y, double h) {
   return m > 0 ? std::max(h, sum / m) : h;
 }
 
+double offInput(const PointCloud& cloud, const KnnIndex& index, const Eigen::Vector3d& y, double h) {
+  double d2 = 0;
+  const std::int64_t j = index.nearest(y, &d2);
+  if (j < 0) return std::numeric_limits<double>::infinity();
+  return std::sqrt(d2) / localSpacing(index, cloud.points[static_cast<std::size_t>(j)], h);
+}
+
 double fitPlane(const std::vector<Eigen::Vector3d>& points, const std::vector<std::uint32_t>& idx,
                 const Eigen::Vector3d& p, double sigma, const Eigen::Vector3d& hint, Eigen::Vector3d& normal,
                 double& offset) {

@@ -376,7 +376,8 @@ void placeCreaseTips(const PointCloud& cloud, const KnnIndex& index, double h, c
 /// Step 3 of snapToCreases(): corners. Two chain ends whose crease lines, continued forward, meet within a few
 /// spacings of both get a sample where they meet (the end samples of chains stop short of a corner, where the
 /// two-plane fit fails), and the gaps to it samples at the chains' spacing.
-void addCorners(const KnnIndex& index, double h, const FeatureParams& params, std::vector<Eigen::Vector3d>& out,
+void addCorners(const PointCloud& cloud, const KnnIndex& index, double h, const FeatureParams& params,
+                std::vector<Eigen::Vector3d>& out,
                 std::vector<std::uint32_t>& owner) {
   struct End {
     Eigen::Vector3d point, direction;  // direction: forward, off the end of the chain
@@ -418,9 +419,7 @@ void addCorners(const KnnIndex& index, double h, const FeatureParams& params, st
       const Eigen::Vector3d pa = ea.point + sa * ea.direction, pb = eb.point + tb * eb.direction;
       if ((pa - pb).norm() > 0.5 * h) continue;  // the two lines must (nearly) meet
       Eigen::Vector3d corner = 0.5 * (pa + pb);
-      double nearest = 0;
-      index.nearest(corner, &nearest);
-      if (std::sqrt(nearest) > params.maxOffCrease * localSpacing(index, corner, h)) continue;  // off the surface
+      if (offInput(cloud, index, corner, h) > 1.5 * params.maxOffCrease) continue;  // off the surface
       // A corner the tracing already placed (or any sample there): nothing to add.
       bool taken = false;
       for (const auto& q : out)
@@ -525,8 +524,8 @@ void separateSamples(double h, std::vector<Eigen::Vector3d>& out, std::vector<st
 //     point of the shared plane and the two other sheets' planes, refitted on the points around it (a step
 //     in a surface fading out, as fandisk's wedge: two creases end at one point without a third crease).
 //  4. Where two chains' end lines (at least 13° apart), continued, meet within 3·radius spacings of both ends and within
-//     params.maxOffCrease local spacings of an input point (the local spacing there: the nearest input point is
-//     farther from a convex corner than from an edge, and farther still in a sparse part), and no sample is
+//     1.5·params.maxOffCrease local spacings of an input point (offInput: the nearest input point is farther
+//     from a convex corner than from an edge), and no sample is
 //     within half a spacing of it (tracing placed most corners already), a corner sample is added there, and
 //     the gap from each of those chain ends to the corner gets samples at the chain's spacing on the straight
 //     line.
@@ -644,7 +643,7 @@ std::vector<Eigen::Vector3d> snapToCreases(const PointCloud& cloud, const std::v
     if (keep[i]) out.push_back(moved[i]), owner.push_back(chainOfSample[i]);
   traceChainEnds(cloud, index, h, params, out, owner);
   placeCreaseTips(cloud, index, h, params, out, owner);
-  addCorners(index, h, params, out, owner);  // 4.
+  addCorners(cloud, index, h, params, out, owner);  // 4.
   addSheetCorners(cloud, index, h, params, out, owner, exec.threads);  // 4a.
   separateSamples(h, out, owner);
   fillCreaseGaps(cloud, index, h, params, out, owner);

@@ -363,9 +363,7 @@ void addSheetCorners(const PointCloud& cloud, const KnnIndex& index, double h, c
       if (svd.singularValues()(2) < 0.3) continue;
       const Eigen::Vector3d c = svd.solve(o);
       if ((c - q).norm() > reach) continue;
-      double nearest = 0;
-      index.nearest(c, &nearest);
-      if (std::sqrt(nearest) > params.maxOffCrease * localSpacing(index, c, h)) continue;  // off the surface
+      if (offInput(cloud, index, c, h) > 1.5 * params.maxOffCrease) continue;  // off the surface
       corner[e] = c;
       found[e] = 1;
     }

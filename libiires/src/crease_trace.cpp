@@ -190,6 +190,9 @@ class CreaseTracer {
         if (!ok && !resume(tr, y, c)) break;
         if (!ok) oneSided = false;
       }
+      // Off the input (its fits' ball, a few local spacings read at y, grows as y leaves the surface): the line
+      // followed has run past the input's end.
+      if (offInput(cloud_, index_, y, h_) > 2.0 * params_.maxOffCrease) break;
       add(tr, y);
       if (!oneSided) last = c;
       tr.dir = (c.direction.dot(tr.dir) < 0 ? -c.direction : c.direction);
@@ -380,9 +383,7 @@ class CreaseTracer {
     const Eigen::Vector3d foot = lineNearest(nO, oO, n3, o3, tip);
     if ((foot - tip).norm() > 0.5 * step) return 0;
     const Eigen::Vector3d yb = foot + (step - (foot - tip).dot(dir)) / d.dot(dir) * d;
-    double nb = 0;
-    index_.nearest(yb, &nb);
-    if (std::sqrt(nb) > params_.maxOffCrease * localSpacing(index_, yb, h_)) return 0;
+    if (offInput(cloud_, index_, yb, h_) > params_.maxOffCrease) return 0;
     bend->valid = true;
     bend->point = yb;
     bend->direction = d;
@@ -633,11 +634,7 @@ void fillCreaseGaps(const PointCloud& cloud, const KnnIndex& index, double h, co
           if ((onLine - q).norm() <= 0.1 * step) fill.push_back(onLine), ok = true;
         }
         if (!ok && chord) fill.push_back(q), ok = true;
-        if (ok) {
-          double nearest = 0;
-          index.nearest(fill.back(), &nearest);
-          ok = std::sqrt(nearest) <= 1.5 * params.maxOffCrease * localSpacing(index, fill.back(), h);
-        }
+        if (ok) ok = offInput(cloud, index, fill.back(), h) <= 1.5 * params.maxOffCrease;
       }
       if (!ok) continue;
       for (const auto& q : fill) added.push_back(q), addedOwner.push_back(owner[i]);

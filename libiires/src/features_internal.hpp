@@ -32,6 +32,11 @@ struct Crease {
 /// the same number of points (non-uniform scans: a fixed radius leaves the sparse parts with too few).
 double localSpacing(const KnnIndex& index, const Eigen::Vector3d& y, double h);
 
+/// How far @p y lies off the input (@p cloud, indexed by @p index): its distance to the nearest input point over
+/// the local spacing there, read at that input point (floor @p h). Read at y itself, the spacing grows with y's
+/// distance from the input, and a point far off would still count as near.
+double offInput(const PointCloud& cloud, const KnnIndex& index, const Eigen::Vector3d& y, double h);
+
 /// Plane through the (weighted) centroid of @p pts (indices into @p points) by PCA; returns the (weighted) RMS
 /// residual. @p sigma > 0: point q has weight exp(−|q − p|²/σ²); 0 = all weights 1.
 double fitPlane(const std::vector<Eigen::Vector3d>& points, const std::vector<std::uint32_t>& idx,
@@ -95,8 +100,9 @@ std::vector<FeatureChain> buildChains(const std::vector<Eigen::Vector3d>& x0,
 /// short crease's, leaves the line off the surface), handing over to the stepped fit once it holds. Fills the
 /// stretches of a crease the detector missed, brings the ends into their corners and recovers short creases
 /// between corners.
-/// New runs get chain indices after the existing ones. Sequential in a fixed order (each trace sees the
-/// samples placed before it): deterministic.
+/// A trace stops where its next sample would lie over 2·maxOffCrease local spacings off the input (offInput): a
+/// line followed past the input's end. New runs get chain indices after the existing ones. Sequential in a
+/// fixed order (each trace sees the samples placed before it): deterministic.
 void traceChainEnds(const PointCloud& cloud, const KnnIndex& index, double h, const FeatureParams& params,
                     std::vector<Eigen::Vector3d>& out, std::vector<std::uint32_t>& owner);
 
@@ -146,8 +152,9 @@ void ontoSheets(const PointCloud& cloud, const KnnIndex& index, double h, const 
 /// (consecutive samples of one chain in @p owner), and on ahead of it a local spacing at a time (up to 8 times),
 /// the input is modelled as planar sheets (the three to five planes found greedily first, then as ontoSheets()
 /// does) until three or more fit with normals that span space (a corner, not a fan of faces around one line).
-/// Their common point (least squares), if within 4 of the run's steps of the end, within params.maxOffCrease
-/// local spacings of an input point and where the end's run leads (within maxChainTurn), gets a corner sample
+/// Their common point (least squares), if within 4 of the run's steps of the end, within 1.5·maxOffCrease
+/// local spacings of an input point (offInput, as step 4's corners) and where the end's run leads (within
+/// maxChainTurn), gets a corner sample
 /// owned by the end's chain, unless a sample lies within half a step of it (a corner placed already, which then
 /// stands for it); the gap from the end to the corner is filled on the straight line at the run's step.
 /// Deterministic: the models in parallel, the samples added in end order.

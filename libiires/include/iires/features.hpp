@@ -55,7 +55,9 @@ struct FeatureParams {
   double minChainLength = 6.0;  ///< spacings: shorter chains and spurs are dropped
   double sampleSpacing = 0.0;   ///< absolute units: spacing of the chain samples; 0 = do not sample
   double snapSigma = 1.5;       ///< spacings: Gaussian width of the local plane fits of snapToCreases()
-  double maxOffCrease = 1.0;    ///< local spacings: snapToCreases() adds a corner only this close to an input point
+  /// local spacings: snapToCreases() keeps a bend (1×), a corner or a gap's sample (1.5×), a traced sample (2×)
+  /// this close to the input
+  double maxOffCrease = 1.0;
 
   /// @throws std::invalid_argument with a readable message when a field is out of range.
   void validate() const;
