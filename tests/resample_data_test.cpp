@@ -221,6 +221,23 @@ std::pair<iires::ResampleResult, iires::ResampleResult> isotropicAndSharp(const 
   return {std::move(iso), iires::resample(cloud, p)};
 }
 
+/// The distances to @p mesh of the isotropic and the --sharp-edges outputs at @p n points of its uniform
+/// 100k sampling (seed 1, positions only, as sharp_edge_bench's rows).
+struct SharpAndIsotropicErrors {
+  iires::DistanceStats sharp, isotropic;
+};
+SharpAndIsotropicErrors sharpAndIsotropicErrors(const iires::TriangleMesh& mesh, std::size_t n) {
+  iires::MeshSamplingParams sp;
+  sp.count = 100000;
+  sp.seed = 1;
+  iires::PointCloud cloud = iires::sampleMesh(mesh, sp);
+  cloud.normals.clear();
+  const auto [iso, r] = isotropicAndSharp(cloud, n);
+  EXPECT_EQ(r.cloud.size(), n);
+  const iires::MeshDistance distance(mesh);
+  return {distance.distances(r.cloud.points), distance.distances(iso.cloud.points)};
+}
+
 // Sharp edges on 5× non-uniform input: exact N, samples held on the creases, and against the isotropic mode on
 // the same input: closer to the mesh (mean and max) and the reference sharp edges (dihedral > 45°) better
 // covered on average (measured: mean error 0.0012 vs 0.0032 % of the diagonal, max 0.137 vs 0.224 %, mean
@@ -257,19 +274,10 @@ TEST(SharpEdges, HeldOnTheCreasesAndCloserToTheMeshThanIsotropic) {
 // which the MLS surface rounds (sharp 0.4191e-2 units; isotropic 0.4122e-2 since the quadric's height is bounded
 // by its points', 0.4987e-2 before): a tie within 2 %, so the bound allows 5 % (1.56× before the fix).
 TEST(SharpEdges, ConcaveCreaseOfJointNoFartherFromTheMeshThanIsotropic) {
-  const auto mesh = iires::readMesh(dataPath("meshes/joint.off"));
-  iires::MeshSamplingParams sp;
-  sp.count = 100000;
-  sp.seed = 1;
-  iires::PointCloud cloud = iires::sampleMesh(mesh, sp);
-  cloud.normals.clear();
-  const auto [iso, r] = isotropicAndSharp(cloud, 20000);
-  ASSERT_EQ(r.cloud.size(), 20000u);
-  const iires::MeshDistance distance(mesh);
-  const auto err = distance.distances(r.cloud.points), isoErr = distance.distances(iso.cloud.points);
-  EXPECT_LT(err.mean, isoErr.mean);
-  EXPECT_LE(err.max, 1.05 * isoErr.max);
-  RecordProperty("err_max_ratio", std::to_string(err.max / isoErr.max));
+  const auto e = sharpAndIsotropicErrors(iires::readMesh(dataPath("meshes/joint.off")), 20000);
+  EXPECT_LT(e.sharp.mean, e.isotropic.mean);
+  EXPECT_LE(e.sharp.max, 1.05 * e.isotropic.max);
+  RecordProperty("err_max_ratio", std::to_string(e.sharp.max / e.isotropic.max));
 }
 
 // anchor, a uniform 100k sampling (the sharp_edge_bench row 1× 10k): beside its corners where four faces meet
@@ -278,19 +286,10 @@ TEST(SharpEdges, ConcaveCreaseOfJointNoFartherFromTheMeshThanIsotropic) {
 // sample moved into such a corner cut across a face (0.379 % once the corner models held). Corners of any
 // valence modelled, the fills moved onto the surface too: 0.140 %.
 TEST(SharpEdges, SamplesBesideFourFaceCornersNoFartherFromTheMeshThanIsotropic) {
-  const auto mesh = iires::readMesh(dataPath("meshes/anchor.off"));
-  iires::MeshSamplingParams sp;
-  sp.count = 100000;
-  sp.seed = 1;
-  iires::PointCloud cloud = iires::sampleMesh(mesh, sp);
-  cloud.normals.clear();
-  const auto [iso, r] = isotropicAndSharp(cloud, 10000);
-  ASSERT_EQ(r.cloud.size(), 10000u);
-  const iires::MeshDistance distance(mesh);
-  const auto err = distance.distances(r.cloud.points), isoErr = distance.distances(iso.cloud.points);
-  EXPECT_LT(err.mean, isoErr.mean);
-  EXPECT_LE(err.max, isoErr.max);
-  RecordProperty("err_max_ratio", std::to_string(err.max / isoErr.max));
+  const auto e = sharpAndIsotropicErrors(iires::readMesh(dataPath("meshes/anchor.off")), 10000);
+  EXPECT_LT(e.sharp.mean, e.isotropic.mean);
+  EXPECT_LE(e.sharp.max, e.isotropic.max);
+  RecordProperty("err_max_ratio", std::to_string(e.sharp.max / e.isotropic.max));
 }
 
 // --sharp-edges on CGAL's two real hippo scans (6k points, noisy, no CAD creases): the detector finds crease-like
