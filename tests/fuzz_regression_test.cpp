@@ -197,4 +197,40 @@ TEST(FuzzRegression, DegenerateRingsStillGiveExactlyN) {
 }
 
 }  // namespace
+/// fuzz_resample-crash-3e4116f8 (int16 mode, scale 1, N = 40, Euclidean, no pre-processing, sharp edges, 2 passes,
+/// 8 final iterations, 14 candidates): 65 points on a coarse grid. The crease fits traced lines off the cloud,
+/// and those held samples failed the run ("output points left the input's bounding box", 30 of them by up to
+/// 2,989 units; 3 by 309 once traces stopped off the input). Held samples outside the box every output point must
+/// lie in are dropped now.
+TEST(FuzzRegression, SharpEdgesOnACoarseGridStayWithinTheInput) {
+  const int rows[][3] = {
+      {-500, -500, -250}, {-500, -358, -250}, {-500, 41, 0}, {0, 0, -255}, {-250, -500, -72}, {-250, -500, 71},
+      {-250, -500, 214}, {-250, -500, 357}, {-250, -500, 500}, {-250, -358, -500}, {-179, -358, -358}, {-179, -358, -215},
+      {-179, -358, -72}, {-179, -358, 71}, {-179, -358, 214}, {-179, -358, 357}, {-179, -358, 500}, {-179, -215, -500},
+      {-108, -215, -358}, {-108, -215, -215}, {-108, -215, -72}, {-108, -215, 71}, {-108, -215, 214}, {-108, -215, 357},
+      {-108, -215, 500}, {-108, -72, -500}, {-36, -72, -358}, {-36, -72, -215}, {-36, -72, -72}, {-36, -72, 71},
+      {-36, -72, 214}, {-36, -72, 357}, {-36, -72, 500}, {-36, 71, -500}, {-36, 71, -358}, {-36, 71, -215},
+      {-36, 71, -72}, {-36, 71, 71}, {-36, 71, 214}, {-36, 71, 357}, {-36, 71, 500}, {-36, 214, -500},
+      {-107, 214, -358}, {-107, 214, -215}, {-107, 214, -72}, {-107, 214, 71}, {-107, 214, 214}, {-107, 214, 357},
+      {-107, 214, 500}, {-107, 357, -500}, {-179, 357, -358}, {-179, 357, -215}, {-179, 357, -72}, {-179, 357, 71},
+      {-179, 357, 214}, {-179, 357, 357}, {-179, 357, 500}, {-179, 500, -500}, {-250, 500, -358}, {-250, 500, -215},
+      {-250, 500, -72}, {-250, 500, 71}, {-250, 500, 214}, {-250, 500, 357}, {-250, 500, 500}};
+  PointCloud cloud;
+  for (const auto& r : rows) cloud.points.emplace_back(r[0], r[1], r[2]);
+  ResampleParams params;
+  params.targetCount = 40;
+  params.intrinsic = false;
+  params.preprocess = false;
+  params.sharpEdges = true;
+  params.mls.k = 16;
+  params.maxPasses = 2;
+  params.maxRelaxIterations = 8;
+  params.relaxPerPass = 2;
+  params.neighbours = 14;
+  params.seed = 0;
+  const ResampleResult result = resample(cloud, params, iires::Execution{1});
+  ASSERT_EQ(result.cloud.size(), 40u);
+  for (std::size_t i = 0; i < result.cloud.size(); ++i) EXPECT_TRUE(result.cloud.points[i].allFinite()) << i;
+}
+
 }  // namespace iires::test

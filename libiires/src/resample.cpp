@@ -59,14 +59,12 @@ std::vector<PointAttribute> carryAttributes(const PointCloud& input, const std::
   return interpolateAttributes(input, output, normals, sameSheet, {}, exec);
 }
 
-/// Exit 0 promises points on the input's surface. Each axis of the working cloud's bounding box is enlarged by
-/// a tenth of its own extent, or one input spacing where that is more (the MLS surface is resolved to about the
-/// input's spacing: at the rim of a plate or a fold a few spacings thick a sample may sit 0.6 of one out) but
-/// never more than half the extent, and in any case by at most three output spacings (a sample 20 units off a ribbon
-/// 2 wide is off the surface, however long the ribbon). A sample outside has left the surface (projection
-/// diverged on a degenerate cloud), and the run fails instead of writing it.
-void checkWithinInput(const std::vector<Eigen::Vector3d>& samples, const std::vector<Eigen::Vector3d>& input,
-                      double spacing, double inputSpacing) {
+/// Exit 0 promises points on the input's surface: the box they must lie in. Each axis of the working cloud's
+/// bounding box is enlarged by a tenth of its own extent, or one input spacing (@p inputSpacing) where that is
+/// more (the MLS surface is resolved to about the input's spacing: at the rim of a plate or a fold a few spacings
+/// thick a sample may sit 0.6 of one out) but never more than half the extent, and in any case by at most three
+/// output spacings (@p spacing; a sample 20 units off a ribbon 2 wide is off the surface, however long the ribbon).
+Eigen::AlignedBox3d inputBox(const std::vector<Eigen::Vector3d>& input, double spacing, double inputSpacing) {
   Eigen::AlignedBox3d box;
   for (const Eigen::Vector3d& p : input) box.extend(p);
   const Eigen::Vector3d extent = box.sizes();
@@ -75,6 +73,14 @@ void checkWithinInput(const std::vector<Eigen::Vector3d>& samples, const std::ve
       (0.1 * extent).cwiseMax(resolved).cwiseMin(3 * spacing).array() + 1e-9 * extent.norm();  // 1e-9: rounding
   box.min() -= margin;
   box.max() += margin;
+  return box;
+}
+
+/// A sample outside inputBox() has left the surface (projection diverged on a degenerate cloud), and the run
+/// fails instead of writing it.
+void checkWithinInput(const std::vector<Eigen::Vector3d>& samples, const std::vector<Eigen::Vector3d>& input,
+                      double spacing, double inputSpacing) {
+  const Eigen::AlignedBox3d box = inputBox(input, spacing, inputSpacing);
   std::size_t outside = 0;
   double worst = 0;
   for (const Eigen::Vector3d& p : samples) {
@@ -115,9 +121,13 @@ PointCloud workingCloud(PointCloud cloud, const ResampleParams& params, const Ex
 
 /// The samples `--sharp-edges` holds: the feature chains sampled at edgeRatio × the output spacing (coarser when
 /// they would take over half of N) and put exactly on the creases; sets featurePoints and featureSamples (how
-/// many of them fit beside the caller's fixed samples).
-std::vector<Eigen::Vector3d> creaseSamples(const PointCloud& cloud, double area, const ResampleParams& params,
-                                           const Execution& exec, ResampleResult& result) {
+/// many of them fit beside the caller's fixed samples). A sample the crease fits put outside the box every output
+/// point must lie in (inputBox() at 0.8 of the target spacing; @p inputSpacing: the input's), as on a degenerate
+/// or sparse cloud a line fitted past its end, is dropped: it is not on the surface, and the free samples cover
+/// its place.
+std::vector<Eigen::Vector3d> creaseSamples(const PointCloud& cloud, double area, double inputSpacing,
+                                           const ResampleParams& params, const Execution& exec,
+                                           ResampleResult& result) {
   const FeatureParams& fp = params.features;
   const FeatureResult features = detectFeatures(cloud, fp, exec);
   const double l0 = std::sqrt(2.0 * area / (std::sqrt(3.0) * static_cast<double>(params.targetCount)));
@@ -128,6 +138,10 @@ std::vector<Eigen::Vector3d> creaseSamples(const PointCloud& cloud, double area,
                                                        static_cast<double>(onEdges.size()) /
                                                        static_cast<double>(params.targetCount), &chainOf);
   onEdges = snapToCreases(cloud, onEdges, chainOf, features.spacing, fp, exec);  // exactly on the creases
+  const Eigen::AlignedBox3d box = inputBox(cloud.points, 0.8 * l0, inputSpacing);
+  onEdges.erase(
+      std::remove_if(onEdges.begin(), onEdges.end(), [&](const Eigen::Vector3d& q) { return !box.contains(q); }),
+      onEdges.end());
   result.featurePoints = features.featureIndices.size();
   result.featureSamples = std::min(onEdges.size(), params.targetCount - params.fixedSamples.size());
   return onEdges;
@@ -353,7 +367,8 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params, const Ex
   ResampleParams local = params;  // sharp edges add fixed samples
   if (params.sharpEdges) {
     t = clock.begin("features");
-    const std::vector<Eigen::Vector3d> onEdges = creaseSamples(cloud, surface->area(), params, exec, result);
+    const std::vector<Eigen::Vector3d> onEdges =
+        creaseSamples(cloud, surface->area(), surface->meanSpacing(), params, exec, result);
     local.fixedSamples.insert(local.fixedSamples.end(), onEdges.begin(),
                               onEdges.begin() + static_cast<long>(result.featureSamples));
     clock.end("features", t);
