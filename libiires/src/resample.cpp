@@ -367,8 +367,7 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params, const Ex
   ResampleParams local = params;  // sharp edges add fixed samples
   if (params.sharpEdges) {
     t = clock.begin("features");
-    const std::vector<Eigen::Vector3d> onEdges =
-        creaseSamples(cloud, surface->area(), surface->meanSpacing(), params, exec, result);
+    const auto onEdges = creaseSamples(cloud, surface->area(), surface->meanSpacing(), params, exec, result);
     local.fixedSamples.insert(local.fixedSamples.end(), onEdges.begin(),
                               onEdges.begin() + static_cast<long>(result.featureSamples));
     clock.end("features", t);
