@@ -529,7 +529,7 @@ void separateSamples(double h, std::vector<Eigen::Vector3d>& out, std::vector<st
 //     within half a spacing of it (tracing placed most corners already), a corner sample is added there, and
 //     the gap from each of those chain ends to the corner gets samples at the chain's spacing on the straight
 //     line.
-//  4a. Corners of any valence: where the sheets at a chain end, or a little ahead of it, are three or more
+//  4a. Corners of up to five faces: where the sheets at a chain end, or a little ahead of it, are three or more
 //     planes meeting at a point the end's crease leads to, a corner sample there and the gap to it filled
 //     (addSheetCorners).
 //  4b. Separation: a sample closer than half the chains' median step to an earlier one is dropped (separateSamples).
@@ -548,7 +548,7 @@ void separateSamples(double h, std::vector<Eigen::Vector3d>& out, std::vector<st
 //     are left out (more: a third sheet, as at a corner) and the move is at most maxLineDistance local spacings.
 //  6b. Off the surface: a sample that the steps above left off it (a chord across a bend, a line followed past
 //     the end of a sheet, a biased fit next to a corner) moves onto the input's sheets around it, modelled as
-//     planes (a face, a crease, a band, a corner of any valence), each bounded by the lines where it meets the
+//     planes (a face, a crease, a band, a corner of up to five faces), each bounded by the lines where it meets the
 //     others (ontoSheets).
 //  7. Separation once more (steps 6 and 6b moved samples).
 //  8. Gaps once more, as in 5, up to 2.5 steps long: step 5's own samples, the moves of 6 and 6b (a corner

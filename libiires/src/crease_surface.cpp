@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
-// The input around a held sample as planar sheets (one, two, a band between two, or a corner of any valence),
-// each bounded by the lines where it meets the others: held samples off the surface move onto them
+// The input around a held sample as planar sheets (one, two, a band between two, or a corner of up to five
+// faces), each bounded by the lines where it meets the others: held samples off the surface move onto them
 // (ontoSheets), and chain ends short of a corner get the corner, the sheets' common point (addSheetCorners).
 #include <Eigen/Geometry>
 #include <Eigen/SVD>
@@ -87,7 +87,7 @@ std::vector<Eigen::Vector3d> normalSeeds(const std::vector<Eigen::Vector3d>& nrm
   return seed;
 }
 
-/// The seeds of a corner where any number of faces meet, one per plane found greedily in @p nbr: the tangent
+/// The seeds of a corner where up to kMaxSheets faces meet, one per plane found greedily in @p nbr: the tangent
 /// plane (a point and its normal) that explains the most points not yet explained (within 3·maxResidual local
 /// spacings @p hl), its normal by the detector's angle from the seeds before, while it explains 5 points, up to
 /// kMaxSheets. Normals blurred across a crease or a corner (the normals' farthest-point seeds take those) have
@@ -261,12 +261,17 @@ Eigen::Vector3d nearestOnSheet(const Sheet& sh, const Eigen::Vector3d& q, double
 /// first (a corner's faces, none blended into another). False where no model fits.
 bool sheetsAround(const PointCloud& cloud, const KnnIndex& index, const Eigen::Vector3d& q, double hl,
                   const FeatureParams& params, bool cornerFirst, std::vector<Sheet>& sheets, bool& band) {
-  std::vector<std::uint32_t> idx;
+  std::vector<std::uint32_t> ball, idx;
   std::vector<double> d2;
+  index.radius(q, params.radius * hl, ball, d2);
+  if (ball.size() > kMaxFitPoints) ball.resize(kMaxFitPoints);
+  // The ball, or the @p least nearest points where it holds fewer (a sparse part: fits need points).
+  auto neighbourhood = [&](std::size_t least) {
+    if (ball.size() >= least) idx = ball;
+    else index.knn(q, least, idx, d2);
+  };
   auto byNormals = [&] {
-    index.radius(q, params.radius * hl, idx, d2);
-    if (idx.size() > kMaxFitPoints) idx.resize(kMaxFitPoints);
-    if (idx.size() < kMinModelPoints) index.knn(q, kMinModelPoints, idx, d2);  // a sparse part: fits need points
+    neighbourhood(kMinModelPoints);
     if (idx.size() < 12) return false;
     const std::vector<Eigen::Vector3d> seed = normalSeeds(cloud.normals, idx, params);
     for (std::size_t k = seed.size(); k >= 1 && !(k == 1 && seed.size() > 1); --k)
@@ -275,9 +280,7 @@ bool sheetsAround(const PointCloud& cloud, const KnnIndex& index, const Eigen::V
     return false;
   };
   auto byPlanes = [&] {
-    index.radius(q, params.radius * hl, idx, d2);
-    if (idx.size() > kMaxFitPoints) idx.resize(kMaxFitPoints);
-    if (idx.size() < 2 * kMinModelPoints) index.knn(q, 2 * kMinModelPoints, idx, d2);
+    neighbourhood(2 * kMinModelPoints);
     const std::vector<Eigen::Vector3d> planes = planeSeeds(cloud, idx, hl, params);
     for (std::size_t k = planes.size(); k >= 3; --k)
       if (fitSheets(cloud, idx, q, hl, params, {planes.begin(), planes.begin() + static_cast<long>(k)}, sheets,

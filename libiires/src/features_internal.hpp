@@ -148,7 +148,7 @@ void fillCreaseGaps(const PointCloud& cloud, const KnnIndex& index, double h, co
 void ontoSheets(const PointCloud& cloud, const KnnIndex& index, double h, const FeatureParams& params,
                 std::vector<Eigen::Vector3d>& out, int threads);
 
-/// Step 4a of snapToCreases(): corners of any valence. At each end of a run of chain samples in @p out
+/// Step 4a of snapToCreases(): corners of up to five faces. At each end of a run of chain samples in @p out
 /// (consecutive samples of one chain in @p owner), and on ahead of it a local spacing at a time (up to 8 times),
 /// the input is modelled as planar sheets (the three to five planes found greedily first, then as ontoSheets()
 /// does) until three or more fit with normals that span space (a corner, not a fan of faces around one line).
