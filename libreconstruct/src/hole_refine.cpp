@@ -18,6 +18,7 @@
 #include <cmath>
 #include <iterator>
 #include <memory>
+#include <optional>
 #include <unordered_map>
 #include <vector>
 
@@ -25,6 +26,7 @@
 #include "iires/knn.hpp"
 #include "iires/reconstruct/mesh_quality.hpp"
 #include "iires/reconstruct/mesh_repair.hpp"
+#include "local_mesh.hpp"
 #include "surface_mesh.hpp"
 
 namespace iires {
@@ -46,8 +48,9 @@ namespace PMP = CGAL::Polygon_mesh_processing;
 /// 124-240 edges).
 constexpr std::size_t kExhaustiveEdges = 250;
 
-/// A faired patch whose triangles fall this far short of Q 0.4 in all (addedShortfall: a degenerate triangle's
-/// worth) is made again without fairing; the repairs after the fill handle a poor triangle or two, not a fold.
+/// A faired patch whose triangles fall this far short of Q 0.4 in all (FinishedPatch::shortfall: a degenerate
+/// triangle's worth) is made again without fairing; the repairs after the fill handle a poor triangle or two, not
+/// a fold.
 constexpr double kRefairShortfall = 0.4;
 
 /// The input points (HoleFillingParams::inputPoints): whether a loop's fill lies on the sampled surface, and
@@ -151,40 +154,131 @@ bool triangulateLoop(Mesh& sm, const LoopFill& loop, Patch& patch) {
   return true;
 }
 
-/// The refined @p patch C⁰-faired when @p fair, then kept where it lies on the sampled surface or across a gap in
-/// the data, else removed again (false: the loop is a border again); kept, it is evened out by isotropic remeshing
-/// at the target length (the loop itself, the patch's border, is neither split, collapsed nor moved).
-bool finishPatch(Mesh& sm, const LoopFill& loop, const Patch& patch, bool fair, const HoleFillingParams& params,
-                 InputSupport& input) {
-  if (fair) PMP::fair(sm, patch.added, CGAL::parameters::fairing_continuity(0));
-  if (input.active() && loop.continued >= params.maxContinuedShare &&
-      !input.supports(sm, patch.added, params.supportDistance * loop.unit)) {
-    for (FaceIndex f : patch.faces) CGAL::Euler::remove_face(sm.halfedge(f), sm);
-    return false;
-  }
-  if (params.refineIterations > 0)
-    PMP::isotropic_remeshing(patch.faces, loop.target, sm,
-                             CGAL::parameters::number_of_iterations(static_cast<unsigned>(params.refineIterations))
-                                 .protect_constraints(true));
-  return true;
+/// Whether the refined @p patch may stay: it lies on the sampled surface or across a gap in the data.
+bool supported(const Mesh& sm, const LoopFill& loop, const Patch& patch, const HoleFillingParams& params,
+               InputSupport& input) {
+  return !input.active() || loop.continued < params.maxContinuedShare ||
+         input.supports(sm, patch.added, params.supportDistance * loop.unit);
 }
 
-/// How far the faces with a vertex added since the input (index ≥ @p firstAdded) fall short of a good shape: the
-/// sum over them of max(0, kGoodQuality − Q). Additive, so two fills of one loop compare by this total.
-double addedShortfall(const Mesh& sm, std::size_t firstAdded) {
-  constexpr double kGoodQuality = 0.4;  // the reconstruction's repair threshold
+/// A loop's patch as it goes into the mesh: faces in sm's vertex indices, −k − 1 naming inner[k]; the patch's
+/// refined vertices are all replaced by the inner ones. shortfall: how far its faces with an inner vertex fall
+/// short of a good shape (the sum of max(0, 0.4 − Q): additive, so two fills of one loop compare by it).
+struct FinishedPatch {
+  std::vector<Eigen::Vector3i> faces;
+  std::vector<Eigen::Vector3d> inner, innerNormals;
   double shortfall = 0;
-  for (FaceIndex f : sm.faces()) {
-    std::array<Eigen::Vector3d, 3> q;
-    bool added = false;
-    int c = 0;
-    for (VertexIndex v : CGAL::vertices_around_face(sm.halfedge(f), sm)) {
-      q[static_cast<std::size_t>(c++)] = toEigen(sm.point(v));
-      added = added || static_cast<std::size_t>(v) >= firstAdded;
+};
+
+/// @p patch evened out by @p iterations of isotropic remeshing at @p target (the loop itself, the patch's border,
+/// is neither split, collapsed nor moved), as a mesh of its own: the patch and the ring of faces around it, so
+/// that the remesher's link tests see the same neighbourhood as in the whole mesh.
+FinishedPatch remeshPatch(const Mesh& sm, const Patch& patch, double target, int iterations) {
+  constexpr double kGoodQuality = 0.4;  // the reconstruction's repair threshold
+  std::vector<FaceIndex> faces = patch.faces, ring;
+  std::sort(faces.begin(), faces.end());
+  for (FaceIndex f : patch.faces)
+    for (VertexIndex v : CGAL::vertices_around_face(sm.halfedge(f), sm))
+      for (FaceIndex g : CGAL::faces_around_target(sm.halfedge(v), sm))
+        if (g != Mesh::null_face() && !std::binary_search(faces.begin(), faces.end(), g)) ring.push_back(g);
+  std::sort(ring.begin(), ring.end());
+  ring.erase(std::unique(ring.begin(), ring.end()), ring.end());
+  std::vector<Eigen::Vector3i> triangles;
+  for (const std::vector<FaceIndex>* part : {&patch.faces, static_cast<const std::vector<FaceIndex>*>(&ring)})
+    for (FaceIndex f : *part) {
+      Eigen::Vector3i t;
+      int c = 0;
+      for (VertexIndex v : CGAL::vertices_around_face(sm.halfedge(f), sm)) t[c++] = static_cast<int>(v);
+      triangles.push_back(t);
     }
-    if (added) shortfall += std::max(0.0, kGoodQuality - triangleQuality(q[0], q[1], q[2]));
+  std::vector<std::uint32_t> global;
+  Mesh lm;
+  const bool local = detail::localSurfaceMesh(
+      triangles, [&](std::uint32_t v) { return toEigen(sm.point(VertexIndex(v))); }, lm, global);
+  const auto patchFaces = static_cast<Mesh::size_type>(patch.faces.size());
+  if (local && iterations > 0) {
+    std::vector<FaceIndex> region;
+    for (Mesh::size_type f = 0; f < patchFaces; ++f) region.emplace_back(f);
+    PMP::isotropic_remeshing(region, target, lm,
+                             CGAL::parameters::number_of_iterations(static_cast<unsigned>(iterations))
+                                 .protect_constraints(true));
+  } else if (!local) {  // as it is (never seen: the mesh is an oriented 2-manifold)
+    lm = sm;
+    global.clear();
+    for (VertexIndex v : sm.vertices()) global.push_back(static_cast<std::uint32_t>(v));
   }
-  return shortfall;
+  // The ring keeps its face indices (the remesher changes only the patch; new faces take freed slots or go last).
+  auto inRing = [&](FaceIndex f) {
+    if (!local) return !std::binary_search(faces.begin(), faces.end(), f);
+    const auto i = static_cast<std::size_t>(f);
+    return i >= patch.faces.size() && i < triangles.size();
+  };
+  std::vector<VertexIndex> added = patch.added;
+  std::sort(added.begin(), added.end());
+  FinishedPatch out;
+  std::unordered_map<std::uint32_t, int> inner;  // lm vertex → −k − 1
+  for (FaceIndex f : lm.faces()) {
+    if (inRing(f)) continue;
+    Eigen::Vector3i t;
+    std::array<Eigen::Vector3d, 3> q;
+    bool hasInner = false;
+    int c = 0;
+    for (VertexIndex v : CGAL::vertices_around_face(lm.halfedge(f), lm)) {
+      const auto lv = static_cast<std::uint32_t>(v);
+      q[static_cast<std::size_t>(c)] = toEigen(lm.point(v));
+      const bool old = lv < global.size() && !std::binary_search(added.begin(), added.end(), VertexIndex(global[lv]));
+      if (old) {
+        t[c++] = static_cast<int>(global[lv]);
+        continue;
+      }
+      hasInner = true;
+      const auto [it, fresh] = inner.emplace(lv, -static_cast<int>(out.inner.size()) - 1);
+      if (fresh) {
+        out.inner.push_back(q[static_cast<std::size_t>(c)]);
+        out.innerNormals.push_back(toEigen(PMP::compute_vertex_normal(v, lm)));
+      }
+      t[c++] = it->second;
+    }
+    out.faces.push_back(t);
+    if (hasInner) out.shortfall += std::max(0.0, kGoodQuality - triangleQuality(q[0], q[1], q[2]));
+  }
+  return out;
+}
+
+/// The positions of @p vertices in @p sm.
+std::vector<Kernel::Point_3> positions(const Mesh& sm, const std::vector<VertexIndex>& vertices) {
+  std::vector<Kernel::Point_3> p;
+  for (VertexIndex v : vertices) p.push_back(sm.point(v));
+  return p;
+}
+
+void setPositions(Mesh& sm, const std::vector<VertexIndex>& vertices, const std::vector<Kernel::Point_3>& p) {
+  for (std::size_t k = 0; k < vertices.size(); ++k) sm.point(vertices[k]) = p[k];
+}
+
+/// The refined @p patch C⁰-faired, then remeshed, where it lies on the sampled surface or across a gap in the data
+/// (else removed again, nothing returned: the loop is a border again). Where the membrane folds (a loop round a
+/// crease), the patch comes out of the remeshing with slivers: then it is remeshed again from the refined
+/// triangulation without fairing, and the patch with the better triangles kept. sm keeps the faired patch's
+/// faces (the context of the next loops); the returned patch replaces them.
+std::optional<FinishedPatch> finishPatch(Mesh& sm, const LoopFill& loop, const Patch& patch,
+                                         const HoleFillingParams& params, InputSupport& input) {
+  const std::vector<Kernel::Point_3> refined = positions(sm, patch.added);
+  PMP::fair(sm, patch.added, CGAL::parameters::fairing_continuity(0));
+  if (!supported(sm, loop, patch, params, input)) {
+    for (FaceIndex f : patch.faces) CGAL::Euler::remove_face(sm.halfedge(f), sm);
+    return std::nullopt;
+  }
+  FinishedPatch faired = remeshPatch(sm, patch, loop.target, params.refineIterations);
+  if (faired.shortfall <= kRefairShortfall) return faired;
+  const std::vector<Kernel::Point_3> fairedPositions = positions(sm, patch.added);
+  setPositions(sm, patch.added, refined);
+  if (supported(sm, loop, patch, params, input)) {
+    FinishedPatch flat = remeshPatch(sm, patch, loop.target, params.refineIterations);
+    if (flat.shortfall < faired.shortfall) return flat;
+  }
+  setPositions(sm, patch.added, fairedPositions);
+  return faired;
 }
 
 }  // namespace
@@ -213,6 +307,8 @@ LargeHoleReport fillLargeHoles(TriangleMesh& mesh, std::vector<Eigen::Vector3d>&
   for (auto e : sm.edges()) edgeSum += std::sqrt(CGAL::squared_distance(sm.point(sm.source(sm.halfedge(e))), sm.point(sm.target(sm.halfedge(e)))));
   const double meanEdge = edgeSum / static_cast<double>(std::max<std::size_t>(sm.number_of_edges(), 1));
   InputSupport input(params);
+  std::vector<FinishedPatch> patches;
+  std::vector<FaceIndex> replaced;  // sm's faces of the patches
   for (HalfedgeIndex h : cycles) {
     ++report.loops;
     Eigen::AlignedBox3d box;
@@ -237,58 +333,49 @@ LargeHoleReport fillLargeHoles(TriangleMesh& mesh, std::vector<Eigen::Vector3d>&
       u = input.unit(sm, h, perimeter / static_cast<double>(edges));
       continued = input.continuedShare(sm, h, u);
     }
-    // Triangulated, refined (new vertices inside, CGAL's density control), then faired: C⁰ fairing (a membrane)
-    // gives a planar loop a flat cap; C¹ would carry the walls' tangents into a dome (measured on the sparse
-    // hand's wrist: Hausdorff 9.0 % of the diagonal with C¹, 3.4 % with C⁰). Where the membrane folds (a loop
-    // round a crease), the patch comes out of the remeshing with slivers: then it is made again from the refined
-    // triangulation without fairing, and the patch with the better triangles is kept.
+    // Triangulated, refined (new vertices inside, CGAL's density control), then faired and remeshed
+    // (finishPatch): C⁰ fairing (a membrane) gives a planar loop a flat cap; C¹ would carry the walls' tangents
+    // into a dome (measured on the sparse hand's wrist: Hausdorff 9.0 % of the diagonal with C¹, 3.4 % with C⁰).
     const LoopFill fill{h, edges, continued, u,
                         std::max(perimeter / static_cast<double>(edges), std::max(meanEdge, longest / 1.9))};
-    const double shortfallBefore = addedShortfall(sm, nv);
     Patch patch;
     if (!triangulateLoop(sm, fill, patch)) {
       ++report.kept;
       continue;
     }
-    Mesh refined = sm;
-    if (!finishPatch(sm, fill, patch, true, params, input)) {
+    std::optional<FinishedPatch> finished = finishPatch(sm, fill, patch, params, input);
+    if (!finished) {
       ++report.kept, ++report.unsupported;
       continue;
     }
-    const double faired = addedShortfall(sm, nv) - shortfallBefore;
-    if (faired > kRefairShortfall) {
-      Mesh fairedMesh = std::move(sm);
-      sm = std::move(refined);
-      if (!finishPatch(sm, fill, patch, false, params, input) || addedShortfall(sm, nv) - shortfallBefore >= faired)
-        sm = std::move(fairedMesh);
-    }
+    patches.push_back(std::move(*finished));
+    replaced.insert(replaced.end(), patch.faces.begin(), patch.faces.end());
     ++report.filled;
   }
   if (!report.filled) return report;
-  // Back to the TriangleMesh: old vertices keep their index (none was removed: only patch vertices can go),
-  // new ones are appended with the normal of their faces.
-  std::vector<std::uint32_t> index(sm.number_of_vertices() + sm.number_of_removed_vertices(), 0);
-  const bool haveNormals = normals.size() == nv;
-  for (VertexIndex v : sm.vertices()) {
-    if (static_cast<std::size_t>(v) < nv) {
-      index[v] = static_cast<std::uint32_t>(static_cast<std::size_t>(v));
-      continue;
-    }
-    index[v] = static_cast<std::uint32_t>(mesh.vertices.size());
-    mesh.vertices.push_back(toEigen(sm.point(v)));
-    if (haveNormals) {
-      const Kernel::Vector_3 n = PMP::compute_vertex_normal(v, sm);
-      normals.emplace_back(n.x(), n.y(), n.z());
-    }
-    ++report.verticesAdded;
-  }
+  // Back to the TriangleMesh: the faces sm had and kept, then the finished patches, whose inner vertices are
+  // appended with their normals (sm's vertices past nv are the patches' refined ones, all replaced).
+  std::sort(replaced.begin(), replaced.end());
   const std::size_t before = mesh.triangles.size();
   mesh.triangles.clear();
   for (FaceIndex f : sm.faces()) {
+    if (std::binary_search(replaced.begin(), replaced.end(), f)) continue;
     Eigen::Vector3i t;
     int c = 0;
-    for (VertexIndex v : CGAL::vertices_around_face(sm.halfedge(f), sm)) t[c++] = static_cast<int>(index[v]);
+    for (VertexIndex v : CGAL::vertices_around_face(sm.halfedge(f), sm)) t[c++] = static_cast<int>(v);
     mesh.triangles.push_back(t);
+  }
+  const bool haveNormals = normals.size() == nv;
+  for (const FinishedPatch& p : patches) {
+    const auto base = static_cast<int>(mesh.vertices.size());
+    mesh.vertices.insert(mesh.vertices.end(), p.inner.begin(), p.inner.end());
+    if (haveNormals) normals.insert(normals.end(), p.innerNormals.begin(), p.innerNormals.end());
+    report.verticesAdded += p.inner.size();
+    for (Eigen::Vector3i t : p.faces) {
+      for (int c = 0; c < 3; ++c)
+        if (t[c] < 0) t[c] = base - t[c] - 1;
+      mesh.triangles.push_back(t);
+    }
   }
   report.facesAdded = mesh.triangles.size() - before;
   return report;

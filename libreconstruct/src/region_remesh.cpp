@@ -8,13 +8,12 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <map>
-#include <unordered_map>
 #include <vector>
 
 #include "iires/detail/disjoint_sets.hpp"
 #include "iires/reconstruct/mesh_quality.hpp"
 #include "iires/reconstruct/mesh_repair.hpp"
-#include "mesh_edges.hpp"
+#include "local_mesh.hpp"
 #include "surface_mesh.hpp"
 #include "vertex_faces.hpp"
 
@@ -59,52 +58,18 @@ std::vector<std::uint32_t> regionWithRing(const TriangleMesh& mesh, const detail
   return faces;
 }
 
-/// One local vertex per fan of faces around each mesh vertex (@p faces' corners joined across shared edges): a
-/// vertex whose faces in the submesh form two fans (they meet only there) becomes two vertices, so the submesh
-/// is a 2-manifold. Returns the local vertex of each corner (3 per face); @p global gets each local vertex's index.
-std::vector<std::uint32_t> localVertices(const TriangleMesh& mesh, const std::vector<std::uint32_t>& faces,
-                                         std::vector<std::uint32_t>& global) {
-  const std::size_t nc = 3 * faces.size();
-  auto vertexAt = [&](std::size_t corner) {
-    return static_cast<std::uint32_t>(mesh.triangles[faces[corner / 3]][static_cast<int>(corner % 3)]);
-  };
-  auto nextCorner = [](std::size_t corner) { return corner - corner % 3 + (corner % 3 + 1) % 3; };
-  std::unordered_map<std::uint64_t, std::uint32_t> from;  // half-edge a → b: the corner of a
-  from.reserve(nc);
-  for (std::size_t k = 0; k < nc; ++k) from.emplace(detail::directedKey(vertexAt(k), vertexAt(nextCorner(k))), k);
-  DisjointSets fans(nc);
-  for (std::size_t k = 0; k < nc; ++k) {
-    const auto it = from.find(detail::directedKey(vertexAt(nextCorner(k)), vertexAt(k)));  // the twin, b → a
-    if (it == from.end()) continue;
-    fans.unite(static_cast<std::uint32_t>(k), static_cast<std::uint32_t>(nextCorner(it->second)));  // a
-    fans.unite(static_cast<std::uint32_t>(nextCorner(k)), it->second);                              // b
-  }
-  std::vector<std::uint32_t> local(nc), id(nc, ~0u);
-  global.clear();
-  for (std::size_t k = 0; k < nc; ++k) {
-    std::uint32_t& root = id[fans.find(static_cast<std::uint32_t>(k))];
-    if (root == ~0u) root = static_cast<std::uint32_t>(global.size()), global.push_back(vertexAt(k));
-    local[k] = root;
-  }
-  return local;
-}
-
 /// Remeshes @p region (sorted face indices of @p mesh) on its own; kept when its worst face gets better.
 RemeshedRegion remeshRegion(const TriangleMesh& mesh, const detail::VertexFaces& vf,
                             const std::vector<std::uint32_t>& region, int iterations) {
   RemeshedRegion out;
   const std::vector<std::uint32_t> faces = regionWithRing(mesh, vf, region);
+  std::vector<Eigen::Vector3i> triangles;
+  triangles.reserve(faces.size());
+  for (std::uint32_t f : faces) triangles.push_back(mesh.triangles[f]);
   std::vector<std::uint32_t> global;
-  const std::vector<std::uint32_t> local = localVertices(mesh, faces, global);
   Mesh sm;
-  for (std::uint32_t g : global) {
-    const Eigen::Vector3d& p = mesh.vertices[g];
-    sm.add_vertex(detail::Kernel::Point_3(p.x(), p.y(), p.z()));
-  }
-  for (std::size_t f = 0; f < faces.size(); ++f)
-    if (sm.add_face(VertexIndex(local[3 * f]), VertexIndex(local[3 * f + 1]), VertexIndex(local[3 * f + 2])) ==
-        Mesh::null_face())
-      return out;  // not an oriented 2-manifold here: left as it is
+  if (!detail::localSurfaceMesh(triangles, [&](std::uint32_t v) { return mesh.vertices[v]; }, sm, global))
+    return out;  // not an oriented 2-manifold here: left as it is
   double before = 1, edgeSum = 0;
   std::vector<FaceIndex> patch;
   for (std::size_t f = 0; f < region.size(); ++f) {
