@@ -3,6 +3,7 @@
 // a face through a neighbour's vertex), none on closed convex meshes, degenerate faces apart.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -89,6 +90,31 @@ TEST(SelfIntersections, MatchesBruteForceOnCrumpledMeshes) {
     EXPECT_EQ(fast, slow) << "noise " << noise;
     EXPECT_FALSE(slow.empty());
   }
+}
+
+// A few faces much longer than the others (a fill's long faces) are paired outside the grid: long faces across
+// a crumpled sphere's box, crossing each other, against testing every pair.
+TEST(SelfIntersections, MatchesBruteForceWithAFewLongFaces) {
+  TriangleMesh m = uvSphereMesh(16, 24);
+  std::mt19937_64 rng(11);
+  std::normal_distribution<double> g(0.0, 0.02);
+  for (auto& v : m.vertices) v += V(g(rng), g(rng), g(rng));
+  const std::size_t longFrom = m.triangles.size();
+  auto addFace = [&](const V& a, const V& b, const V& c) {
+    const int o = static_cast<int>(m.vertices.size());
+    m.vertices.insert(m.vertices.end(), {a, b, c});
+    m.triangles.emplace_back(o, o + 1, o + 2);
+  };
+  addFace(V(-1.5, -1.5, -1.5), V(1.5, 1.5, 1.5), V(0.1, 0, 0));
+  addFace(V(-1.5, 1.5, -1.5), V(1.5, -1.5, 1.5), V(0, 0.1, 0));
+  addFace(V(-1.5, 1.5, 1.5), V(1.5, -1.5, -1.5), V(0, 0, 0.8));
+  const Pairs fast = selfIntersections(m), slow = selfIntersectionsBruteForce(m);
+  EXPECT_EQ(fast, slow);
+  EXPECT_EQ(fast, selfIntersections(m, 2));
+  const auto longPairs = std::count_if(slow.begin(), slow.end(), [&](const auto& p) { return p.second >= longFrom; });
+  EXPECT_GT(longPairs, 6);  // each long face cuts the sphere twice at least
+  EXPECT_TRUE(std::find(slow.begin(), slow.end(), std::pair<std::size_t, std::size_t>{longFrom, longFrom + 1}) !=
+              slow.end());
 }
 
 TEST(SelfIntersections, SameAnswerForAnyThreadCount) {

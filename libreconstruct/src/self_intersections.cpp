@@ -132,8 +132,9 @@ bool overlap(const CGAL::Bbox_3& a, const CGAL::Bbox_3& b) {
 
 /// The pairs of overlapping (closed) boxes, each once, from a uniform grid of cells twice the median box size:
 /// every box is entered in the cells it overlaps and a pair is reported in the one cell that holds the lowest
-/// corner of the two boxes' intersection. Linear for a mesh of similar triangles (a reconstruction); returns false,
-/// leaving the work to CGAL's box intersection, when the sizes vary too much for a grid (boxes over many cells).
+/// corner of the two boxes' intersection. Linear for a mesh of similar triangles (a reconstruction). The few boxes
+/// over many cells (long fill faces) are left out of the grid and paired by CGAL's box intersection with all the
+/// others; returns false, leaving all the work to it, when there are many of them.
 template <typename Skip>
 bool gridCandidates(const std::vector<Box>& boxes, const Skip& skip, int threads,
                     std::vector<std::pair<std::size_t, std::size_t>>& out) {
@@ -154,15 +155,22 @@ bool gridCandidates(const std::vector<Box>& boxes, const Skip& skip, int threads
   auto coord = [&](double x, int d) { return static_cast<std::uint32_t>((x - all.min(d)) / cell); };
   auto key = [](std::uint64_t x, std::uint64_t y, std::uint64_t z) { return (x << 42) | (y << 21) | z; };
   constexpr std::uint64_t kMaxCellsPerBox = 27;
+  constexpr std::size_t kMaxLargeShare = 16;  // more than 1 box in 16 over kMaxCellsPerBox cells: no grid
   std::vector<std::array<std::uint32_t, 3>> low(boxes.size());  // each box's lowest cell
   std::vector<KeyedIndex> entries;                               // (cell, box), boxes in index order
+  std::vector<const Box*> large, small;                          // over kMaxCellsPerBox cells, and the others
   entries.reserve(4 * boxes.size());
   for (std::uint32_t i = 0; i < boxes.size(); ++i) {
     const CGAL::Bbox_3& b = boxes[i].bbox();
     std::uint32_t hi[3];
     for (int d = 0; d < 3; ++d) low[i][d] = coord(b.min(d), d), hi[d] = coord(b.max(d), d);
     const auto& lo = low[i];
-    if (std::uint64_t{hi[0] - lo[0] + 1} * (hi[1] - lo[1] + 1) * (hi[2] - lo[2] + 1) > kMaxCellsPerBox) return false;
+    if (std::uint64_t{hi[0] - lo[0] + 1} * (hi[1] - lo[1] + 1) * (hi[2] - lo[2] + 1) > kMaxCellsPerBox) {
+      large.push_back(&boxes[i]);
+      if (large.size() > boxes.size() / kMaxLargeShare) return false;
+      continue;
+    }
+    small.push_back(&boxes[i]);
     for (std::uint64_t x = lo[0]; x <= hi[0]; ++x)
       for (std::uint64_t y = lo[1]; y <= hi[1]; ++y)
         for (std::uint64_t z = lo[2]; z <= hi[2]; ++z) entries.emplace_back(key(x, y, z), i);
@@ -190,6 +198,12 @@ bool gridCandidates(const std::vector<Box>& boxes, const Skip& skip, int threads
         }
   });
   for (const auto& f : found) out.insert(out.end(), f.begin(), f.end());
+  if (large.empty()) return true;
+  auto report = [&](const Box* x, const Box* y) {
+    if (!skip(x->info(), y->info())) out.emplace_back(std::min(x->info(), y->info()), std::max(x->info(), y->info()));
+  };
+  CGAL::box_intersection_d(large.begin(), large.end(), small.begin(), small.end(), report);
+  CGAL::box_self_intersection_d(large.begin(), large.end(), report);
   return true;
 }
 
