@@ -3,7 +3,7 @@
 # title: Valid meshes over the closed corpus (issue 20)
 # about: `bench/run_mesh_validity.sh quick|full`: `reconstruct_bench --seed 1` on 200k-point samplings of the closed
 # about: corpus meshes (density ratio 1 and a 4× gradient along the longest axis) reconstructed to N, and the corpus's
-# about: real point sets to 5k; local = iires-reconstruct, the peers mesh the same resampled points (input-AF: CGAL's
+# about: real point sets to 5k, 10k and 30k; local = iires-reconstruct, the peers mesh the same resampled points (input-AF: CGAL's
 # about: advancing front on the dense input). si = self-intersecting face pairs, nm = non-manifold edges + vertices,
 # about: loops = boundary loops, lt30 = % of angles under 30°, H→ / H← = Hausdorff distance mesh → truth / truth →
 # about: mesh in % of the diagonal (real sets: to the input), uncov = % of the input farther than 2 spacings from the
@@ -25,7 +25,7 @@ fi
   for r in 1 4; do
     "$B" --models "$models" --dense 200000 --counts "$counts" --density-ratio $r --seed 1 --methods "$methods"
   done
-  "$B" --models none --points real --point-counts 5000 --methods "$methods"
+  "$B" --models none --points real --point-counts 5000,10000,30000 --methods "$methods"
 } | awk '
   /method=/ && !/method=resample/ {
     delete kv
