@@ -100,6 +100,42 @@ TEST(MeshValidity, RemovesSelfIntersectionsOfCrossingSpheres) {
   EXPECT_GT(q.faces, 8000u);
 }
 
+// The refill after a removal looks at the loops the removal opened (and, when asked, those the large-hole fill
+// kept unlooked-at), not at every loop of the mesh again: a cut sphere far from two crossing ones keeps its cap
+// open unless its loop is named.
+TEST(MeshValidity, RefillLooksOnlyAtTheLoopsItOpened) {
+  TriangleMesh m = twoSpheres(Eigen::Vector3d(1.2, 0.3, 0.1));
+  PointCloud c;
+  const TriangleMesh sphere = sphereMesh(c);
+  const TriangleMesh cut =
+      test::withoutFaces(sphere, [&](const Eigen::Vector3i& t) { return test::hasCornerBelow(sphere, t, -0.8); });
+  const int off = static_cast<int>(m.vertices.size());
+  for (const auto& v : cut.vertices) m.vertices.push_back(v + Eigen::Vector3d(10, 0, 0));
+  for (const auto& t : cut.triangles) m.triangles.push_back(t + Eigen::Vector3i(off, off, off));
+  ASSERT_EQ(evaluateMesh(m).boundaryLoops, 1u);
+  std::vector<std::uint32_t> capLoop;  // the cut sphere's vertices below the cut's rim
+  for (std::size_t v = 0; v < cut.vertices.size(); ++v)
+    if (cut.vertices[v].z() < -0.7) capLoop.push_back(static_cast<std::uint32_t>(off + static_cast<int>(v)));
+  auto loopsAfter = [&](bool onlyOpened, const std::vector<std::uint32_t>& unseen) {
+    TriangleMesh r = m;
+    std::vector<Eigen::Vector3d> normals;
+    ValidityParams vp;
+    vp.onlyOpenedLoops = onlyOpened;
+    vp.unseenLoops = unseen;
+    const ValidityReport rep = repairValidity(r, normals, vp);
+    EXPECT_GT(rep.rounds, 0u);
+    EXPECT_EQ(evaluateMesh(r).selfIntersections, 0u);
+    TriangleMesh far;  // the cut sphere's part of the result
+    far.vertices = r.vertices;
+    for (const auto& t : r.triangles)
+      if (t.minCoeff() >= off) far.triangles.push_back(t);
+    return evaluateMesh(far).boundaryLoops;
+  };
+  EXPECT_EQ(loopsAfter(false, {}), 0u);
+  EXPECT_EQ(loopsAfter(true, {}), 1u);
+  EXPECT_EQ(loopsAfter(true, capLoop), 0u);
+}
+
 TEST(MeshValidity, SplitsNonManifoldEdgesAndVertices) {
   PointCloud c;
   TriangleMesh m = sphereMesh(c);

@@ -284,7 +284,7 @@ std::optional<FinishedPatch> finishPatch(Mesh& sm, const LoopFill& loop, const P
 }  // namespace
 
 LargeHoleReport fillLargeHoles(TriangleMesh& mesh, std::vector<Eigen::Vector3d>& normals,
-                               const HoleFillingParams& params) {
+                               const HoleFillingParams& params, const std::vector<char>* only) {
   params.validate();
   LargeHoleReport report;
   if (!(params.maxRefinedExtent > 0) || mesh.triangles.empty()) return report;
@@ -297,20 +297,39 @@ LargeHoleReport fillLargeHoles(TriangleMesh& mesh, std::vector<Eigen::Vector3d>&
   for (const auto& t : mesh.triangles)
     for (int c = 0; c < 3; ++c) boxes[parts.find(static_cast<std::uint32_t>(t[c]))].extend(mesh.vertices[static_cast<std::size_t>(t[c])]);
 
+  // The faces CGAL cannot add (at a non-manifold edge or vertex, or turned against their neighbours) stay as they
+  // are; a loop through one of their vertices may be no hole at all and is kept.
   Mesh sm;
-  if (!toSurfaceMesh(mesh, sm)) {
-    report.skipped = true;  // not an oriented 2-manifold: leave the mesh alone
-    return report;
-  }
+  std::vector<std::size_t> leftOut;
+  toSurfaceMesh(mesh, sm, &leftOut);
+  std::vector<char> blocked(nv, 0);
+  for (std::size_t f : leftOut)
+    for (int c = 0; c < 3; ++c) blocked[static_cast<std::size_t>(mesh.triangles[f][c])] = 1;
+  report.facesLeftOut = leftOut.size();
+  for (std::uint32_t v = 0; v < nv; ++v)
+    if (blocked[v]) report.unseen.push_back(v);
   const std::vector<HalfedgeIndex> cycles = borderCycles(sm);
   double edgeSum = 0;
   for (auto e : sm.edges()) edgeSum += std::sqrt(CGAL::squared_distance(sm.point(sm.source(sm.halfedge(e))), sm.point(sm.target(sm.halfedge(e)))));
   const double meanEdge = edgeSum / static_cast<double>(std::max<std::size_t>(sm.number_of_edges(), 1));
   InputSupport input(params);
   std::vector<FinishedPatch> patches;
-  std::vector<FaceIndex> replaced;  // sm's faces of the patches
+  auto through = [&](HalfedgeIndex h, const std::vector<char>& flags) {
+    HalfedgeIndex g = h;
+    do {
+      const auto v = static_cast<std::size_t>(sm.target(g));
+      if (v < flags.size() && flags[v]) return true;
+      g = sm.next(g);
+    } while (g != h);
+    return false;
+  };
   for (HalfedgeIndex h : cycles) {
+    if (only && !through(h, *only)) continue;
     ++report.loops;
+    if (!leftOut.empty() && through(h, blocked)) {
+      ++report.kept;
+      continue;
+    }
     Eigen::AlignedBox3d box;
     std::size_t edges = 0;
     double longest = 0, perimeter = 0;
@@ -349,22 +368,12 @@ LargeHoleReport fillLargeHoles(TriangleMesh& mesh, std::vector<Eigen::Vector3d>&
       continue;
     }
     patches.push_back(std::move(*finished));
-    replaced.insert(replaced.end(), patch.faces.begin(), patch.faces.end());
     ++report.filled;
   }
   if (!report.filled) return report;
-  // Back to the TriangleMesh: the faces sm had and kept, then the finished patches, whose inner vertices are
-  // appended with their normals (sm's vertices past nv are the patches' refined ones, all replaced).
-  std::sort(replaced.begin(), replaced.end());
+  // Back to the TriangleMesh: its faces stay as they are (a fill only adds faces), the finished patches follow,
+  // their inner vertices appended with their normals (sm's vertices past nv are the patches' refined ones).
   const std::size_t before = mesh.triangles.size();
-  mesh.triangles.clear();
-  for (FaceIndex f : sm.faces()) {
-    if (std::binary_search(replaced.begin(), replaced.end(), f)) continue;
-    Eigen::Vector3i t;
-    int c = 0;
-    for (VertexIndex v : CGAL::vertices_around_face(sm.halfedge(f), sm)) t[c++] = static_cast<int>(v);
-    mesh.triangles.push_back(t);
-  }
   const bool haveNormals = normals.size() == nv;
   for (const FinishedPatch& p : patches) {
     const auto base = static_cast<int>(mesh.vertices.size());

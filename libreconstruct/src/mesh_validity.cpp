@@ -91,9 +91,10 @@ std::size_t removeNonManifold(TriangleMesh& mesh, std::size_t minComponentFaces,
   return removed;
 }
 
-/// Fill the holes a removal opened as the pipeline fills holes: small loops, extra fans, large loops.
-void refill(TriangleMesh& mesh, std::vector<Eigen::Vector3d>& normals, const ValidityParams& params,
-            int threads, ValidityReport& report) {
+/// Fill the holes a removal opened (their loops pass through a vertex @p opened flags) as the pipeline fills
+/// holes: small loops, extra fans, large loops.
+void refill(TriangleMesh& mesh, std::vector<Eigen::Vector3d>& normals, const std::vector<char>& opened,
+            const ValidityParams& params, int threads, ValidityReport& report) {
   const std::size_t faces = mesh.triangles.size(), vertices = mesh.vertices.size();
   const std::vector<Eigen::Vector3i> before = mesh.triangles;
   const std::size_t open = fillSmallHoles(mesh, normals, params.holes).kept;
@@ -104,7 +105,12 @@ void refill(TriangleMesh& mesh, std::vector<Eigen::Vector3d>& normals, const Val
   const std::size_t pinched = removeNonManifold(mesh, params.minComponentFaces, threads, nullptr, &touched);
   if (params.holes.maxRefinedExtent > 0 && (open > 0 || pinched > 0)) {  // else no loop is left for it
     orientConsistently(mesh, normals);  // fillLargeHoles needs an oriented 2-manifold
-    fillLargeHoles(mesh, normals, params.holes);
+    std::vector<char> loops(mesh.vertices.size(), 0);  // the loops the removal and the pinched fans opened
+    for (std::size_t v = 0; v < loops.size(); ++v)
+      loops[v] = (v < opened.size() && opened[v]) || (v < touched.size() && touched[v]);
+    for (std::uint32_t v : params.unseenLoops)
+      if (v < loops.size()) loops[v] = 1;
+    fillLargeHoles(mesh, normals, params.holes, params.onlyOpenedLoops ? &loops : nullptr);
   }
   report.facesRemoved += pinched;
   report.facesAdded += mesh.triangles.size() + pinched - faces;
@@ -145,7 +151,7 @@ ValidityReport repairValidity(TriangleMesh& mesh, std::vector<Eigen::Vector3d>& 
     report.facesRemoved += removeNonManifold(mesh, params.minComponentFaces, exec.threads, nullptr, &pinchable);
     if (params.minComponentFaces > 1) report.facesRemoved += removeSmallComponents(mesh, params.minComponentFaces);
     const TriangleMesh removed = mesh;  // free of intersections: every face of a pair went
-    refill(mesh, normals, params, exec.threads, report);
+    refill(mesh, normals, pinchable, params, exec.threads, report);
     pairs = selfIntersections(mesh, facesChangedSince(removed, mesh), exec.threads);
   }
   // What still intersects goes without a fill: removing faces creates no intersection, and removeNonManifold

@@ -94,7 +94,7 @@ std::string ReconstructResult::toJson() const {
   j.key("rim_bands").beginObject().member("bands", rimBands.bands).member("faces_added", rimBands.facesAdded);
   j.member("parts_turned", rimBands.partsTurned).endObject();
   holeCounts("large_holes", largeHoles);
-  j.member("unsupported", largeHoles.unsupported).member("skipped", largeHoles.skipped).endObject();
+  j.member("unsupported", largeHoles.unsupported).member("faces_left_out", largeHoles.facesLeftOut).endObject();
   j.key("validity_repair").beginObject().member("intersecting_pairs_found", validity.intersectingPairs);
   j.member("non_manifold_edges_found", validity.nonManifoldEdges).member("rounds", validity.rounds);
   j.member("faces_removed", validity.facesRemoved).member("faces_added", validity.facesAdded);
@@ -258,6 +258,8 @@ std::size_t repairMeshValidity(const ReconstructParams& params, const HoleFillin
   vp.holes = holes;
   vp.refill = params.fillHoles && vp.refill;
   vp.minComponentFaces = params.minComponentFaces;
+  vp.onlyOpenedLoops = true;  // closeHoles() looked at the others
+  vp.unseenLoops = result.largeHoles.unseen;
   result.validity = repairValidity(result.mesh, normals, vp, exec);
   if (result.validity.facesAdded > 0 && params.repairQuality > 0) {
     const TriangleMesh clean = result.mesh;

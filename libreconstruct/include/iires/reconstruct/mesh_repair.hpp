@@ -118,7 +118,10 @@ struct LargeHoleReport {
   std::size_t unsupported = 0;    ///< of those, loops whose fill left the input where it goes on (undone)
   std::size_t facesAdded = 0;     ///< net triangles added
   std::size_t verticesAdded = 0;  ///< vertices added inside the holes
-  bool skipped = false;           ///< the mesh was not an oriented 2-manifold: nothing was done
+  /// faces CGAL could not add to a 2-manifold (at a non-manifold edge or vertex, or turned against their
+  /// neighbours): left as they are, with the loops through their vertices (unseen) kept open unlooked-at
+  std::size_t facesLeftOut = 0;
+  std::vector<std::uint32_t> unseen;
 };
 
 /// @brief What closeRimBands() did.
@@ -153,11 +156,13 @@ RimBandReport closeRimBands(TriangleMesh& mesh, std::vector<Eigen::Vector3d>& no
 /// goes on beyond the loop is undone and the loop kept (report.unsupported; see HoleFillingParams::inputPoints).
 /// New vertices are appended to the mesh, and their normals (of the incident faces) to @p normals when it holds
 /// one per vertex; the faces are rebuilt (old faces first, in order).
-/// @pre @p mesh is consistently oriented (orientConsistently()); otherwise, or when it is not a 2-manifold,
-/// nothing is done (report.skipped).
+/// @pre @p mesh is consistently oriented (orientConsistently()); where it is not, or not a 2-manifold, the faces
+/// there stay as they are and the loops through their vertices are kept (report.facesLeftOut, report.unseen).
+/// With @p only (a flag per vertex), only the loops through a flagged vertex are looked at (where a repair opened
+/// or changed a loop; the others were looked at before).
 /// @note Deterministic. With params.inputPoints, their k-d tree is built when a loop is first to be filled.
 LargeHoleReport fillLargeHoles(TriangleMesh& mesh, std::vector<Eigen::Vector3d>& normals,
-                               const HoleFillingParams& params = {});
+                               const HoleFillingParams& params = {}, const std::vector<char>* only = nullptr);
 
 /// @brief Remesh the neighbourhood of the triangles still below @p minQuality: those faces grown by @p rings rings
 /// (through shared vertices) get @p iterations passes of CGAL's isotropic remeshing at the region's mean edge

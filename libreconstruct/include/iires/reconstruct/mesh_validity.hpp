@@ -22,6 +22,10 @@ struct ValidityParams {
   bool refill = true;                   ///< fill the holes the removal opens (false: leave them open)
   HoleFillingParams holes;              ///< how they are filled (fillSmallHoles, then fillLargeHoles)
   std::size_t minComponentFaces = 20;   ///< components this small left by a removal are dropped (0 = keep)
+  /// The large-hole fill looks only at the loops a removal opened or changed and those through unseenLoops (set
+  /// where fillLargeHoles() has already looked at the others; false: every loop)
+  bool onlyOpenedLoops = false;
+  std::vector<std::uint32_t> unseenLoops;  ///< vertices of the loops fillLargeHoles() kept unlooked-at (its report.unseen)
 
   /// @throws std::invalid_argument when a field is out of range.
   void validate() const;
