@@ -556,22 +556,24 @@ double worstQuality(const TriangleMesh& m) {
   return worst;
 }
 
-TEST(MeshRepair, PeelRimSliversRemovesObtuseRimTrianglesOnly) {
+TEST(MeshRepair, PeelRimSliversRemovesRimTrianglesCloseToTheNewRimOnly) {
   // A 6 × 4 grid whose vertex (3, 1) sits 0.12 above the rim edge (2, 0)–(3, 0): that rim triangle's apex angle is
-  // 153°, inside the edge's diametral ball. It is peeled; the apex becomes a rim vertex.
+  // 153°, inside the edge's diametral ball. It is peeled; the apex becomes a rim vertex, and the poor face it then
+  // borders on the rim, within an edge of the rim left without it, is peeled in the next pass.
   TriangleMesh m = flatGrid(6, 4);
   const int apex = 1 * 7 + 3;
   m.vertices[apex] = Eigen::Vector3d(2.5, 0.12, 0.0);
   ASSERT_LT(worstQuality(m), 0.4);
   const std::size_t faces = m.triangles.size();
-  EXPECT_EQ(peelRimSlivers(m, 0.4), 1u);
-  EXPECT_EQ(m.triangles.size(), faces - 1);
+  EXPECT_EQ(peelRimSlivers(m, 0.4), 2u);
+  EXPECT_EQ(m.triangles.size(), faces - 2);
+  EXPECT_GE(worstQuality(m), 0.4);
   for (const auto& t : m.triangles) EXPECT_FALSE((t.array() == 2).any() && (t.array() == 3).any() && (t.array() == apex).any());
   EXPECT_EQ(evaluateMesh(m).nonManifoldVertices, 0u);
 
   // An ear below the rim: a triangle on the rim edge (2, 0)–(3, 0) whose third vertex lies 0.1 below it. Peeled,
   // its tip in no face. A needle ear (tip 5 below, acute everywhere) is poor too, but not peeled: the rim would move
-  // in by more than half an edge.
+  // in by five edges.
   for (const double depth : {0.1, 5.0}) {
     TriangleMesh e = flatGrid(6, 4);
     e.vertices.emplace_back(2.5, -depth, 0.0);
@@ -579,6 +581,15 @@ TEST(MeshRepair, PeelRimSliversRemovesObtuseRimTrianglesOnly) {
     ASSERT_LT(worstQuality(e), 0.4);
     EXPECT_EQ(peelRimSlivers(e, 0.4), depth < 1 ? 1u : 0u) << depth;
   }
+
+  // A skewed ear, its tip acute (0.4 below the rim edge it hangs from, 0.7 past its end) but within an edge of
+  // that edge: peeled too.
+  TriangleMesh skew = flatGrid(6, 4);
+  skew.vertices.emplace_back(3.7, -0.4, 0.0);
+  skew.triangles.emplace_back(3, 2, static_cast<int>(skew.vertices.size() - 1));
+  ASSERT_LT(worstQuality(skew), 0.4);
+  EXPECT_EQ(peelRimSlivers(skew, 0.4), 1u);
+  EXPECT_GE(worstQuality(skew), 0.4);
 
   // One row of squares: the apex is on the other rim, so peeling would pinch it; nothing is peeled.
   TriangleMesh strip = flatGrid(6, 1);

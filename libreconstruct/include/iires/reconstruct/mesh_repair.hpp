@@ -203,12 +203,14 @@ std::size_t removeSmallComponents(TriangleMesh& mesh, std::size_t minFaces);
 std::size_t relaxVertices(TriangleMesh& mesh, const std::vector<Eigen::Vector3d>& normals, int sweeps,
                           double maxDeviation);
 
-/// @brief Remove the triangles below @p minQuality that sit on an open rim with their obtuse corner inside the rim
-/// edge's diametral ball: with one boundary edge, the corner opposite it, when that vertex is on no rim (it becomes
-/// a rim vertex, still manifold); with two (an ear), the corner between them (left in no face). A rim triangle has
-/// no neighbour to flip with, and its apex cannot move away from the rim edge without squeezing the faces behind
-/// it; the rim moves in by less than half the rim edge. Peeling exposes two edges, whose faces are looked at again
-/// (a few passes; one peel per vertex and pass, so no vertex is pinched).
+/// @brief Remove the triangles below @p minQuality that sit on an open rim and lie close to the rim left without
+/// them: with one boundary edge, when the corner opposite it is on no rim (it becomes a rim vertex, still
+/// manifold); with two (an ear), the corner between them is left in no face. Close: that corner is obtuse (inside
+/// the rim edge's diametral ball, so the rim moves in by less than half that edge), or no point of the triangle is
+/// farther than the mesh's mean edge from the new rim (input under it stays within a spacing of the mesh). A rim
+/// triangle has no neighbour to flip with, and its apex cannot move away from the rim edge without squeezing the
+/// faces behind it. Peeling exposes two edges, whose faces are looked at again (a few passes; one peel per vertex
+/// and pass, so no vertex is pinched).
 /// @return faces removed. Deterministic.
 std::size_t peelRimSlivers(TriangleMesh& mesh, double minQuality);
 
