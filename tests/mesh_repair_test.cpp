@@ -310,7 +310,8 @@ TEST(MeshRepair, FillLargeHolesClosesACapWithNewVertices) {
   EXPECT_TRUE(std::equal(turned.triangles.begin(), turned.triangles.end(), flipped.triangles.begin()));
   for (std::size_t k = turned.triangles.size(); k < flipped.triangles.size(); ++k)
     for (int c = 0; c < 3; ++c)
-      EXPECT_FALSE(std::binary_search(f.unseen.begin(), f.unseen.end(), static_cast<std::uint32_t>(flipped.triangles[k][c])));
+      EXPECT_FALSE(
+          std::binary_search(f.unseen.begin(), f.unseen.end(), static_cast<std::uint32_t>(flipped.triangles[k][c])));
   p.maxRefinedExtent = 1.5;
   EXPECT_THROW(p.validate(), std::invalid_argument);
 }

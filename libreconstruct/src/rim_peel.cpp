@@ -89,7 +89,8 @@ std::size_t peelRimSlivers(TriangleMesh& mesh, double minQuality) {
       std::array<bool, 3> rim{};
       for (int c = 0; c < 3; ++c) rim[c] = faces.at(detail::undirectedKey(vtx(t, c), vtx(t, (c + 1) % 3))).size() == 1;
       // Neighbouring peels in one pass could pinch a vertex between them: one peel per vertex and pass.
-      if (touched[vtx(t, 0)] || touched[vtx(t, 1)] || touched[vtx(t, 2)] || !peelable(mesh, t, rim, onRim, reach)) continue;
+      if (touched[vtx(t, 0)] || touched[vtx(t, 1)] || touched[vtx(t, 2)] || !peelable(mesh, t, rim, onRim, reach))
+        continue;
       remove[f] = 1;
       for (int c = 0; c < 3; ++c) touched[vtx(t, c)] = 1;
       ++now;

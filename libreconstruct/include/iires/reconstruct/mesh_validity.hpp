@@ -25,7 +25,7 @@ struct ValidityParams {
   /// The large-hole fill looks only at the loops a removal opened or changed and those through unseenLoops (set
   /// where fillLargeHoles() has already looked at the others; false: every loop)
   bool onlyOpenedLoops = false;
-  std::vector<std::uint32_t> unseenLoops;  ///< vertices of the loops fillLargeHoles() kept unlooked-at (its report.unseen)
+  std::vector<std::uint32_t> unseenLoops;  ///< vertices of loops fillLargeHoles() kept unlooked-at (report.unseen)
 
   /// @throws std::invalid_argument when a field is out of range.
   void validate() const;
