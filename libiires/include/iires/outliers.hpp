@@ -72,8 +72,11 @@ std::size_t outlierNeighbours(const OutlierParams& params);
 /// *trusted* (non-suspect) points exceeds planeThreshold local spacings, or its distance to the plane of the
 /// nearest of them (with its 8 nearest trusted neighbours) exceeds nearPlaneThreshold local spacings; any
 /// point beyond twice planeThreshold is an outlier too (a small cluster of outliers can be mutual among
-/// itself), and so is an *isolated* point, whose mean distance to its 6 nearest neighbours exceeds 10 times the
-/// 90th percentile of that distance over the cloud (points scattered far from the object). The literal eq. 4 (any non-mutual neighbour) flags ordinary points where the density changes —
+/// itself), and so is an *isolated* point: off a sheet of its neighbours, with a mean distance to its 6 nearest
+/// neighbours over 10 times the 90th percentile of that distance over the cloud, or over 3 times when three in
+/// four of its neighbours are as sparse and they fill space around it (local dimension over 2.6: background
+/// clutter; a separate object sampled sparsely is a surface, of dimension about 2). The literal eq. 4 (any
+/// non-mutual neighbour) flags ordinary points where the density changes —
 /// those points are non-mutual too but lie on their neighbours' plane, so the second test clears them; an
 /// outlier moved 3–6 spacings off the surface is non-mutual (the surface points' own neighbours are all
 /// closer) and far from the plane. With a finite nearPlaneThreshold a flagged point is cleared again when it lies
