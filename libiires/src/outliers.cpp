@@ -105,13 +105,14 @@ double planeDistance(const Eigen::Vector3d& p, const std::vector<Eigen::Vector3d
 /// sheet of its neighbours @p around (@p local: their spacing), and far sparser still or among sparse neighbours
 /// that fill space around it.
 bool isolatedPoint(const std::vector<Eigen::Vector3d>& P, const std::vector<double>& spacing, std::size_t i,
-                   const std::vector<std::uint32_t>& around, double local, double p90, const KnnIndex& wide) {
+                   const std::vector<std::uint32_t>& around, double local, double p90, const KnnIndex& index) {
   double variation = 1;
   const double offSheet = planeDistance(P[i], P, around, &variation) / local;
   if (around.size() >= kSheetPoints && variation <= kSheetVariation && offSheet <= kSheetDistance) return false;
   if (spacing[i] > kFarIsolation * p90) return true;
   const auto sparse = std::count_if(around.begin(), around.end(), [&](std::uint32_t j) { return spacing[j] > p90; });
-  return 4 * static_cast<std::size_t>(sparse) >= 3 * around.size() && localDimension(wide, P, P[i]) > kVolumeDimension;
+  return 4 * static_cast<std::size_t>(sparse) >= 3 * around.size() &&
+         localDimension(index, P, P[i]) > kVolumeDimension;
 }
 
 double median(std::vector<double>& v) {
@@ -300,9 +301,9 @@ OutlierResult processOutliers(const PointCloud& input, const OutlierParams& para
   std::vector<std::uint32_t> nbr(n * K);
   std::vector<std::uint32_t> count(n);
   std::vector<double> spacing(n);
+  std::optional<KnnIndex> own;  // without a table; also the isolation test's index
   {
     if (table && table->k() < K) table = nullptr;
-    std::optional<KnnIndex> own;
     if (!table) own.emplace(P);
     forEachPoint([&](std::size_t i) {
       std::vector<std::uint32_t> idx;
@@ -355,8 +356,9 @@ OutlierResult processOutliers(const PointCloud& input, const OutlierParams& para
   // where it curves within them, they spread in two dimensions, not three (kVolumeDimension).
   const double p90 = quantile(spacing, 0.9), isolation = kIsolation * p90;
   std::vector<std::uint8_t> isolated(n, 0);
-  std::optional<KnnIndex> wide;  // for the local dimension, only when a point is that sparse
-  if (std::any_of(spacing.begin(), spacing.end(), [&](double x) { return x > isolation; })) wide.emplace(P);
+  // The local dimension reads more neighbours than the table holds: the cloud's own index, built only when a
+  // point is that sparse.
+  if (!own && std::any_of(spacing.begin(), spacing.end(), [&](double x) { return x > isolation; })) own.emplace(P);
   forEachPoint([&](std::size_t i) {
     const std::uint32_t* ri = row(i);
     const std::size_t ki = std::min<std::size_t>(planeK + 1, count[i]);
@@ -381,7 +383,7 @@ OutlierResult processOutliers(const PointCloud& input, const OutlierParams& para
       off = near.size() >= 3 && planeDistance(P[i], P, near) / local > params.nearPlaneThreshold;
     }
     if (spacing[i] > isolation)
-      isolated[i] = isolatedPoint(P, spacing, i, std::vector<std::uint32_t>(ri + 1, ri + ki), local, p90, *wide);
+      isolated[i] = isolatedPoint(P, spacing, i, std::vector<std::uint32_t>(ri + 1, ri + ki), local, p90, *own);
     outlier[i] = (suspect[i] && off) || ratio > 2 * params.planeThreshold || isolated[i];
     trusted[i] = !suspect[i] && !isolated[i] && ratio <= params.planeThreshold;
     localSpacing[i] = local;
