@@ -170,11 +170,45 @@ struct FinishedPatch {
   double shortfall = 0;
 };
 
+/// @p faces of @p m as a FinishedPatch: a vertex is the whole mesh's (@p global maps m's vertices to it; empty:
+/// m is the whole mesh) unless it is new or one of @p added (sorted: the patch's refined vertices, all replaced).
+FinishedPatch collectPatch(const Mesh& m, const std::vector<FaceIndex>& faces, const std::vector<std::uint32_t>& global,
+                           const std::vector<VertexIndex>& added) {
+  constexpr double kGoodQuality = 0.4;  // the reconstruction's repair threshold
+  FinishedPatch out;
+  std::unordered_map<std::uint32_t, int> inner;  // m's vertex → −k − 1
+  for (FaceIndex f : faces) {
+    Eigen::Vector3i t;
+    std::array<Eigen::Vector3d, 3> q;
+    bool hasInner = false;
+    int c = 0;
+    for (VertexIndex v : CGAL::vertices_around_face(m.halfedge(f), m)) {
+      const auto mv = static_cast<std::uint32_t>(v);
+      q[static_cast<std::size_t>(c)] = toEigen(m.point(v));
+      const bool known = global.empty() || mv < global.size();
+      const std::uint32_t g = global.empty() ? mv : known ? global[mv] : 0;
+      if (known && !std::binary_search(added.begin(), added.end(), VertexIndex(g))) {
+        t[c++] = static_cast<int>(g);
+        continue;
+      }
+      hasInner = true;
+      const auto [it, fresh] = inner.emplace(mv, -static_cast<int>(out.inner.size()) - 1);
+      if (fresh) {
+        out.inner.push_back(q[static_cast<std::size_t>(c)]);
+        out.innerNormals.push_back(toEigen(PMP::compute_vertex_normal(v, m)));
+      }
+      t[c++] = it->second;
+    }
+    out.faces.push_back(t);
+    if (hasInner) out.shortfall += std::max(0.0, kGoodQuality - triangleQuality(q[0], q[1], q[2]));
+  }
+  return out;
+}
+
 /// @p patch evened out by @p iterations of isotropic remeshing at @p target (the loop itself, the patch's border,
 /// is neither split, collapsed nor moved), as a mesh of its own: the patch and the ring of faces around it, so
 /// that the remesher's link tests see the same neighbourhood as in the whole mesh.
 FinishedPatch remeshPatch(const Mesh& sm, const Patch& patch, double target, int iterations) {
-  constexpr double kGoodQuality = 0.4;  // the reconstruction's repair threshold
   std::vector<FaceIndex> faces = patch.faces, ring;
   std::sort(faces.begin(), faces.end());
   for (FaceIndex f : patch.faces)
@@ -191,58 +225,26 @@ FinishedPatch remeshPatch(const Mesh& sm, const Patch& patch, double target, int
       for (VertexIndex v : CGAL::vertices_around_face(sm.halfedge(f), sm)) t[c++] = static_cast<int>(v);
       triangles.push_back(t);
     }
+  std::vector<VertexIndex> added = patch.added;
+  std::sort(added.begin(), added.end());
   std::vector<std::uint32_t> global;
   Mesh lm;
-  const bool local = detail::localSurfaceMesh(
-      triangles, [&](std::uint32_t v) { return toEigen(sm.point(VertexIndex(v))); }, lm, global);
-  const auto patchFaces = static_cast<Mesh::size_type>(patch.faces.size());
-  if (local && iterations > 0) {
+  if (!detail::localSurfaceMesh(triangles, [&](std::uint32_t v) { return toEigen(sm.point(VertexIndex(v))); }, lm,
+                                global))
+    return collectPatch(sm, patch.faces, {}, added);  // as it is (not seen: sm is an oriented 2-manifold)
+  const std::size_t patchFaces = patch.faces.size();
+  if (iterations > 0) {
     std::vector<FaceIndex> region;
-    for (Mesh::size_type f = 0; f < patchFaces; ++f) region.emplace_back(f);
+    for (std::size_t f = 0; f < patchFaces; ++f) region.emplace_back(static_cast<Mesh::size_type>(f));
     PMP::isotropic_remeshing(region, target, lm,
                              CGAL::parameters::number_of_iterations(static_cast<unsigned>(iterations))
                                  .protect_constraints(true));
-  } else if (!local) {  // as it is (never seen: the mesh is an oriented 2-manifold)
-    lm = sm;
-    global.clear();
-    for (VertexIndex v : sm.vertices()) global.push_back(static_cast<std::uint32_t>(v));
   }
   // The ring keeps its face indices (the remesher changes only the patch; new faces take freed slots or go last).
-  auto inRing = [&](FaceIndex f) {
-    if (!local) return !std::binary_search(faces.begin(), faces.end(), f);
-    const auto i = static_cast<std::size_t>(f);
-    return i >= patch.faces.size() && i < triangles.size();
-  };
-  std::vector<VertexIndex> added = patch.added;
-  std::sort(added.begin(), added.end());
-  FinishedPatch out;
-  std::unordered_map<std::uint32_t, int> inner;  // lm vertex → −k − 1
-  for (FaceIndex f : lm.faces()) {
-    if (inRing(f)) continue;
-    Eigen::Vector3i t;
-    std::array<Eigen::Vector3d, 3> q;
-    bool hasInner = false;
-    int c = 0;
-    for (VertexIndex v : CGAL::vertices_around_face(lm.halfedge(f), lm)) {
-      const auto lv = static_cast<std::uint32_t>(v);
-      q[static_cast<std::size_t>(c)] = toEigen(lm.point(v));
-      const bool old = lv < global.size() && !std::binary_search(added.begin(), added.end(), VertexIndex(global[lv]));
-      if (old) {
-        t[c++] = static_cast<int>(global[lv]);
-        continue;
-      }
-      hasInner = true;
-      const auto [it, fresh] = inner.emplace(lv, -static_cast<int>(out.inner.size()) - 1);
-      if (fresh) {
-        out.inner.push_back(q[static_cast<std::size_t>(c)]);
-        out.innerNormals.push_back(toEigen(PMP::compute_vertex_normal(v, lm)));
-      }
-      t[c++] = it->second;
-    }
-    out.faces.push_back(t);
-    if (hasInner) out.shortfall += std::max(0.0, kGoodQuality - triangleQuality(q[0], q[1], q[2]));
-  }
-  return out;
+  std::vector<FaceIndex> remeshed;
+  for (FaceIndex f : lm.faces())
+    if (const auto i = static_cast<std::size_t>(f); i < patchFaces || i >= triangles.size()) remeshed.push_back(f);
+  return collectPatch(lm, remeshed, global, added);
 }
 
 /// The positions of @p vertices in @p sm.
