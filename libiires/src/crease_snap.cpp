@@ -377,8 +377,7 @@ void placeCreaseTips(const PointCloud& cloud, const KnnIndex& index, double h, c
 /// spacings of both get a sample where they meet (the end samples of chains stop short of a corner, where the
 /// two-plane fit fails), and the gaps to it samples at the chains' spacing.
 void addCorners(const PointCloud& cloud, const KnnIndex& index, double h, const FeatureParams& params,
-                std::vector<Eigen::Vector3d>& out,
-                std::vector<std::uint32_t>& owner) {
+                std::vector<Eigen::Vector3d>& out, std::vector<std::uint32_t>& owner) {
   struct End {
     Eigen::Vector3d point, direction;  // direction: forward, off the end of the chain
     double step;                       // the chain's sample spacing there
