@@ -61,7 +61,7 @@ seed fuzz_readers pts 004 $'2\n0 0 0 7\n1 1 1 7\n'
 seed fuzz_readers obj 005 $'v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1//1 2//1 3//1\nf -3 -2 -1\n'
 seed fuzz_readers off 006 $'NOFF\n3 1 0\n0 0 0 0 0 1\n1 0 0 0 0 1\n0 1 0 0 0 1\n3 0 1 2\n'
 seed fuzz_readers stl 007 $'solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\nendloop\nendfacet\nendsolid t\n'
-# fuzz_resample (header layout in fuzz_resample.cpp): a 6x6 grid bent into a paraboloid (or an 8x8 roof with a
+# fuzz_resample (header layout in resample_input.hpp): a 6x6 grid bent into a paraboloid (or an 8x8 roof with a
 # crease), with intrinsic control, pre-processing, curvature mode, sharp edges, fixed samples or a larger N.
 mkdir -p "$out/seeds/fuzz_resample"
 python3 - "$out/seeds/fuzz_resample" <<'PY'
