@@ -125,6 +125,26 @@ TEST(Curvature, SphereMatchesAnalyticMeanAngle) {
   EXPECT_EQ(r.pointsPerLevel[2], n);
 }
 
+// A sphere sampled 25 times more densely at one pole than at the other has one curvature everywhere: the field
+// is uniform and every point takes the middle level. Eq. 9's raw angle, taken over k neighbours whose radius
+// follows the density, is five times larger on the sparse side and split the sphere into all five levels.
+TEST(Curvature, DensityGradientIsNotCurvature) {
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const auto dense = iires::test::sphereCloud(60000, 1.0, 11);
+  iires::PointCloud c;
+  for (std::size_t i = 0; i < dense.size(); ++i)
+    if (u(rng) < std::pow(25.0, -(1.0 - dense.points[i].x()) / 2.0)) {  // keep 1 at x = 1, 1/25 at x = −1
+      c.points.push_back(dense.points[i]);
+      c.normals.push_back(dense.normals[i]);
+    }
+  ASSERT_GT(c.size(), 10000u);
+  const auto r = iires::computeCurvature(c.points, c.normals);
+  EXPECT_TRUE(r.uniform);
+  EXPECT_EQ(r.pointsPerLevel[2], c.size());
+  EXPECT_LT(cv(r.smoothedEta), 0.15);
+}
+
 // On a cylinder only the circumferential offset turns the normal: angle = |Δs_φ|/R = d·|cos θ|/R for a
 // neighbour at distance d and direction θ, and E|cos θ| = 2/π for isotropic neighbours, so
 // η_cylinder ≈ (2/π)·η_sphere at equal radius and density.

@@ -81,6 +81,20 @@ std::vector<double> smoothFromTable(std::vector<double> f, const KnnTable& t, do
   return f;
 }
 
+/// Eq. 9's angle is taken over the k nearest neighbours, whose radius follows the sampling density: where the
+/// input is five times sparser the same bend reads five times the angle, and the sparse part would take the
+/// curved levels' small spacing. Each angle is scaled to the cloud's median neighbourhood radius (the angle
+/// per length, in the radians a median neighbourhood would see), so the levels follow the surface's
+/// curvature, not its sampling.
+void perUnitLength(std::vector<double>& eta, const KnnTable& t) {
+  if (t.k == 0 || eta.empty()) return;
+  std::vector<double> radius(t.meanDist);
+  std::nth_element(radius.begin(), radius.begin() + static_cast<std::ptrdiff_t>(radius.size() / 2), radius.end());
+  const double median = radius[radius.size() / 2];
+  for (std::size_t i = 0; i < eta.size(); ++i)
+    if (t.meanDist[i] > 0) eta[i] *= median / t.meanDist[i];
+}
+
 double quantileOfSorted(const std::vector<double>& sorted, double q) {
   if (sorted.empty()) return 0.0;
   const double pos = q * static_cast<double>(sorted.size() - 1);
@@ -160,7 +174,8 @@ CurvatureResult computeCurvature(const std::vector<Eigen::Vector3d>& points,
 
   CurvatureResult r;
   const KnnTable table = buildKnn(points, params.k, exec.threads);
-  r.eta = fieldFromTable(normals, table, exec.threads);                                          // eq. (9)
+  r.eta = fieldFromTable(normals, table, exec.threads);  // eq. (9)
+  perUnitLength(r.eta, table);
   r.smoothedEta = smoothFromTable(r.eta, table, params.beta, params.smoothIterations, exec.threads);  // (8)
 
   // Quantisation (eq. 10's groups): equal-count quantiles, unless the field is uniform.

@@ -6,7 +6,8 @@
 ///
 /// Per input point p this unit computes
 ///  - η_c(p): the mean angle (radians) between the oriented normal at p and the normals of its k nearest
-///    neighbours (eq. 9);
+///    neighbours (eq. 9), scaled by the cloud's median k-NN radius over p's: the angle per length, so a part
+///    sampled more sparsely does not read as more curved;
 ///  - η_s(p): η_c smoothed over the k-NN graph (eq. 8, see CurvatureParams::beta);
 ///  - a level q ∈ [0, t) from flat (0) to curved (t − 1), by equal-count quantiles of η_s (eq. 10's groups);
 ///  - a size factor s(p) = c·r_q, the target edge length at p in units of the isotropic length l
@@ -49,7 +50,7 @@ struct CurvatureParams {
 
 /// @brief Per-point curvature, level and size factor.
 struct CurvatureResult {
-  std::vector<double> eta;          ///< η_c(p), eq. 9, radians
+  std::vector<double> eta;          ///< η_c(p), eq. 9, radians, per the cloud's median k-NN radius (see below)
   std::vector<double> smoothedEta;  ///< η_s(p) after eq. 8
   std::vector<int> level;           ///< 0 = flattest … t − 1 = most curved
   std::vector<double> sizeFactor;   ///< s(p) = c·r_level (smoothed across level borders), units of l
