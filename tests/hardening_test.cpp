@@ -293,8 +293,9 @@ TEST(Hardening, TinyReconstructionsFailInsteadOfWritingAnEmptyMesh) {
       EXPECT_FALSE(readMesh(out).triangles.empty()) << n;
       fs::remove(out);
     } else {
-      EXPECT_EQ(code, 1) << n << ": " << message;
+      EXPECT_EQ(code, 2) << n << ": " << message;  // the count asked for, as any bad input: exit 2, with a way out
       EXPECT_NE(message.find("no triangles"), std::string::npos) << message;
+      EXPECT_NE(message.find("a larger -n"), std::string::npos) << message;
       EXPECT_FALSE(fs::exists(out)) << n;
     }
   }

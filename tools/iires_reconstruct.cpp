@@ -122,9 +122,11 @@ int main(int argc, char** argv) {
       throw iires::InputError(input + ": " + e.what());
     }
     progress.update("write", 0.0);
-    if (result.mesh.triangles.empty())
-      throw std::runtime_error(input + ": the reconstruction produced no triangles (" +
-                               std::to_string(result.mesh.vertices.size()) + " vertices); nothing was written");
+    if (result.mesh.triangles.empty())  // the input or the count asked for, not a fault of the run
+      throw iires::InputError(input + ": the reconstruction produced no triangles from " +
+                              std::to_string(result.samples.size()) +
+                              " samples: too few to mesh this surface (a larger -n), or the cloud is not a surface; "
+                              "nothing was written");
     iires::OutputBatch outputs;  // the mesh, the report and the uncovered points, or none of them
     outputs.mesh(output, result.mesh);
     if (!reportPath.empty()) outputs.text(reportPath, result.toJson());
