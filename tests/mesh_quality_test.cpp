@@ -284,6 +284,26 @@ TEST(MeshQuality, UncoveredReferencePoints) {
   EXPECT_NE(q.toTable().find("2 points (0.45 %)"), std::string::npos) << q.toTable();
 }
 
+// The mesh's area farther than two output spacings from every reference point is unsupported: a square meshed
+// whole against points on its left half only leaves the strip beyond x = 0.5 + 2 spacings without input.
+TEST(MeshQuality, UnsupportedMeshArea) {
+  const TriangleMesh m = gridSquare(10);
+  PointCloud half, whole;
+  for (int i = 0; i <= 20; ++i)
+    for (int j = 0; j <= 20; ++j) {
+      whole.points.emplace_back(i / 20.0, j / 20.0, 0.0);
+      if (i <= 10) half.points.emplace_back(i / 20.0, j / 20.0, 0.0);
+    }
+  MeshQualityParams p;
+  p.meshSamples = 20000;
+  const MeshQuality q = evaluateMesh(m, &half, p);
+  EXPECT_NEAR(q.unsupportedShare, 0.5 - q.uncoveredDistance, 0.02);
+  EXPECT_GT(q.unsupportedShare, 0.2);
+  EXPECT_NE(q.toJson().find("\"unsupported\""), std::string::npos);
+  EXPECT_NE(q.toTable().find("mesh off input"), std::string::npos) << q.toTable();
+  EXPECT_EQ(evaluateMesh(m, &whole, p).unsupportedShare, 0.0);
+}
+
 TEST(MeshQuality, IsolatedVerticesAndComponents) {
   TriangleMesh m = tetrahedron();
   TriangleMesh s = openSquare();

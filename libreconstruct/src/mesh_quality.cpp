@@ -387,6 +387,12 @@ MeshQuality evaluateMesh(const TriangleMesh& mesh, const PointCloud* reference, 
     d.forwardMean = dist.empty() ? 0.0 : sum / static_cast<double>(dist.size());
     d.hausdorff = std::max(d.forwardMax, d.backwardMax);
     d.mean = 0.5 * (d.forwardMean + d.backwardMean);
+    // The area samples follow the q.vertices vertex samples (meshSamplePoints).
+    if (dist.size() > q.vertices) {
+      const auto far = std::count_if(dist.begin() + static_cast<std::ptrdiff_t>(q.vertices), dist.end(),
+                                     [&](double x) { return x > q.uncoveredDistance; });
+      q.unsupportedShare = static_cast<double>(far) / static_cast<double>(dist.size() - q.vertices);
+    }
   }
   return q;
 }
@@ -456,6 +462,8 @@ std::string MeshQuality::toJson() const {
     j.member("reference_to_mesh_mean", distance.backwardMean).member("diagonal", distance.diagonal).endObject();
     j.key("uncovered").beginObject().member("count", uncovered).member("share", uncoveredShare);
     j.member("distance", uncoveredDistance).endObject();
+    j.key("unsupported").beginObject().member("share", unsupportedShare).member("distance", uncoveredDistance);
+    j.endObject();
   }
   j.endObject();
   return j.str() + "\n";
@@ -497,6 +505,7 @@ std::string MeshQuality::toTable() const {
     row("input -> mesh max (% diag)", fix(100.0 * distance.backwardMax / distance.diagonal, 3) + " %");
     row("uncovered input (>2 spacings)",
         std::to_string(uncovered) + " points (" + fix(100.0 * uncoveredShare, 2) + " %)");
+    row("mesh off input (>2 spacings)", fix(100.0 * unsupportedShare, 2) + " % of its area");
   }
   return os.str();
 }

@@ -97,6 +97,10 @@ struct MeshQuality {
   std::size_t uncovered = 0;     ///< reference points farther than uncoveredDistance from the mesh
   double uncoveredShare = 0;     ///< uncovered / reference points (0–1)
   std::vector<std::size_t> uncoveredPoints;  ///< their indices in the reference, ascending
+  /// The other way round: the share of the mesh's area (of its area-uniform samples) farther than
+  /// uncoveredDistance from every reference point — parts of the mesh no input backs: a fill across missing
+  /// data, a bridge or cap across a gap between parts (0–1).
+  double unsupportedShare = 0;
 
   /// @brief Whether the mesh is valid for downstream use: faces, no self-intersection, no degenerate face,
   /// manifold and consistently oriented.
@@ -113,7 +117,8 @@ struct MeshQuality {
 /// @brief Shape and topology of @p mesh (self-intersections included); with @p reference, also the two-sided
 /// distance to that cloud: reference→mesh exactly (point-to-triangle, CGAL AABB tree) and mesh→reference from
 /// params.meshSamples area-uniform samples of the mesh plus its vertices (distance to the nearest reference
-/// point), and the reference points farther than two output spacings from the mesh (uncovered).
+/// point), the reference points farther than two output spacings from the mesh (uncovered) and the share of the
+/// mesh's area farther than that from the reference (unsupported).
 /// @note O(F log F + (n + s) log F). Deterministic for any thread count.
 MeshQuality evaluateMesh(const TriangleMesh& mesh, const PointCloud* reference = nullptr,
                          const MeshQualityParams& params = {}, const Execution& exec = {});
