@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -304,6 +305,45 @@ TEST_F(IoTest, ReadsOffVariants) {
   EXPECT_EQ(cloud.normals, (std::vector<Vector3d>{{0, 0, 1}, {0, 1, 0}}));
 }
 
+// A mesh read as a surface (the tools' INPUT) is a sampling of it, not its corners alone: a cube's 8 vertices sample
+// nothing of its faces (a CAD part's vertices lie on its faces' rims), so its faces get points, with their
+// normals and their corners' attributes (blended; an integer label: the nearest corner's).
+TEST_F(IoTest, MeshFacesAreSampledWhenTheirVerticesDoNotSampleThem) {
+  std::ostringstream ply;
+  ply << "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n"
+         "property uchar red\nproperty int label\nelement face 2\nproperty list uchar int vertex_indices\n"
+         "end_header\n0 0 0 0 1\n1 0 0 100 1\n1 1 0 200 2\n0 1 0 100 2\n3 0 1 2\n3 0 2 3\n";
+  file("square.ply", ply.str());
+  EXPECT_EQ(readPointCloud(path("square.ply")).size(), 4u);  // a cloud: the vertices
+  const PointCloud square = readSurfacePoints(path("square.ply"));
+  ASSERT_GT(square.size(), 50000u);
+  ASSERT_EQ(square.normals.size(), square.size());
+  ASSERT_EQ(square.attributes.size(), 2u);
+  for (std::size_t i = 0; i < square.size(); ++i) {
+    const Vector3d& p = square.points[i];
+    ASSERT_TRUE(p.x() >= 0 && p.x() <= 1 && p.y() >= 0 && p.y() <= 1 && p.z() == 0) << p.transpose();
+    ASSERT_NEAR(square.normals[i].z(), 1.0, 1e-12);
+    const double red = square.attributes[0].values[i], label = square.attributes[1].values[i];
+    ASSERT_NEAR(red, 100 * p.x() + 100 * p.y(), 1e-6);  // the corners' values blended (linear here)
+    ASSERT_TRUE(label == 1 || label == 2) << label;
+  }
+  // A mesh as fine as its vertices, with more of them than the surface needs (a 400 × 400 grid, 160,801), is read
+  // as its vertices.
+  const int k = 400;
+  std::ostringstream off;
+  off << "OFF\n" << (k + 1) * (k + 1) << " " << 2 * k * k << " 0\n";
+  for (int i = 0; i <= k; ++i)
+    for (int j = 0; j <= k; ++j) off << i / double(k) << " " << j / double(k) << " 0\n";
+  for (int i = 0; i < k; ++i)
+    for (int j = 0; j < k; ++j) {
+      const int a = i * (k + 1) + j;
+      off << "3 " << a << " " << a + k + 1 << " " << a + k + 2 << "\n";
+      off << "3 " << a << " " << a + k + 2 << " " << a + 1 << "\n";
+    }
+  file("grid.off", off.str());
+  EXPECT_EQ(readSurfacePoints(path("grid.off")).size(), std::size_t((k + 1) * (k + 1)));
+}
+
 TEST_F(IoTest, ReadsObjFaceFormsAndNegativeIndices) {
   file("a.obj",
        "# cube corner\r\nmtllib x.mtl\r\no thing\r\nv 0 0 0\r\nv 1 0 0\r\nv 1 1 0 1.0\r\nvt 0 0\r\nvn 0 0 "
@@ -520,6 +560,10 @@ TEST(IoRealData, CgalBunnyOff) {
   EXPECT_EQ(mesh.vertices.size(), 37706u);
   EXPECT_EQ(mesh.triangles.size(), 75408u);
   EXPECT_EQ(readPointCloud(path).size(), 37706u);
+  // Read as a surface: its vertices first, then points on its faces (at least about 100,000 over the surface).
+  const PointCloud cloud = readSurfacePoints(path);
+  ASSERT_GE(cloud.size(), 100000u);
+  EXPECT_TRUE(std::equal(mesh.vertices.begin(), mesh.vertices.end(), cloud.points.begin()));
 }
 
 TEST(IoRealData, CgalKittenXyzHasNormals) {

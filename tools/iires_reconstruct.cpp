@@ -30,7 +30,7 @@ int main(int argc, char** argv) {
     iires::ReconstructParams params;
     iires::Execution exec;
     std::vector<std::string> columns;
-    app.add_option("INPUT", input, "input cloud (.ply .pcd .xyz .xyzn .pts, or mesh vertices .obj .off .stl)")
+    app.add_option("INPUT", input, "input cloud (.ply .pcd .xyz .xyzn .pts, or a mesh .obj .off .stl: its surface)")
         ->required();
     app.add_option("OUTPUT_MESH", output, "output mesh (.ply .obj .off by extension)");
     app.add_option("-n,--count", count, "vertices of the mesh: resample to exactly N points first (>= 4)");
@@ -84,7 +84,7 @@ int main(int argc, char** argv) {
           throw iires::InputError(qualityOnly + ": vertex " + std::to_string(i) +
                                   " has a coordinate beyond the supported magnitude");
       }
-      iires::PointCloud reference = iires::readPointCloud(input);
+      iires::PointCloud reference = iires::readSurfacePoints(input);
       iires::validateCloud(reference, 1, input);
       progress.update("quality", 0.0);
       iires::MeshQualityParams qp;
@@ -112,7 +112,7 @@ int main(int argc, char** argv) {
     params.method = iires::parseReconstructMethod(method);
 
     progress.update("read", 0.0);
-    const iires::PointCloud cloud = iires::readPointCloud(input, columns);
+    const iires::PointCloud cloud = iires::readSurfacePoints(input, columns);
     if (noResample) iires::tools::checkCount("the input's point count", static_cast<long long>(cloud.size()),
                                              kBytesPerVertex);
     iires::ReconstructResult result;

@@ -22,7 +22,8 @@ int main(int argc, char** argv) {
     iires::Execution exec;
     auto samples = static_cast<long long>(params.samples);
     bool noScale = false, quiet = false, showProgress = false, fullResample = false;
-    app.add_option("SOURCE", sourcePath, "cloud to move (.ply .pcd .xyz .xyzn .pts, or mesh vertices)")->required();
+    app.add_option("SOURCE", sourcePath, "cloud to move (.ply .pcd .xyz .xyzn .pts, or a mesh: its surface)")
+        ->required();
     app.add_option("TARGET", targetPath, "cloud to align to")->required();
     app.add_option("-o,--output", alignedPath, "write SOURCE mapped into TARGET coordinates (.ply .xyz .xyzn)");
     app.add_option("--transform", transformPath, "write the 4x4 matrix T_target_source, one row per line");
@@ -67,8 +68,8 @@ int main(int argc, char** argv) {
     iires::tools::Progress progress("iires-register", showProgress, quiet);
     exec.progress = progress.callback();
     progress.update("read", 0.0);
-    const iires::PointCloud source = iires::readPointCloud(sourcePath);
-    const iires::PointCloud target = iires::readPointCloud(targetPath);
+    const iires::PointCloud source = iires::readSurfacePoints(sourcePath);
+    const iires::PointCloud target = iires::readSurfacePoints(targetPath);
     iires::reg::RegistrationResult result;
     try {
       result = iires::reg::registerClouds(source, target, params, exec);

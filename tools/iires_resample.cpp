@@ -56,7 +56,7 @@ int main(int argc, char** argv) {
     options.applyToParams(!denoiseOnly);
     if (denoiseOnly) {
       progress.update("read", 0.0);
-      const iires::PointCloud cloud = iires::readPointCloud(input, columns);
+      const iires::PointCloud cloud = iires::readSurfacePoints(input, columns);
       iires::PreprocessResult cleaned;
       try {
         cleaned = iires::preprocess(cloud, params.preprocessing, exec);
@@ -94,7 +94,7 @@ int main(int argc, char** argv) {
       return iires::tools::runTiled(options, progress, local);
     }
     progress.update("read", 0.0);
-    iires::PointCloud cloud = iires::readPointCloud(input, columns);
+    iires::PointCloud cloud = iires::readSurfacePoints(input, columns);
     iires::ResampleResult result;
     try {
       result = iires::resample(std::move(cloud), params, exec);

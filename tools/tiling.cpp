@@ -59,7 +59,7 @@ void TilingOptions::defaultMemory() {
 }
 
 void ResampleOptions::addRunFlags(CLI::App& app) {
-  app.add_option("INPUT", input, "input cloud (.ply .pcd .xyz .xyzn .pts, or mesh vertices .obj .off .stl)")
+  app.add_option("INPUT", input, "input cloud (.ply .pcd .xyz .xyzn .pts, or a mesh .obj .off .stl: its surface)")
       ->required();
   app.add_option("OUTPUT", output, "output cloud (.ply binary with normals, .xyz, .xyzn)")->required();
   app.add_option("-n,--count", count, "exact number of output points N (>= 1); required unless --denoise-only");

@@ -111,9 +111,11 @@ void checkTriangles(const std::string& path, const TriangleMesh& mesh) {
 
 }  // namespace
 
-PointCloud readPointCloud(const std::string& path) { return readPointCloud(path, {}); }
+namespace {
 
-PointCloud readPointCloud(const std::string& path, const std::vector<std::string>& columns) {
+/// What readPointCloud() and readSurfacePoints() read: the file's geometry, mesh vertices with area-weighted face
+/// normals (oriented by the winding: exact where PCA would guess) when the file gave none. @p givenNormals: it did.
+Geometry readCloudGeometry(const std::string& path, const std::vector<std::string>& columns, bool& givenNormals) {
   Geometry geometry;
   if (columns.empty()) {
     geometry = load(path, false);
@@ -123,16 +125,12 @@ PointCloud readPointCloud(const std::string& path, const std::vector<std::string
     geometry = parseXyzNamedColumns(path, readFile(path, Signature::kText), columns);
     if (geometry.points.empty()) fail(path, "the file holds no points");
   }
-  PointCloud cloud;
-  cloud.points = std::move(geometry.points);
-  cloud.normals = std::move(geometry.normals);
-  cloud.attributes = std::move(geometry.attributes);
-  if (cloud.normals.empty() && !geometry.triangles.empty()) {
-    // Mesh vertices: area-weighted face normals, oriented by the winding (exact where PCA would guess).
-    std::vector<Vector3d> normals(cloud.size(), Vector3d::Zero());
+  givenNormals = !geometry.normals.empty();
+  if (!givenNormals && !geometry.triangles.empty()) {
+    std::vector<Vector3d> normals(geometry.points.size(), Vector3d::Zero());
     for (const Eigen::Vector3i& t : geometry.triangles) {
-      const Vector3d& a = cloud.points[t[0]];
-      const Vector3d n = (cloud.points[t[1]] - a).cross(cloud.points[t[2]] - a);
+      const Vector3d& a = geometry.points[t[0]];
+      const Vector3d n = (geometry.points[t[1]] - a).cross(geometry.points[t[2]] - a);
       for (int k = 0; k < 3; ++k) normals[t[k]] += n;
     }
     const bool complete = std::all_of(normals.begin(), normals.end(), [](const Vector3d& n) {
@@ -140,10 +138,34 @@ PointCloud readPointCloud(const std::string& path, const std::vector<std::string
     });
     if (complete) {
       for (Vector3d& n : normals) n.normalize();
-      cloud.normals = std::move(normals);
+      geometry.normals = std::move(normals);
     }
   }
+  return geometry;
+}
+
+PointCloud toCloud(Geometry geometry) {
+  PointCloud cloud;
+  cloud.points = std::move(geometry.points);
+  cloud.normals = std::move(geometry.normals);
+  cloud.attributes = std::move(geometry.attributes);
   return cloud;
+}
+
+}  // namespace
+
+PointCloud readPointCloud(const std::string& path) { return readPointCloud(path, {}); }
+
+PointCloud readPointCloud(const std::string& path, const std::vector<std::string>& columns) {
+  bool givenNormals = false;
+  return toCloud(readCloudGeometry(path, columns, givenNormals));
+}
+
+PointCloud readSurfacePoints(const std::string& path, const std::vector<std::string>& columns) {
+  bool givenNormals = false;
+  Geometry geometry = readCloudGeometry(path, columns, givenNormals);
+  if (!geometry.triangles.empty()) addFaceSamples(geometry, givenNormals);
+  return toCloud(std::move(geometry));
 }
 
 TriangleMesh readMesh(const std::string& path) {
