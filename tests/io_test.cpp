@@ -286,6 +286,27 @@ TEST_F(IoTest, ReadsXyzWithCommentsCrlfAndOptionalNormals) {
   EXPECT_EQ(readPointCloud(path("a.xyzn")).normals, std::vector<Vector3d>{Vector3d(0, 0, 1)});
 }
 
+// Text files as other tools write them: a header naming the columns ("x y z", CloudCompare's "//X Y Z"), a UTF-8
+// byte-order mark, commas (CSV) or semicolons between the values. A semicolon file's decimal commas are no
+// numbers: an error, never values read in the wrong columns.
+TEST_F(IoTest, ReadsXyzWithHeadersByteOrderMarksAndSeparators) {
+  const std::vector<Vector3d> expected{{1, 2, 3}, {4.5, 5, 6}};
+  for (const auto& [name, text] : std::vector<std::pair<std::string, std::string>>{
+           {"h.xyz", "x y z\n1 2 3\n4.5 5 6\n"},
+           {"cc.xyz", "//X Y Z\r\n1 2 3\r\n4.5 5 6\r\n"},
+           {"bom.xyz", "\xEF\xBB\xBF" "1 2 3\n4.5 5 6\n"},
+           {"csv.xyz", "x,y,z\n1,2,3\n4.5, 5, 6\n"},
+           {"semicolon.xyz", "1;2;3\n4.5;5;6\n"},
+           {"h.pts", "X Y Z\n2\n1 2 3\n4.5 5 6\n"}}) {
+    file(name, text);
+    EXPECT_EQ(readPointCloud(path(name)).points, expected) << name;
+  }
+  file("comma.xyz", "1,0;2,0;3,0\n");
+  expectCloudError("comma.xyz", "malformed number");
+  file("words.xyz", "x y z\nfoo bar baz\n");
+  expectCloudError("words.xyz", "line 2: malformed number");
+}
+
 TEST_F(IoTest, ReadsPtsWithAndWithoutCount) {
   file("a.pts", "2\n1 2 3 -1200 255 0 0\n4 5 6 -800 0 255 0\n");
   EXPECT_EQ(readPointCloud(path("a.pts")).points, (std::vector<Vector3d>{{1, 2, 3}, {4, 5, 6}}));
@@ -394,6 +415,9 @@ TEST_F(IoTest, ReadsPcdAndChecksItsCount) {
   expectCloudError("bad.pcd", "corrupted header");
   file("value.pcd", header + "1 2 3\n4 x 6\n7 8 9\n");
   expectCloudError("value.pcd", "line 13: malformed number");
+  // An organised cloud's pixels that measured nothing (NaN, PCL's convention) are no points.
+  file("organised.pcd", header + "nan nan nan\n4 5 6\nnan nan nan\n");
+  EXPECT_EQ(readPointCloud(path("organised.pcd")).points, std::vector<Vector3d>{Vector3d(4, 5, 6)});
 }
 
 TEST_F(IoTest, ReadsBinaryAndCompressedPcdWithNormals) {

@@ -66,12 +66,15 @@ bool parseDouble(std::string_view token, double& value);
 /// Parses a whole token as an integer.
 bool parseInteger(std::string_view token, long long& value);
 
-/// Splits text into lines (LF or CRLF) and lines into whitespace-separated tokens, skipping blank lines and,
-/// when asked, '#' comments.
+/// Splits text into lines (LF or CRLF) and lines into whitespace-separated tokens (and at @p separators, e.g. ","
+/// in a CSV file), skipping blank lines and, when asked, '#' comments. A UTF-8 byte-order mark opening the text
+/// is skipped.
 class LineReader {
  public:
-  LineReader(std::string_view text, bool hashComments, std::size_t firstLine = 1)
-      : text_(text), comments_(hashComments), line_(firstLine - 1) {}
+  LineReader(std::string_view text, bool hashComments, std::size_t firstLine = 1, std::string_view separators = {})
+      : text_(text), comments_(hashComments), line_(firstLine - 1), separators_(std::string(kSpace) += separators) {
+    if (text_.substr(0, 3) == "\xEF\xBB\xBF") pos_ = 3;
+  }
 
   /// Advances to the next line holding a token; false at the end of the text.
   bool next() {
@@ -82,9 +85,9 @@ class LineReader {
       ++line_;
       if (comments_) line = line.substr(0, line.find('#'));
       tokens_.clear();
-      for (std::size_t i = line.find_first_not_of(kSpace); i != std::string_view::npos;
-           i = line.find_first_not_of(kSpace, i)) {
-        const std::size_t j = std::min(line.find_first_of(kSpace, i), line.size());
+      for (std::size_t i = line.find_first_not_of(separators_); i != std::string_view::npos;
+           i = line.find_first_not_of(separators_, i)) {
+        const std::size_t j = std::min(line.find_first_of(separators_, i), line.size());
         tokens_.push_back(line.substr(i, j - i));
         i = j;
       }
@@ -106,9 +109,17 @@ class LineReader {
   std::string_view text_;
   bool comments_;
   std::size_t line_;
+  std::string separators_;
   std::size_t pos_ = 0;
   std::vector<std::string_view> tokens_;
 };
+
+/// A text point file's layout: its field separators besides blanks ("," for CSV, ";" where its first data line
+/// has one, where a ',' may be a decimal comma and is left to fail as a number), for LineReader.
+std::string textSeparators(std::string_view text);
+/// Whether the current line of @p lines is a header naming the columns ("x y z", CloudCompare's "//X Y Z"): no
+/// digit in it (a line of data with a bad value is an error, not a header).
+bool isHeaderLine(const LineReader& lines);
 
 double number(const std::string& path, const LineReader& lines, std::size_t i);
 Vector3d vector3(const std::string& path, const LineReader& lines, std::size_t first);

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <iterator>
@@ -29,6 +30,22 @@ void unpackPcdColour(std::vector<PointAttribute>& attributes, const std::vector<
     for (int c = 0; c < 3; ++c) rgb[static_cast<std::size_t>(c)].values.push_back((bits >> (16 - 8 * c)) & 0xffu);
   }
   for (PointAttribute& channel : rgb) attributes.push_back(std::move(channel));
+}
+
+/// PCL marks the pixels of an organised cloud (a depth camera's, a structured-light scan's) that measured nothing
+/// with NaN coordinates (is_dense false): they are no points, and are left out with their normals and attributes.
+void dropUnmeasured(Geometry& g) {
+  std::size_t kept = 0;
+  for (std::size_t i = 0; i < g.points.size(); ++i) {
+    if (std::isnan(g.points[i].x()) || std::isnan(g.points[i].y()) || std::isnan(g.points[i].z())) continue;
+    g.points[kept] = g.points[i];
+    if (!g.normals.empty()) g.normals[kept] = g.normals[i];
+    for (PointAttribute& a : g.attributes) a.values[kept] = a.values[i];
+    ++kept;
+  }
+  g.points.resize(kept);
+  if (!g.normals.empty()) g.normals.resize(kept);
+  for (PointAttribute& a : g.attributes) a.values.resize(kept);
 }
 
 struct PcdField {
@@ -233,6 +250,7 @@ Geometry parsePcd(const std::string& path, std::string_view data) {
     fail(path, "corrupted header: unknown DATA " + quoteToken(encoding));
   }
   geometry.attributes = attributes.finish();
+  dropUnmeasured(geometry);
   return geometry;
 }
 

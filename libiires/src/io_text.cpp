@@ -8,14 +8,36 @@
 
 namespace iires::detail::io {
 
+std::string textSeparators(std::string_view text) {
+  // The first line with a digit outside a '#' comment is data (a header names the columns without one).
+  for (std::size_t pos = 0; pos < text.size();) {
+    const std::size_t end = std::min(text.find('\n', pos), text.size());
+    std::string_view line = text.substr(pos, end - pos);
+    pos = end + 1;
+    line = line.substr(0, line.find('#'));
+    if (line.find_first_of("0123456789") == std::string_view::npos) continue;
+    if (line.find(';') != std::string_view::npos) return ";";
+    if (line.find(',') != std::string_view::npos) return ",";
+    return {};
+  }
+  return {};
+}
+
+bool isHeaderLine(const LineReader& lines) {
+  return std::none_of(lines.tokens().begin(), lines.tokens().end(), [](std::string_view token) {
+    return token.find_first_of("0123456789") != std::string_view::npos;
+  });
+}
+
 namespace {
 
 /// x y z [nx ny nz] per line; every line has the column count of the first (3, or 6 with normals).
 Geometry parseXyzColumns(const std::string& path, std::string_view text, bool normalsRequired) {
   Geometry geometry;
-  LineReader lines(text, true);
+  LineReader lines(text, true, 1, textSeparators(text));
   std::size_t columns = 0;
-  while (lines.next()) {
+  for (bool first = true; lines.next(); first = false) {
+    if (first && isHeaderLine(lines)) continue;  // "x y z", "//X Y Z"
     const std::size_t n = lines.size();
     if (normalsRequired ? n != 6 : n != 3 && n != 6)
       failAt(path, lines.line(),
@@ -45,9 +67,13 @@ Geometry parseXyzn(const std::string& path, std::string_view text) {
 /// An optional point count on the first line, then x y z per line; further columns are ignored.
 Geometry parsePts(const std::string& path, std::string_view text) {
   Geometry geometry;
-  LineReader lines(text, true);
+  LineReader lines(text, true, 1, textSeparators(text));
   std::optional<long long> declared;
   for (bool first = true; lines.next(); first = false) {
+    if (first && isHeaderLine(lines)) {
+      first = lines.next();  // the line after a header may hold the count
+      if (!first) break;
+    }
     if (first && lines.size() == 1) {
       declared = integer(path, lines, 0);
       continue;
@@ -87,9 +113,10 @@ Geometry parseXyzNamedColumns(const std::string& path, std::string_view text, co
 
   Geometry geometry;
   std::vector<std::vector<double>> values(columns.size());
-  LineReader lines(text, true);
+  LineReader lines(text, true, 1, textSeparators(text));
   Vector3d p, n;
-  while (lines.next()) {
+  for (bool first = true; lines.next(); first = false) {
+    if (first && isHeaderLine(lines)) continue;  // the columns' names
     if (lines.size() != columns.size())
       failAt(path, lines.line(),
              "expected " + std::to_string(columns.size()) + " values (the columns), found " + std::to_string(lines.size()));
