@@ -338,5 +338,55 @@ TEST(Resample, SharpEdgesFitFreeSamplesToTheirOwnFace) {
   EXPECT_LT(err.max, 2.5e-4);
 }
 
+/// Distance from @p p to the surface of the axis-aligned box [@p lo, @p hi] (negative inside).
+double boxDistance(const Eigen::Vector3d& p, const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) {
+  const Eigen::Vector3d q = (p - 0.5 * (lo + hi)).cwiseAbs() - 0.5 * (hi - lo);
+  return q.cwiseMax(0.0).norm() + std::min(q.maxCoeff(), 0.0);
+}
+
+// An L-bracket (two boxes) scanned from one view: only the faces turned to the camera, so its creases end at the
+// scan's silhouette, and some corners join a face the scan never saw. Held samples traced past the end of the
+// scan or put where the fitted planes meet beyond it lay up to 0.96 output spacings off the part (12 of 15 runs
+// over 0.5: five views, N = 1,000 to 3,000); samples past the input's extent and a kernel width from it are
+// dropped now.
+TEST(Resample, SharpEdgesStayOnAScanThatEndsAtACrease) {
+  const Eigen::Vector3d boxes[2][2] = {{{0, 0, 0}, {2, 1, 0.3}}, {{0, 0, 0}, {0.3, 1, 1.5}}};
+  for (const Eigen::Vector3d& view : {Eigen::Vector3d(0.6, 0.4, -1), Eigen::Vector3d(-1, 0.5, -0.7)}) {
+    std::mt19937_64 rng(5);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    iires::PointCloud cloud;
+    for (int b = 0; b < 2; ++b) {
+      const Eigen::Vector3d &lo = boxes[b][0], &hi = boxes[b][1], e = hi - lo;
+      const double faceArea[3] = {e.y() * e.z(), e.x() * e.z(), e.x() * e.y()};
+      const double total = 2 * (faceArea[0] + faceArea[1] + faceArea[2]);
+      for (int i = 0; i < 50000; ++i) {
+        double pick = u(rng) * total;
+        int axis = 0;
+        while (pick >= 2 * faceArea[axis]) pick -= 2 * faceArea[axis++];
+        const bool high = pick >= faceArea[axis];
+        Eigen::Vector3d p(lo.x() + u(rng) * e.x(), lo.y() + u(rng) * e.y(), lo.z() + u(rng) * e.z());
+        p[axis] = high ? hi[axis] : lo[axis];
+        Eigen::Vector3d n = Eigen::Vector3d::Zero();
+        n[axis] = high ? 1 : -1;
+        const Eigen::Vector3d &olo = boxes[1 - b][0], &ohi = boxes[1 - b][1];
+        if (boxDistance(p, olo, ohi) < -1e-9 || n.dot(view) >= 0) continue;  // inside the other box, or unseen
+        cloud.points.push_back(p);
+      }
+    }
+    for (std::size_t n : {2000u, 3000u}) {
+      iires::ResampleParams p;
+      p.targetCount = n;
+      p.sharpEdges = true;
+      const auto r = iires::resample(cloud, p);
+      ASSERT_EQ(r.cloud.size(), n);
+      double worst = 0;
+      for (const Eigen::Vector3d& q : r.cloud.points)
+        worst = std::max(worst, std::abs(std::min(boxDistance(q, boxes[0][0], boxes[0][1]),
+                                                  boxDistance(q, boxes[1][0], boxes[1][1]))));
+      EXPECT_LT(worst, 0.5 * r.spacing.mean) << "view " << view.transpose() << ", N = " << n;
+    }
+  }
+}
+
 }  // namespace
 

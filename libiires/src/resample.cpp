@@ -121,13 +121,18 @@ PointCloud workingCloud(PointCloud cloud, const ResampleParams& params, const Ex
 
 /// The samples `--sharp-edges` holds: the feature chains sampled at edgeRatio × the output spacing (coarser when
 /// they would take over half of N) and put exactly on the creases; sets featurePoints and featureSamples (how
-/// many of them fit beside the caller's fixed samples). A sample the crease fits put outside the box every output
-/// point must lie in (inputBox() at 0.8 of the target spacing; @p inputSpacing: the input's), as on a degenerate
-/// or sparse cloud a line fitted past its end, is dropped: it is not on the surface, and the free samples cover
-/// its place.
-std::vector<Eigen::Vector3d> creaseSamples(const PointCloud& cloud, double area, double inputSpacing,
+/// many of them fit beside the caller's fixed samples). A sample the crease fits put off the sampled surface is
+/// dropped, and the free samples cover its place: outside the box every output point must lie in (inputBox() at
+/// 0.8 of the target spacing), as on a degenerate or sparse cloud a line fitted past its end, or past the input's
+/// local extent (by kHeldBeyond) and farther from every input point than @p surface's kernel width there (where
+/// the MLS surface ends), as a crease traced past the end of a scan or a corner where the fitted planes of a face
+/// the scan never saw meet. A corner of a closed part lies within about 0.7 kernel widths of its input points,
+/// and a crease sample in a gap of the sampling within the input's extent.
+std::vector<Eigen::Vector3d> creaseSamples(const PointCloud& cloud, const MlsSurface& surface,
                                            const ResampleParams& params, const Execution& exec,
                                            ResampleResult& result) {
+  constexpr double kHeldBeyond = 0.25;  // kernel widths past the input neighbours' hull (MlsSurface::project)
+  const double area = surface.area(), inputSpacing = surface.meanSpacing();
   const FeatureParams& fp = params.features;
   const FeatureResult features = detectFeatures(cloud, fp, exec);
   const double l0 = std::sqrt(2.0 * area / (std::sqrt(3.0) * static_cast<double>(params.targetCount)));
@@ -139,9 +144,13 @@ std::vector<Eigen::Vector3d> creaseSamples(const PointCloud& cloud, double area,
                                                        static_cast<double>(params.targetCount), &chainOf);
   onEdges = snapToCreases(cloud, onEdges, chainOf, features.spacing, fp, exec);  // exactly on the creases
   const Eigen::AlignedBox3d box = inputBox(cloud.points, 0.8 * l0, inputSpacing);
-  onEdges.erase(
-      std::remove_if(onEdges.begin(), onEdges.end(), [&](const Eigen::Vector3d& q) { return !box.contains(q); }),
-      onEdges.end());
+  const auto offTheSurface = [&](const Eigen::Vector3d& q) {
+    if (!box.contains(q)) return true;
+    double off = 0, beyond = 0;
+    surface.project(q, nullptr, &off, nullptr, nullptr, 0, &beyond);
+    return off > 1.0 && beyond > kHeldBeyond;
+  };
+  onEdges.erase(std::remove_if(onEdges.begin(), onEdges.end(), offTheSurface), onEdges.end());
   result.featurePoints = features.featureIndices.size();
   result.featureSamples = std::min(onEdges.size(), params.targetCount - params.fixedSamples.size());
   return onEdges;
@@ -367,7 +376,7 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params, const Ex
   ResampleParams local = params;  // sharp edges add fixed samples
   if (params.sharpEdges) {
     t = clock.begin("features");
-    const auto onEdges = creaseSamples(cloud, surface->area(), surface->meanSpacing(), params, exec, result);
+    const auto onEdges = creaseSamples(cloud, *surface, params, exec, result);
     local.fixedSamples.insert(local.fixedSamples.end(), onEdges.begin(),
                               onEdges.begin() + static_cast<long>(result.featureSamples));
     clock.end("features", t);
