@@ -113,34 +113,13 @@ void checkTriangles(const std::string& path, const TriangleMesh& mesh) {
 
 namespace {
 
-/// What readPointCloud() and readSurfacePoints() read: the file's geometry, mesh vertices with area-weighted face
-/// normals (oriented by the winding: exact where PCA would guess) when the file gave none. @p givenNormals: it did.
-Geometry readCloudGeometry(const std::string& path, const std::vector<std::string>& columns, bool& givenNormals) {
-  Geometry geometry;
-  if (columns.empty()) {
-    geometry = load(path, false);
-  } else {
-    checkRegularFile(path);
-    if (extensionOf(path) != ".xyz") fail(path, "column names apply to .xyz files only");
-    geometry = parseXyzNamedColumns(path, readFile(path, Signature::kText), columns);
-    if (geometry.points.empty()) fail(path, "the file holds no points");
-  }
-  givenNormals = !geometry.normals.empty();
-  if (!givenNormals && !geometry.triangles.empty()) {
-    std::vector<Vector3d> normals(geometry.points.size(), Vector3d::Zero());
-    for (const Eigen::Vector3i& t : geometry.triangles) {
-      const Vector3d& a = geometry.points[t[0]];
-      const Vector3d n = (geometry.points[t[1]] - a).cross(geometry.points[t[2]] - a);
-      for (int k = 0; k < 3; ++k) normals[t[k]] += n;
-    }
-    const bool complete = std::all_of(normals.begin(), normals.end(), [](const Vector3d& n) {
-      return n.squaredNorm() > 0 && n.allFinite();
-    });
-    if (complete) {
-      for (Vector3d& n : normals) n.normalize();
-      geometry.normals = std::move(normals);
-    }
-  }
+/// The file's geometry as readPointCloud() and readSurfacePoints() take it.
+Geometry readCloudGeometry(const std::string& path, const std::vector<std::string>& columns) {
+  if (columns.empty()) return load(path, false);
+  checkRegularFile(path);
+  if (extensionOf(path) != ".xyz") fail(path, "column names apply to .xyz files only");
+  Geometry geometry = parseXyzNamedColumns(path, readFile(path, Signature::kText), columns);
+  if (geometry.points.empty()) fail(path, "the file holds no points");
   return geometry;
 }
 
@@ -157,14 +136,32 @@ PointCloud toCloud(Geometry geometry) {
 PointCloud readPointCloud(const std::string& path) { return readPointCloud(path, {}); }
 
 PointCloud readPointCloud(const std::string& path, const std::vector<std::string>& columns) {
-  bool givenNormals = false;
-  return toCloud(readCloudGeometry(path, columns, givenNormals));
+  Geometry geometry = readCloudGeometry(path, columns);
+  if (geometry.normals.empty() && !geometry.triangles.empty()) {
+    // Mesh vertices: area-weighted face normals, oriented by the winding (exact where PCA would guess).
+    std::vector<Vector3d> normals(geometry.points.size(), Vector3d::Zero());
+    for (const Eigen::Vector3i& t : geometry.triangles) {
+      const Vector3d& a = geometry.points[t[0]];
+      const Vector3d n = (geometry.points[t[1]] - a).cross(geometry.points[t[2]] - a);
+      for (int k = 0; k < 3; ++k) normals[t[k]] += n;
+    }
+    const bool complete = std::all_of(normals.begin(), normals.end(), [](const Vector3d& n) {
+      return n.squaredNorm() > 0 && n.allFinite();
+    });
+    if (complete) {
+      for (Vector3d& n : normals) n.normalize();
+      geometry.normals = std::move(normals);
+    }
+  }
+  return toCloud(std::move(geometry));
 }
 
 PointCloud readSurfacePoints(const std::string& path, const std::vector<std::string>& columns) {
-  bool givenNormals = false;
-  Geometry geometry = readCloudGeometry(path, columns, givenNormals);
-  if (!geometry.triangles.empty()) addFaceSamples(geometry, givenNormals);
+  // Normals the file does not give are left to the resampler's estimate from the dense points: the area-weighted
+  // ones of a coarse polyhedron's vertices lean over its creases (3torus.off, 19 vertices: spacing cv 0.28 at 1,000
+  // points with them or with the faces' normals, 0.063 without).
+  Geometry geometry = readCloudGeometry(path, columns);
+  if (!geometry.triangles.empty()) addFaceSamples(geometry);
   return toCloud(std::move(geometry));
 }
 

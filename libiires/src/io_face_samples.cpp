@@ -43,7 +43,7 @@ double medianEdgeLength(const Geometry& g) {
 
 }  // namespace
 
-void addFaceSamples(Geometry& g, bool givenNormals) {
+void addFaceSamples(Geometry& g) {
   const std::size_t vertices = g.points.size();
   double area = 0;
   std::vector<double> faceArea(g.triangles.size());
@@ -69,9 +69,9 @@ void addFaceSamples(Geometry& g, bool givenNormals) {
       const Eigen::Vector2d uv = foldedR2(k + 1);
       const double w[3] = {1.0 - uv.x() - uv.y(), uv.x(), uv.y()};
       g.points.push_back(w[0] * a + w[1] * b + w[2] * c);
-      if (normals) {  // the file's own normals blended (a smooth surface's), else the face's (exact on it)
+      if (normals) {  // the file's, blended
         const Vector3d n = w[0] * g.normals[t[0]] + w[1] * g.normals[t[1]] + w[2] * g.normals[t[2]];
-        g.normals.push_back(givenNormals && n.norm() > 0 ? Vector3d(n.normalized()) : faceNormal);
+        g.normals.push_back(n.norm() > 0 ? Vector3d(n.normalized()) : faceNormal);
       }
       // Attributes: a blend of the corners' values (as interpolateAttributes() averages), a label the nearest
       // corner's.

@@ -39,9 +39,9 @@ PointCloud readPointCloud(const std::string& path, const std::vector<std::string
 /// @brief Read a file as the points of a surface: a cloud as readPointCloud(); a mesh (.ply with faces, .obj, .off,
 /// .stl) as its vertices and, on every face larger than its median edge length squared, points spread over it (a
 /// CAD part's vertices lie on its faces' rims only; a cube's 8 sample nothing of it) — at least about 100,000
-/// over the surface; a mesh finer than that reads as its vertices. The face points take the face's normal (the
-/// file's vertex normals blended, when it had them) and their corners' attributes (blended; a label the nearest
-/// corner's). What the tools read as INPUT.
+/// over the surface; a mesh finer than that reads as its vertices. Normals: the file's (blended onto the face
+/// points), or none (the resampler estimates them from the points); the face points take their corners'
+/// attributes (blended; a label the nearest corner's). What the tools read as INPUT.
 /// @throws InputError as readPointCloud.
 PointCloud readSurfacePoints(const std::string& path, const std::vector<std::string>& columns = {});
 
