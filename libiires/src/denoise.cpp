@@ -39,6 +39,8 @@ constexpr std::size_t kWideNeighbours = 64;
 // 0.0769 with one, 0.0766 with three, 0.0767 with six; folded sheets 2.5 spacings apart, noise 0.2 spacings, 20k
 // samples farther than 0.1 gap: 98, 82, 73, 66).
 constexpr int kBiasPoolPasses = 3;
+// Negative squared-bias estimates needed to read the estimates' spread where the bias is nil (nullSpread()).
+constexpr std::size_t kMinNullEstimates = 100;
 
 void checkCloud(const PointCloud& cloud, std::size_t minPoints) {
   if (cloud.empty()) throw InputError("denoise: the cloud is empty");
@@ -244,12 +246,26 @@ struct SweepKernel {
   }
 };
 
+/// The spread of the pooled squared-bias estimates where the bias is nil, in units of each one's lift variance σ² v:
+/// a true squared bias is never negative, so the estimates below zero are noise, and as the estimate is symmetric
+/// about the truth there, their median magnitude over 0.6745 (a half-normal's) is its standard deviation. 0 when
+/// fewer than kMinNullEstimates are negative (a cloud curved everywhere, or noise so low that the lifts stand out).
+double nullSpread(const std::vector<QuadricFit>& fits, const std::vector<double>& bias2, double noiseVar) {
+  std::vector<double> below;
+  for (std::size_t i = 0; i < fits.size(); ++i)
+    if (fits[i].ok && fits[i].liftVar > 0 && bias2[i] < 0) below.push_back(-bias2[i] / (noiseVar * fits[i].liftVar));
+  if (below.size() < kMinNullEstimates) return 0.0;
+  return quantile(std::move(below), 0.5) / 0.6745;
+}
+
 /// Empirical-Bayes choice between the quadric and the plane at every point of a sweep: the share of the quadric's
 /// lift d_i (the plane's bias at p_i, estimated with noise of variance σ² v_i) to apply. With b_i² the squared
 /// bias, b²/(b² + c σ² v) minimises the squared error of p_i's height (the Wiener/James–Stein factor). σ² is
 /// the median of the fits' residual variances; b² is estimated by d² − σ² v, averaged over the neighbours
 /// (kBiasPoolPasses passes of the sweep's kernel), since curvature is coherent over the kernel where the noise
-/// is not. c is the share of this sweep's noise variance that reaches the output: the later sweeps average it
+/// is not, and lowered by one standard deviation of that estimate where the bias is nil (nullSpread()): c is
+/// small, so an estimate a little above zero by chance would keep most of the quadric, and its noise, on a flat
+/// part (sheets 2.5 spacings apart with noise of 0.2 spacings: residual 0.069 → 0.06 spacings). c is the share of this sweep's noise variance that reaches the output: the later sweeps average it
 /// again (each lets through the quadric's variance factor at p, its median over the points, for white noise),
 /// while a bias left now stays. Where the lift stands out of the noise the quadric is kept; on flat parts the
 /// point moves (nearly) onto the plane, whose estimate has a fraction of the quadric's variance at the centre.
@@ -284,8 +300,10 @@ std::vector<double> liftShares(const std::vector<QuadricFit>& fits, const SweepK
     });
     bias2.swap(next);
   }
+  const double spread = nullSpread(fits, bias2, noiseVar);
   parallelFor(n, threads, [&](std::size_t i) {
-    const double b2 = std::max(0.0, bias2[i]), v = passed * noiseVar * fits[i].liftVar;
+    const double b2 = std::max(0.0, bias2[i] - spread * noiseVar * fits[i].liftVar);
+    const double v = passed * noiseVar * fits[i].liftVar;
     keep[i] = b2 + v > 0 ? b2 / (b2 + v) : 1.0;
   });
   return keep;
