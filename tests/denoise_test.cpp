@@ -131,8 +131,9 @@ double interiorRmsError(const PointCloud& cloud, Height f) {
 TEST(Denoise, FlatNoisyPatchShrinksTheQuadricTowardsThePlane) {
   // Gaussian noise σ = 0.2 spacings on a flat patch, as a scan of a flat part. The quadric's height at the centre
   // has several times the plane's variance (its lift applied in full leaves rms 0.071 spacings); where the data
-  // show no curvature the lift is shrunk towards the plane: 0.054 left (0.060 when the pooled bias estimate is
-  // not lowered by its spread at nil bias, nullSpread(); the plane alone 0.034).
+  // show no curvature the lift is shrunk towards the plane: 0.040 left (the plane alone 0.034). 0.060 when the
+  // pooled bias estimate is not lowered by its spread at nil bias (nullSpread()) and the later sweeps read the
+  // noise from their own residuals, which the first sweep left smooth over the kernel; 0.054 with the first only.
   PointCloud cloud = iires::test::planeCloud(20000, 1.0, 1.0, 21);
   const double l = iires::meanNeighbourSpacing(cloud.points);
   std::mt19937_64 rng(22);
@@ -140,7 +141,7 @@ TEST(Denoise, FlatNoisyPatchShrinksTheQuadricTowardsThePlane) {
   for (auto& p : cloud.points) p.z() = g(rng);
   const auto flat = [](double, double) { return 0.0; };
   const double error = interiorRmsError(iires::denoise(cloud).cloud, flat) / l;
-  EXPECT_LT(error, 0.057);
+  EXPECT_LT(error, 0.045);
   DenoiseParams plane;
   plane.degree = 1;
   EXPECT_LT(interiorRmsError(iires::denoise(cloud, plane).cloud, flat) / l, error);  // the bound it approaches

@@ -246,6 +246,13 @@ struct SweepKernel {
   }
 };
 
+/// The noise the first projection sweep measured: σ², the median of its fits' residual variances, and the median
+/// share of white noise's variance its quadrics let through at the centre (QuadricFit::heightVar).
+struct NoiseLevel {
+  double variance = 0;
+  double factor = 0;
+};
+
 /// The spread of the pooled squared-bias estimates where the bias is nil, in units of each one's lift variance σ² v:
 /// a true squared bias is never negative, so the estimates below zero are noise, and as the estimate is symmetric
 /// about the truth there, their median magnitude over 0.6745 (a half-normal's) is its standard deviation. 0 when
@@ -265,12 +272,16 @@ double nullSpread(const std::vector<QuadricFit>& fits, const std::vector<double>
 /// (kBiasPoolPasses passes of the sweep's kernel), since curvature is coherent over the kernel where the noise
 /// is not, and lowered by one standard deviation of that estimate where the bias is nil (nullSpread()): c is
 /// small, so an estimate a little above zero by chance would keep most of the quadric, and its noise, on a flat
-/// part (sheets 2.5 spacings apart with noise of 0.2 spacings: residual 0.069 → 0.06 spacings). c is the share of this sweep's noise variance that reaches the output: the later sweeps average it
-/// again (each lets through the quadric's variance factor at p, its median over the points, for white noise),
-/// while a bias left now stays. Where the lift stands out of the noise the quadric is kept; on flat parts the
-/// point moves (nearly) onto the plane, whose estimate has a fraction of the quadric's variance at the centre.
-std::vector<double> liftShares(const std::vector<QuadricFit>& fits, const SweepKernel& kernel, int laterSweeps,
-                               int threads) {
+/// part (sheets 2.5 spacings apart with noise of 0.2 spacings: residual 0.069 → 0.06 spacings). c is the share
+/// of this sweep's noise variance that reaches the output: the later sweeps average it again (each lets through the
+/// quadric's variance factor at p, its median over the points, for white noise), while a bias left now stays.
+/// Where the lift stands out of the noise the quadric is kept; on flat parts the point moves (nearly) onto the
+/// plane, whose estimate has a fraction of the quadric's variance at the centre.
+/// The first sweep (@p sweep 0) measures σ² on white noise and records it in @p first; what a sweep leaves is
+/// smooth over the kernel, so a later sweep's quadrics follow it and their residuals understate it. There σ² is
+/// at least what the earlier sweeps let through of the first one's: σ₀² times its variance factor per sweep.
+std::vector<double> liftShares(const std::vector<QuadricFit>& fits, const SweepKernel& kernel, int sweep,
+                               int laterSweeps, NoiseLevel& first, int threads) {
   const std::size_t n = fits.size();
   std::vector<double> residual, through;
   residual.reserve(n), through.reserve(n);
@@ -280,10 +291,13 @@ std::vector<double> liftShares(const std::vector<QuadricFit>& fits, const SweepK
       through.push_back(f.heightVar);
     }
   std::vector<double> keep(n, 1.0);
-  const double noiseVar = quantile(std::move(residual), 0.5);
+  const double factor = quantile(std::move(through), 0.5);
+  double noiseVar = quantile(std::move(residual), 0.5);
+  if (sweep == 0) first = {noiseVar, factor};
+  else noiseVar = std::max(noiseVar, first.variance * std::pow(first.factor, sweep));
   // Noise below a millionth of the kernel width is round-off: a noise-free cloud keeps the quadric everywhere.
   if (!(noiseVar > 1e-12 * kernel.rows.medianH * kernel.rows.medianH)) return keep;
-  const double passed = std::pow(quantile(std::move(through), 0.5), laterSweeps);
+  const double passed = std::pow(factor, laterSweeps);
   std::vector<double> bias2(n, 0.0), next(n, 0.0);
   for (std::size_t i = 0; i < n; ++i)
     if (fits[i].ok) bias2[i] = fits[i].lift * fits[i].lift - noiseVar * fits[i].liftVar;
@@ -310,13 +324,15 @@ std::vector<double> liftShares(const std::vector<QuadricFit>& fits, const SweepK
 }
 
 /// One projection sweep (eq. 1–3) of every point of @p kernel.points: @p next (@p cur when !@p move) and the fitted
-/// @p nextNormals; @p laterSweeps: how many sweeps follow this one (liftShares()).
+/// @p nextNormals; @p sweep: how many sweeps went before this one, @p laterSweeps: how many follow, @p first: the
+/// first sweep's noise (liftShares()).
 /// A probe below @p cleanBelow says the input is clean (the caller keeps its positions): the full quadric's normals
 /// are returned, as for a noise-free cloud, and liftShares() is not run.
 /// @return the noise probe: the mean distance from the points to their fits (the quadric's where it was fitted,
 /// before liftShares() weighs it), which the sweeps' noise tests are calibrated on
-double projectSweep(const SweepKernel& kernel, int degree, int laterSweeps, bool move, double cleanBelow, int threads,
-                    std::vector<Eigen::Vector3d>& next, std::vector<Eigen::Vector3d>& nextNormals) {
+double projectSweep(const SweepKernel& kernel, int degree, int sweep, int laterSweeps, NoiseLevel& first, bool move,
+                    double cleanBelow, int threads, std::vector<Eigen::Vector3d>& next,
+                    std::vector<Eigen::Vector3d>& nextNormals) {
   const Rows& rows = kernel.rows;
   const std::vector<Eigen::Vector3d>& cur = kernel.points;
   const std::size_t n = cur.size();
@@ -348,7 +364,7 @@ double projectSweep(const SweepKernel& kernel, int degree, int laterSweeps, bool
   if (degree != 2) return probe;
   // Degree 2: along the plane's normal onto the quadric, by the share of its lift the data support.
   const std::vector<double> keep =
-      probe < cleanBelow ? std::vector<double>(n, 1.0) : liftShares(fits, kernel, laterSweeps, threads);
+      probe < cleanBelow ? std::vector<double>(n, 1.0) : liftShares(fits, kernel, sweep, laterSweeps, first, threads);
   parallelFor(n, threads, [&](std::size_t i) {
     const QuadricFit& f = fits[i];
     if (!f.ok) return;
@@ -431,12 +447,13 @@ DenoiseResult denoise(const PointCloud& input, const DenoiseParams& params, cons
   const double invSharp2 = sharp > 0 ? 1.0 / (sharp * sharp) : 0.0;
   const int sweeps = std::max(1, params.iterations);  // at least one fit, for the normals
   bool probing = given && !params.keepGivenNormals;  // estimated normals: a first sweep without them decides
+  NoiseLevel firstNoise;  // measured by every first sweep, the last one's kept (the sweeps may start again)
   for (int it = 0; it < sweeps; ++it) {
     const bool useBilateral = sharp > 0 && ((given && !probing) || it > 0);
     const SweepKernel kernel{rows, cur, normals, useBilateral, given, invSharp2};
     const double cleanBelow = it == 0 && params.iterations > 0 ? params.cleanDisplacement * rows.spacing : 0.0;
-    const double meanMove = projectSweep(kernel, params.degree, sweeps - 1 - it, params.iterations > 0, cleanBelow,
-                                         exec.threads, next, nextNormals);
+    const double meanMove = projectSweep(kernel, params.degree, it, sweeps - 1 - it, firstNoise,
+                                         params.iterations > 0, cleanBelow, exec.threads, next, nextNormals);
     // Without given normals the first sweep's normals are unoriented; the bilateral term uses |n_j·n_p|,
     // and later sweeps orient each fit like the point's previous normal, so the sign only needs fixing
     // once at the end.
