@@ -67,6 +67,33 @@ TEST(Resample, NonUniformOpenPlaneBecomesUniform) {
   EXPECT_NEAR(static_cast<double>(left) / 2000.0, 0.5, 0.03);
 }
 
+// A floor as one scanner 1 above its corner sees it: the density falls with the range (∝ cos θ / r²), 14 times
+// more sparsely spaced at the far corner than at the median. Resampled so that the far part is upsampled, its
+// samples must still see each other as neighbours: where the tolerance of the intrinsic rule stayed at the
+// cloud's median spacing, they were refused one another (their nearest input points a far spacing apart differ
+// in geodesic coordinates by that much) and piled up (at this size 194 pairs under 0.3 spacings, cv 0.27).
+TEST(Resample, FarSideOfOneScanIsUpsampledWithoutClumps) {
+  iires::PointCloud cloud;
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  while (cloud.size() < 20000) {
+    const double x = 8 * u(rng), y = 8 * u(rng), r2 = 1 + x * x + y * y;
+    if (u(rng) < std::pow(r2, -1.5)) cloud.points.emplace_back(x, y, 0.0);
+  }
+  const auto r = iires::resample(cloud, paramsFor(6000));
+  ASSERT_EQ(r.cloud.size(), 6000u);
+  const iires::KnnIndex index(r.cloud.points);
+  std::size_t close = 0;
+  for (const auto& p : r.cloud.points) {
+    std::vector<std::uint32_t> idx;
+    std::vector<double> d2;
+    index.knn(p, 2, idx, d2);
+    close += std::sqrt(d2[1]) < 0.3 * r.spacing.mean;
+  }
+  EXPECT_EQ(close, 0u);
+  EXPECT_LT(r.spacing.cv, 0.15);
+}
+
 TEST(Resample, UpsamplesToExactCount) {
   const auto cloud = iires::test::sphereCloud(600, 1.0, 23);
   const auto r = iires::resample(cloud, paramsFor(5000));

@@ -27,6 +27,10 @@ namespace {
 using detail::kInf;
 using detail::kNone;
 using Clock = std::chrono::steady_clock;
+// A point's local sampling scale reads the nearest-neighbour distances of itself and at most this many of its
+// neighbours (componentScales()).
+constexpr std::size_t kMaxScaleNeighbours = 16;
+constexpr float kSparseScale = 2.0f;
 
 double secondsSince(Clock::time_point t) {
   return std::chrono::duration<double>(Clock::now() - t).count();
@@ -216,7 +220,8 @@ struct GeodesicCoordinates::Impl {
   Graph graph;
   double spacing = 0;
   double area = 0;
-  std::vector<float> scale;  // per point (caller's order): its component's samplingScale()
+  std::vector<float> scale;       // per point (caller's order): its component's samplingScale()
+  std::vector<float> localScale;  // per point (caller's order): localScales()
   GeodesicReport report;
 
   using NeighbourLists = detail::NeighbourLists;
@@ -374,12 +379,26 @@ void GeodesicCoordinates::Impl::componentScales(const NeighbourLists& lists, con
     of[c] = std::max(1.0f, static_cast<float>(d[d.size() / 2] / spacing));
   }
   scale.resize(n);
-  for (std::size_t i = 0; i < n; ++i) {
+  localScale.resize(n);
+  parallelFor(n, threads, [&](std::size_t i) {
     float across = lists.across[i];
-    for (std::size_t r = 0; r < k && lists.index[i * k + r] != kNone; ++r)
-      across = std::max(across, lists.across[lists.index[i * k + r]]);
+    std::array<float, kMaxScaleNeighbours + 1> near;
+    std::size_t m = 0;
+    if (lists.distance[i * k] < kInf) near[m++] = lists.distance[i * k];
+    for (std::size_t r = 0; r < k && lists.index[i * k + r] != kNone; ++r) {
+      const std::uint32_t j = lists.index[i * k + r];
+      across = std::max(across, lists.across[j]);
+      if (m < near.size() && lists.distance[j * k] < kInf) near[m++] = lists.distance[j * k];
+    }
+    float local = 1.0f;  // the median nearest-neighbour distance around the point, over the cloud's
+    if (m > 0 && spacing > 0) {
+      std::nth_element(near.begin(), near.begin() + static_cast<long>(m / 2), near.begin() + static_cast<long>(m));
+      local = static_cast<float>(near[m / 2] / spacing);
+      if (local < kSparseScale) local = 1.0f;
+    }
     scale[order[i]] = std::max(of[components.id[i]], spacing > 0 ? static_cast<float>(0.5 * across / spacing) : 1.0f);
-  }
+    localScale[order[i]] = std::max(scale[order[i]], local);
+  });
 }
 
 /// Which k-NN entries become edges, by symmetric tests (so both directions agree): 0 = dropped, 1 = kept and
@@ -715,6 +734,7 @@ const std::vector<std::uint32_t>& GeodesicCoordinates::satellites(std::size_t c)
 double GeodesicCoordinates::spacing() const { return impl_->spacing; }
 double GeodesicCoordinates::area() const { return impl_->area; }
 const std::vector<float>& GeodesicCoordinates::samplingScales() const { return impl_->scale; }
+const std::vector<float>& GeodesicCoordinates::localScales() const { return impl_->localScale; }
 const GeodesicReport& GeodesicCoordinates::report() const { return impl_->report; }
 
 std::vector<float> GeodesicCoordinates::distanceField(std::uint32_t source) const {

@@ -55,7 +55,7 @@ void IntrinsicRule::update(const std::vector<Eigen::Vector3d>& samples, const st
     const std::int64_t d = geo_->nearest(samples[i]);
     dense_[i] = static_cast<std::uint32_t>(d < 0 ? 0 : d);
     comp_[i] = geo_->component(dense_[i]);
-    scale_[i] = geo_->samplingScales()[dense_[i]];
+    scale_[i] = geo_->localScales()[dense_[i]];
     std::copy_n(&geo_->coordinates()[dense_[i] * dims], dims, &coords_[i * dims]);
     if (gapTest) near_[i] = nearSheets_[dense_[i]];
   });

@@ -149,6 +149,10 @@ class GeodesicCoordinates {
   /// @brief Per point: how much more coarsely than the cloud its component is sampled (a separate object
   /// scanned sparsely) — the component's median nearest-neighbour distance over the cloud's, at least 1.
   const std::vector<float>& samplingScales() const;
+  /// @brief Per point: samplingScales(), or how much more coarsely than the cloud its own neighbourhood is sampled
+  /// where that is at least twice (the median nearest-neighbour distance over the point and its graph neighbours,
+  /// over the cloud's): the far side of a single scan, whose density falls with the range.
+  const std::vector<float>& localScales() const;
   /// @brief Undirected graph edges as (a, b), a < b, sorted — for inspection and tests.
   std::vector<std::array<std::uint32_t, 2>> edges() const;
   const GeodesicReport& report() const;

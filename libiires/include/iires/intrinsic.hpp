@@ -31,7 +31,7 @@ struct IntrinsicParams {
   double slope = 1.5;
   /// The tolerance in units of the dense cloud's spacing (median nearest-neighbour distance): covers mapping
   /// each sample to its nearest dense point and the graph's discretisation (≥ 0). In a part sampled on a
-  /// coarser scale than the rest (GeodesicCoordinates::samplingScales) it grows by that scale.
+  /// coarser scale than the rest (GeodesicCoordinates::localScales) it grows by that scale.
   double toleranceSpacings = 4.0;
   /// Euclidean bound: reject pairs farther apart than this many *sample* spacings (estimated from the dense
   /// spacing and the sample count), so the rule is safe on its own against mirror points. 0 = no bound.
@@ -87,7 +87,7 @@ class IntrinsicRule final : public NeighbourRule {
   bool consistent(const float* ga, const float* gb, double d, double scale) const;
   /// The coarser of two dense points' sampling scales.
   double pairScale(std::size_t a, std::size_t b) const {
-    return std::max(geo_->samplingScales()[a], geo_->samplingScales()[b]);
+    return std::max(geo_->localScales()[a], geo_->localScales()[b]);
   }
 
   std::shared_ptr<const GeodesicCoordinates> geo_;
