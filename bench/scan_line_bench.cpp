@@ -6,6 +6,8 @@
 //   CASE: lines — 50 parallel lines 0.02 apart on a gently curved sheet, points 0.002 apart along them;
 //         rings — a rotating scanner's rings on the ground, 0.15 apart near the sensor and 1.1 apart at the
 //                 outer ones, points 0.015–0.05 apart along them;
+//         floor — a floor seen from one scanner 1 above its corner, 60,000 points whose density falls with the
+//                 range (the far corner 14 times more sparsely spaced than the median);
 //         slices:MESH — a profile scanner's slices of a closed mesh: 60 planes across its longest axis, points
 //                 a tenth of the planes' distance apart along each contour (random, 3 % jitter), positions only.
 // Columns: points, cv (nearest-neighbour spacing cv), components (the geodesic coordinates' parts; the truth is
@@ -70,12 +72,13 @@ int main(int argc, char** argv) {
       ns.push_back(std::stoul(arg));
     }
   }
-  const bool rings = name == "rings", slices = name.rfind("slices:", 0) == 0;
-  if (name != "lines" && !rings && !slices) {
+  const bool rings = name == "rings", floor = name == "floor", slices = name.rfind("slices:", 0) == 0;
+  if (name != "lines" && !rings && !floor && !slices) {
     std::fprintf(stderr, "scan_line_bench: error: unknown case '%s'\n", name.c_str());
     return 2;
   }
   const iires::PointCloud cloud = rings    ? iires::test::groundRings(seed)
+                                  : floor  ? iires::test::floorFromCorner(60000, seed)
                                   : slices ? iires::test::sliceContours(iires::readMesh(name.substr(7)), 60, seed)
                                            : iires::test::scanLineCloud(seed);
   if (!writeInput.empty()) iires::writePointCloud(writeInput, cloud);

@@ -73,14 +73,7 @@ TEST(Resample, NonUniformOpenPlaneBecomesUniform) {
 // cloud's median spacing, they were refused one another (their nearest input points a far spacing apart differ
 // in geodesic coordinates by that much) and piled up (at this size 194 pairs under 0.3 spacings, cv 0.27).
 TEST(Resample, FarSideOfOneScanIsUpsampledWithoutClumps) {
-  iires::PointCloud cloud;
-  std::mt19937_64 rng(5);
-  std::uniform_real_distribution<double> u(0.0, 1.0);
-  while (cloud.size() < 20000) {
-    const double x = 8 * u(rng), y = 8 * u(rng), r2 = 1 + x * x + y * y;
-    if (u(rng) < std::pow(r2, -1.5)) cloud.points.emplace_back(x, y, 0.0);
-  }
-  const auto r = iires::resample(cloud, paramsFor(6000));
+  const auto r = iires::resample(iires::test::floorFromCorner(20000), paramsFor(6000));
   ASSERT_EQ(r.cloud.size(), 6000u);
   const iires::KnnIndex index(r.cloud.points);
   std::size_t close = 0;

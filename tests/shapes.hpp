@@ -68,6 +68,20 @@ inline PointCloud scannedSheets(double gap, std::uint64_t seed = 1) {
   return c;
 }
 
+/// A floor as one scanner 1 above its corner sees it: @p count points on [0, 8]² (z = 0), the density falling with
+/// the range as cos θ / r² (r² = 1 + x² + y²), so that the far corner is about 14 times more sparsely spaced than the
+/// median. Positions only.
+inline PointCloud floorFromCorner(std::size_t count, std::uint64_t seed = 5) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  PointCloud c;
+  while (c.size() < count) {
+    const double x = 8 * u(rng), y = 8 * u(rng), r2 = 1 + x * x + y * y;
+    if (u(rng) < std::pow(r2, -1.5)) c.points.emplace_back(x, y, 0.0);
+  }
+  return c;
+}
+
 /// A rotating scanner's rings on the ground: a sensor 1.7 above the z = 0 plane, 17 beams from 30° to 10°
 /// below the horizon, a point every 0.3° of azimuth (jittered), so that the rings lie 0.15 apart near the
 /// sensor and 1.1 apart at the outer ones (radius 2.9 to 9.7) while points along a ring are 0.015–0.05 apart.
