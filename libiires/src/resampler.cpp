@@ -32,14 +32,10 @@ constexpr double kBeyondLimit = 0.05;
 // out. Looser than kOffSurfaceLimit, which a clean 5× density gradient's sparse side reaches (h capped there).
 constexpr double kCollapseOffLimit = 1.0;
 // A split's midpoint projected farther than this × the chord from where it was: the new sample would jump farther
-// than the two it splits are apart — the chord cuts across a bore, a recess or a gap (a sparse input's, or the
-// MLS surface of unoriented normals) rather than spanning a stretch of surface (a half circle's sagitta is half
-// the chord). Tighter bounds help sparse inputs more but, on a very noisy input, leave holes the mesh closes with
-// a handle.
+// than the two it splits are apart — the chord cuts across a bore, a recess or a gap (a sparse input's, or the MLS
+// surface of unoriented normals) rather than spanning surface (a half circle's sagitta is half the chord). Tighter
+// bounds help sparse inputs more but, on a very noisy input, leave holes the mesh closes with a handle.
 constexpr double kSplitSagitta = 1.0;
-// The spacing cv above which the passes at N go on while it falls at all (the uniformity the issues ask of an
-// isotropic sampling); under it, only while it falls by over 5 % a pass.
-constexpr double kEvenCv = 0.08;
 constexpr double kCarryShare = 0.05;     // edits touching more than this share of samples restart the relaxation
 constexpr std::size_t kWiderQuery = 3;   // candidates queried for a sample the rule refuses some of
 constexpr double kCellSheetHeight = 1.25;  // voxel cells: another sheet lies this × the sheet height off a plane
@@ -729,18 +725,17 @@ void Resampler::run(Samples& s, ResampleResult& result) {
     if (static_cast<double>(map.touched.size()) > kCarryShare * static_cast<double>(s.size())) relaxation = {};
     carry(relaxation, map, s.size());
   };
-  // maxPasses bounds the passes at N; passes that still change the count (upsampling doubles it at most once
-  // per pass) come on top, up to kMaxCountPasses of them. While the spacing cv still falls by over 5 % a pass
-  // (under 0.9 of its value two passes before), or at all while it is above kEvenCv, the passes at N go on, up to
-  // 8 × maxPasses: each moves 1 % of the samples from the densest spots to the sparsest, too few where the density
-  // varies widely (a scanner's rings, whose cv fell from 0.40 to 0.28 by 5–6 % a pass and stopped there).
+  // maxPasses bounds the passes at N; count-changing passes come on top (up to kMaxCountPasses). Up to 8 × maxPasses
+  // at N while the cv falls by over 5 % a pass (0.9 over two), or at all above kEvenCv: each moves 1 % of the samples
+  // from the densest spots to the sparsest, too few where the density varies widely (a scanner's rings: 0.40 → 0.28).
   constexpr int kMaxCountPasses = 8, kMaxPassFactor = 8;
+  constexpr double kEvenCv = 0.08;  // the isotropic spacing cv the issues ask for
   std::vector<double> passCv;
   auto another = [&](int pass, int atN) {
     if (atN < params_.maxPasses) return pass < params_.maxPasses + kMaxCountPasses;
     const std::size_t m = passCv.size();
-    if (atN >= kMaxPassFactor * params_.maxPasses || m < 3) return false;
-    return passCv[m - 1] < (passCv[m - 1] > kEvenCv ? 1.0 : 0.9) * passCv[m - 3];
+    const double fall = m >= 3 && passCv[m - 1] > kEvenCv ? 1.0 : 0.9;
+    return atN < kMaxPassFactor * params_.maxPasses && m >= 3 && passCv[m - 1] < fall * passCv[m - 3];
   };
   for (int pass = 0, atN = 0; another(pass, atN); ++pass) {
     exec_.report("resample", 0.8 * std::min(atN, params_.maxPasses) / params_.maxPasses);
