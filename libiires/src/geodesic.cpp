@@ -30,6 +30,8 @@ using Clock = std::chrono::steady_clock;
 // A point's local sampling scale reads the nearest-neighbour distances of itself and at most this many of its
 // neighbours (componentScales()).
 constexpr std::size_t kMaxScaleNeighbours = 16;
+// A neighbourhood sampled this many times more coarsely than the cloud has its own scale; under it the scale stays
+// the component's (a random sampling's local median varies by ±20 %).
 constexpr float kSparseScale = 2.0f;
 
 double secondsSince(Clock::time_point t) {
@@ -365,7 +367,9 @@ GeodesicCoordinates::Impl::NeighbourLists GeodesicCoordinates::Impl::neighbourLi
 /// nearest-neighbour distance over the cloud's (spacing), at least 1 — and on or beside scan lines at least half
 /// the largest distance to the next line among the point and its k nearest over the spacing (a point between two
 /// lines lies that far from the nearest one; a point that noise or a tight turn kept off the lines, or whose
-/// nearest line lies on one side while the other side's is farther, takes its neighbours' spacing).
+/// nearest line lies on one side while the other side's is farther, takes its neighbours' spacing). localScale: the
+/// same, or the point's own neighbourhood's median nearest-neighbour distance over the spacing where that is at
+/// least kSparseScale.
 void GeodesicCoordinates::Impl::componentScales(const NeighbourLists& lists, const Components& components) {
   const std::size_t n = points.size(), k = static_cast<std::size_t>(params.k);
   std::vector<std::vector<float>> nearest(components.count);
