@@ -49,13 +49,8 @@ struct Geometry {
 
 void addPolygon(Geometry& geometry, const std::vector<int>& polygon);
 
-/// A mesh read as a point cloud: adds points on the faces its vertices leave unsampled (io_face_samples.cpp) —
-/// one per s² of a face's area, s the median edge length, so a mesh with faces far larger than that (a CAD
-/// part's flat faces, whose vertices lie on their rims only) reads as a sampling of its surface, and a mesh as
-/// fine as its vertices (every face under s²) is read as its vertices; at least about 100,000 points over the
-/// surface (a cube's 8 corners sample nothing of it). The new points' normals: the corners' (the file's, one per
-/// vertex, when there are) blended; their attributes blended from the face's corners (a label takes the nearest
-/// corner's value).
+/// The face points of readSurfacePoints() (io.hpp), appended to @p geometry's vertices: one per s² of a face's
+/// area, s the median edge length (io_face_samples.cpp).
 void addFaceSamples(Geometry& geometry);
 
 // ---------------------------------------------------------------------------------------------------------

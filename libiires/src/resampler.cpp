@@ -734,8 +734,8 @@ void Resampler::run(Samples& s, ResampleResult& result) {
   auto another = [&](int pass, int atN) {
     if (atN < params_.maxPasses) return pass < params_.maxPasses + kMaxCountPasses;
     const std::size_t m = passCv.size();
-    const double fall = m >= 3 && passCv[m - 1] > kEvenCv ? 1.0 : 0.9;
-    return atN < kMaxPassFactor * params_.maxPasses && m >= 3 && passCv[m - 1] < fall * passCv[m - 3];
+    if (atN >= kMaxPassFactor * params_.maxPasses || m < 3) return false;
+    return passCv[m - 1] < (passCv[m - 1] > kEvenCv ? 1.0 : 0.9) * passCv[m - 3];
   };
   for (int pass = 0, atN = 0; another(pass, atN); ++pass) {
     exec_.report("resample", 0.8 * std::min(atN, params_.maxPasses) / params_.maxPasses);
