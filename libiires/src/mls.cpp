@@ -168,7 +168,6 @@ Eigen::Vector3d MlsSurface::project(const Eigen::Vector3d& x0, Eigen::Vector3d* 
     d2.resize(idx.size());
   }
   const int steps = std::max(1, iterations > 0 ? iterations : params_.iterations);
-  const double normalInv = params_.normalSigma > 0 ? 1.0 / (params_.normalSigma * params_.normalSigma) : 0.0;
   for (int it = 0; it < steps; ++it) {
     // Re-centre the neighbourhood only when the estimate moved by more than a quarter kernel width.
     if (lastH == 0 || (x - queried).squaredNorm() > 0.0625 * lastH * lastH) {
@@ -218,6 +217,12 @@ Eigen::Vector3d MlsSurface::project(const Eigen::Vector3d& x0, Eigen::Vector3d* 
     };
     if (gate && std::none_of(idx.begin(), idx.end(), [&](std::uint32_t j) { return facing(j) && onSheet(j); }))
       gate = false;
+    // Normal weights (robust MLS): everywhere at normalSigma, else where another sheet is near, at
+    // nearSheetNormalSigma.
+    const bool nearOther = !nearSheets_.empty() && std::any_of(idx.begin(), idx.begin() + static_cast<long>(found),
+                                                               [&](std::uint32_t j) { return nearSheets_[j] != 0; });
+    const double sigma = params_.normalSigma > 0 ? params_.normalSigma : nearOther ? params_.nearSheetNormalSigma : 0.0;
+    const double normalInv = sigma > 0 ? 1.0 / (sigma * sigma) : 0.0;
     h = 0;
     for (std::size_t j = 0; j < found; ++j) h += h_[idx[j]];
     h /= static_cast<double>(found);
