@@ -217,8 +217,7 @@ Eigen::Vector3d MlsSurface::project(const Eigen::Vector3d& x0, Eigen::Vector3d* 
     };
     if (gate && std::none_of(idx.begin(), idx.end(), [&](std::uint32_t j) { return facing(j) && onSheet(j); }))
       gate = false;
-    // Normal weights (robust MLS): everywhere at normalSigma, else where another sheet is near, at
-    // nearSheetNormalSigma.
+    // Normal weights (robust MLS): everywhere at normalSigma, else at nearSheetNormalSigma where a sheet is near.
     const bool nearOther = !nearSheets_.empty() && std::any_of(idx.begin(), idx.begin() + static_cast<long>(found),
                                                                [&](std::uint32_t j) { return nearSheets_[j] != 0; });
     const double sigma = params_.normalSigma > 0 ? params_.normalSigma : nearOther ? params_.nearSheetNormalSigma : 0.0;
