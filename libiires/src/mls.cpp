@@ -9,6 +9,7 @@
 #include "iires/detail/parallel.hpp"
 #include "iires/sheets.hpp"
 #include "quadric_fit.hpp"
+#include "tangent_hull.hpp"
 
 namespace iires {
 namespace {
@@ -19,66 +20,6 @@ constexpr double kMaxQuadricHeight = 2.0;     // kernel widths: a quadric fit be
 const double kSpacingPerWidth = 0.5 / std::sqrt(8.0 / M_PI);
 const double kGapParallelCos = std::cos(25.0 * M_PI / 180.0);  // SheetParams::gapAngleDeg
 
-/// Distance from the origin to the segment [p, r].
-double segmentDistance(const Eigen::Vector2d& p, const Eigen::Vector2d& r) {
-  const Eigen::Vector2d e = r - p;
-  const double ee = e.squaredNorm();
-  const double t = ee > 0 ? std::clamp(-p.dot(e) / ee, 0.0, 1.0) : 0.0;
-  return (p + t * e).norm();
-}
-
-/// Distance in the tangent plane at @p x (normal @p normal) from x to the convex hull of the neighbours
-/// @p idx that have weight in @p w (the last projection step's): 0 inside it.
-/// Neighbours in all four open quadrants around x prove it inside (every line through x leaves a whole quadrant
-/// on one side), which ends the scan early in the cloud's interior; only the rest (near an open boundary)
-/// build the hull.
-double beyondHull(const std::vector<Eigen::Vector3d>& points, const std::vector<std::uint32_t>& idx,
-                  const std::vector<double>& w, const Eigen::Vector3d& x, const Eigen::Vector3d& normal) {
-  const Eigen::Vector3d u = normal.unitOrthogonal(), t = normal.cross(u);
-  thread_local std::vector<Eigen::Vector2d> q;
-  q.clear();
-  unsigned quadrants = 0;
-  for (std::size_t j = 0; j < idx.size(); ++j)
-    if (w[j] != 0.0) {
-      const Eigen::Vector3d d = points[idx[j]] - x;
-      const double a = d.dot(u), b = d.dot(t);
-      quadrants |= (a > 0 ? 1u : a < 0 ? 2u : 0u) << (b > 0 ? 0 : b < 0 ? 2 : 4);
-      if ((quadrants & 15u) == 15u) return 0.0;
-      q.emplace_back(a, b);
-    }
-  if (q.size() < 3) return q.empty() ? 0.0 : q.size() == 1 ? q[0].norm() : segmentDistance(q[0], q[1]);
-  // The hull (Andrew's monotone chain, counter-clockwise), then x's distance to it: 0 inside, else to the
-  // nearest hull edge.
-  std::sort(q.begin(), q.end(), [](const Eigen::Vector2d& p, const Eigen::Vector2d& r) {
-    return p.x() < r.x() || (p.x() == r.x() && p.y() < r.y());
-  });
-  thread_local std::vector<Eigen::Vector2d> hull;
-  hull.assign(2 * q.size(), Eigen::Vector2d::Zero());
-  auto cross = [](const Eigen::Vector2d& o, const Eigen::Vector2d& p, const Eigen::Vector2d& r) {
-    return (p - o).x() * (r - o).y() - (p - o).y() * (r - o).x();
-  };
-  std::size_t m = 0;
-  for (std::size_t j = 0; j < q.size(); ++j) {
-    while (m >= 2 && cross(hull[m - 2], hull[m - 1], q[j]) <= 0) --m;
-    hull[m++] = q[j];
-  }
-  for (std::size_t j = q.size() - 1, lowerEnd = m + 1; j-- > 0;) {
-    while (m >= lowerEnd && cross(hull[m - 2], hull[m - 1], q[j]) <= 0) --m;
-    hull[m++] = q[j];
-  }
-  --m;  // the last point is the first
-  if (m < 3) return segmentDistance(hull[0], hull[m > 1 ? 1 : 0]);
-  const Eigen::Vector2d origin = Eigen::Vector2d::Zero();
-  bool inside = true;
-  double nearest = std::numeric_limits<double>::max();
-  for (std::size_t e = 0; e < m; ++e) {
-    const Eigen::Vector2d& p = hull[e];
-    const Eigen::Vector2d& r = hull[e + 1 == m ? 0 : e + 1];
-    if (cross(p, r, origin) < 0) inside = false;
-    nearest = std::min(nearest, segmentDistance(p, r));
-  }
-  return inside ? 0.0 : nearest;
-}
 }  // namespace
 
 MlsSurface::MlsSurface(const std::vector<Eigen::Vector3d>& points,
@@ -298,7 +239,7 @@ Eigen::Vector3d MlsSurface::project(const Eigen::Vector3d& x0, Eigen::Vector3d* 
   }
   if (normalOut) *normalOut = normal;
   if (offSurface) *offSurface = off;
-  if (beyond) *beyond = idx.empty() || h <= 0 ? 0.0 : beyondHull(points_, idx, w, x, normal) / h;
+  if (beyond) *beyond = idx.empty() || h <= 0 ? 0.0 : detail::beyondHull(points_, idx.data(), idx.size(), w.data(), x, normal) / h;
   return x;
 }
 

@@ -11,6 +11,7 @@
 #include "iires/denoise.hpp"
 #include "iires/knn.hpp"
 #include "iires/detail/parallel.hpp"
+#include "tangent_hull.hpp"
 
 namespace iires {
 namespace {
@@ -18,6 +19,11 @@ namespace {
 using Clock = std::chrono::steady_clock;
 constexpr std::size_t kSpacingNeighbours = 6;  // l = mean distance to the 6 nearest neighbours (paper §6.1)
 constexpr std::size_t kNearPlaneSheets = 4;  // a flagged point's trusted neighbours whose planes are tried
+// How far past the trusted points around it, on its plane, a pulled point may land, in units of the fit's radius h:
+// a true outlier by an open boundary, pulled along a plane the noise tilts, lands up to about 0.6 h past them (a
+// noisy plane's edge); the points of a face seen at a grazing angle, pulled onto the face they meet at a crease,
+// up to 1.4 h (a one-view scan of a hexagonal nut).
+constexpr double kPullBeyond = 0.75;
 // A flagged point that a plane through it shares with this share of its planeNeighbours nearest (within this many
 // local spacings of the plane, around the point within this largest angular gap, three of them within the reach)
 // is on a sheet (onSharedPlane).
@@ -197,7 +203,11 @@ bool onSharedPlane(const std::vector<Eigen::Vector3d>& P, const std::uint32_t* r
 /// eq. (5): projects each outlier onto the MLS plane of its nearest trusted point q's neighbourhood. Outliers
 /// flagged in @p isolated (far from the object) have no surface to land on and are removed instead; so is an
 /// outlier whose projection lands more than twice the fit's support radius h from a(q), where the plane no
-/// longer stands for the surface. An outlier within the plane's own scatter stays where it is.
+/// longer stands for the surface. An outlier within the plane's own scatter stays where it is, and so does one
+/// whose projection lands past the trusted points around it on the plane (by more than kPullBeyond·h): there the
+/// plane extrapolates. Such points are mostly true ones beside a crease or an open boundary: a face seen at a
+/// grazing angle, sparse beside the face it meets, had its points pulled onto that face's plane, past the crease
+/// and five spacings from any input point.
 void pullOutliers(const PointCloud& input, const OutlierParams& params, const std::vector<std::uint8_t>& trusted,
                   const std::vector<std::uint8_t>& isolated, OutlierResult& result, int threads) {
   const std::size_t n = input.size();
@@ -238,6 +248,12 @@ void pullOutliers(const PointCloud& input, const OutlierParams& params, const st
       unsupported[o] = 1;
       return;
     }
+    // Landing past the trusted points around it, the plane extrapolates: it does not show the point off the surface.
+    std::vector<std::uint32_t> around;
+    std::vector<double> aroundD2;
+    cleanTree->knn(pulled, fitK, around, aroundD2);
+    if (detail::beyondHull(cleanPoints, around.data(), around.size(), nullptr, pulled, plane.normal) > kPullBeyond * h)
+      return;
     // A point no farther from the plane than the plane's own points (twice their RMS distance) is not shown off
     // the surface by it: beside a crease the plane spans both sheets, and pulling a true point of one sheet onto
     // it would move it inside the object. It stays where it is.
