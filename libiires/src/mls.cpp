@@ -20,6 +20,15 @@ constexpr double kMaxQuadricHeight = 2.0;     // kernel widths: a quadric fit be
 const double kSpacingPerWidth = 0.5 / std::sqrt(8.0 / M_PI);
 const double kGapParallelCos = std::cos(25.0 * M_PI / 180.0);  // SheetParams::gapAngleDeg
 
+/// The σ of a fit's normal weights (robust MLS) over the neighbours @p idx: normalSigma everywhere, else
+/// nearSheetNormalSigma where one of them has another sheet near (@p near: the sheet rule's flags), else 0 (off).
+double normalWeightSigma(const MlsParams& params, const std::vector<std::uint8_t>& near,
+                         const std::vector<std::uint32_t>& idx) {
+  if (params.normalSigma > 0) return params.normalSigma;
+  const bool nearOther = !near.empty() && std::any_of(idx.begin(), idx.end(), [&](std::uint32_t j) { return near[j]; });
+  return nearOther ? params.nearSheetNormalSigma : 0.0;
+}
+
 }  // namespace
 
 MlsSurface::MlsSurface(const std::vector<Eigen::Vector3d>& points,
@@ -158,10 +167,7 @@ Eigen::Vector3d MlsSurface::project(const Eigen::Vector3d& x0, Eigen::Vector3d* 
     };
     if (gate && std::none_of(idx.begin(), idx.end(), [&](std::uint32_t j) { return facing(j) && onSheet(j); }))
       gate = false;
-    // Normal weights (robust MLS): everywhere at normalSigma, else at nearSheetNormalSigma where a sheet is near.
-    const bool nearOther = !nearSheets_.empty() && std::any_of(idx.begin(), idx.begin() + static_cast<long>(found),
-                                                               [&](std::uint32_t j) { return nearSheets_[j] != 0; });
-    const double sigma = params_.normalSigma > 0 ? params_.normalSigma : nearOther ? params_.nearSheetNormalSigma : 0.0;
+    const double sigma = normalWeightSigma(params_, nearSheets_, idx);
     const double normalInv = sigma > 0 ? 1.0 / (sigma * sigma) : 0.0;
     h = 0;
     for (std::size_t j = 0; j < found; ++j) h += h_[idx[j]];
@@ -239,7 +245,8 @@ Eigen::Vector3d MlsSurface::project(const Eigen::Vector3d& x0, Eigen::Vector3d* 
   }
   if (normalOut) *normalOut = normal;
   if (offSurface) *offSurface = off;
-  if (beyond) *beyond = idx.empty() || h <= 0 ? 0.0 : detail::beyondHull(points_, idx.data(), idx.size(), w.data(), x, normal) / h;
+  if (beyond)
+    *beyond = idx.empty() || h <= 0 ? 0.0 : detail::beyondHull(points_, idx.data(), idx.size(), w.data(), x, normal) / h;
   return x;
 }
 
