@@ -20,15 +20,6 @@ constexpr double kMaxQuadricHeight = 2.0;     // kernel widths: a quadric fit be
 const double kSpacingPerWidth = 0.5 / std::sqrt(8.0 / M_PI);
 const double kGapParallelCos = std::cos(25.0 * M_PI / 180.0);  // SheetParams::gapAngleDeg
 
-/// The σ of a fit's normal weights (robust MLS) over the neighbours @p idx: normalSigma everywhere, else
-/// nearSheetNormalSigma where one of them has another sheet near (@p near: the sheet rule's flags), else 0 (off).
-double normalWeightSigma(const MlsParams& params, const std::vector<std::uint8_t>& near,
-                         const std::vector<std::uint32_t>& idx) {
-  if (params.normalSigma > 0) return params.normalSigma;
-  const bool nearOther = !near.empty() && std::any_of(idx.begin(), idx.end(), [&](std::uint32_t j) { return near[j]; });
-  return nearOther ? params.nearSheetNormalSigma : 0.0;
-}
-
 }  // namespace
 
 MlsSurface::MlsSurface(const std::vector<Eigen::Vector3d>& points,
@@ -118,6 +109,7 @@ Eigen::Vector3d MlsSurface::project(const Eigen::Vector3d& x0, Eigen::Vector3d* 
     d2.resize(idx.size());
   }
   const int steps = std::max(1, iterations > 0 ? iterations : params_.iterations);
+  const double normalInv = params_.normalSigma > 0 ? 1.0 / (params_.normalSigma * params_.normalSigma) : 0.0;
   for (int it = 0; it < steps; ++it) {
     // Re-centre the neighbourhood only when the estimate moved by more than a quarter kernel width.
     if (lastH == 0 || (x - queried).squaredNorm() > 0.0625 * lastH * lastH) {
@@ -167,8 +159,6 @@ Eigen::Vector3d MlsSurface::project(const Eigen::Vector3d& x0, Eigen::Vector3d* 
     };
     if (gate && std::none_of(idx.begin(), idx.end(), [&](std::uint32_t j) { return facing(j) && onSheet(j); }))
       gate = false;
-    const double sigma = normalWeightSigma(params_, nearSheets_, idx);
-    const double normalInv = sigma > 0 ? 1.0 / (sigma * sigma) : 0.0;
     h = 0;
     for (std::size_t j = 0; j < found; ++j) h += h_[idx[j]];
     h /= static_cast<double>(found);
@@ -246,7 +236,8 @@ Eigen::Vector3d MlsSurface::project(const Eigen::Vector3d& x0, Eigen::Vector3d* 
   if (normalOut) *normalOut = normal;
   if (offSurface) *offSurface = off;
   if (beyond)
-    *beyond = idx.empty() || h <= 0 ? 0.0 : detail::beyondHull(points_, idx.data(), idx.size(), w.data(), x, normal) / h;
+    *beyond = idx.empty() || h <= 0 ? 0.0
+                                    : detail::beyondHull(points_, idx.data(), idx.size(), w.data(), x, normal) / h;
   return x;
 }
 

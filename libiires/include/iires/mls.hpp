@@ -25,12 +25,6 @@ struct MlsParams {
   /// Öztireli et al. 2009): a fit near a crease follows the query's own sheet and does not round the crease off.
   /// 0 = off (the normals' sign test only). `--sharp-edges` sets 0.5 unless given.
   double normalSigma = 0.0;
-  /// The same weights where normalSigma is 0, in fits that hold a point with another sheet near (the sheet rule's
-  /// near flags): a thin part's rim or fold turns tighter than the kernel (sheets 2.5–3 input spacings apart
-  /// joined by a fold of that diameter), and the plain fit, reaching round it, pulled samples within an output
-  /// spacing of the fold up to 0.28 gap off their sheet. 1 weighs a neighbour turned by 30° at 0.76, by 90° at
-  /// 0.14. 0 = off.
-  double nearSheetNormalSigma = 1.0;
 };
 
 /// @brief The input neighbourhood of a previous projection, kept by a caller that projects the same moving
