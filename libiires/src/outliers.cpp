@@ -249,9 +249,10 @@ void pullOutliers(const PointCloud& input, const OutlierParams& params, const st
       return;
     }
     // Landing past the trusted points around it, the plane extrapolates: it does not show the point off the surface.
+    // Three fit rows of them, so that on a scan's lines (a profile scanner's slices) they span the gap to the next.
     std::vector<std::uint32_t> around;
     std::vector<double> aroundD2;
-    cleanTree->knn(pulled, fitK, around, aroundD2);
+    cleanTree->knn(pulled, 3 * fitK, around, aroundD2);
     if (detail::beyondHull(cleanPoints, around.data(), around.size(), nullptr, pulled, plane.normal) > kPullBeyond * h)
       return;
     // A point no farther from the plane than the plane's own points (twice their RMS distance) is not shown off
