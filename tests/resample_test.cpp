@@ -288,6 +288,35 @@ TEST(Resample, UpsampledSparseTubeEndsStayAtTheInputsRims) {
   EXPECT_LE(radial, 0.1 * spacing);
 }
 
+// Dense specks (30 points within 0.05) on a sheet sampled about 1 apart: each speck is a part of its own to the
+// neighbour rule. A split of an edge passing over one lands on the speck, where neither end sees it; every pass
+// split that edge again onto the same spot, stacking samples on one position.
+TEST(Resample, SplitsNeverStackSamplesOnADenseSpeck) {
+  for (std::uint64_t seed : {1u, 2u, 3u, 4u}) {
+    const double side = std::sqrt(3000.0);
+    iires::PointCloud cloud = iires::test::planeCloud(3000, side, 1.0, seed);
+    std::mt19937_64 rng(seed + 100);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    for (int speck = 0; speck < 10; ++speck) {
+      const Eigen::Vector3d centre((0.1 + 0.8 * u(rng)) * side, (0.1 + 0.8 * u(rng)) * side, 0.0);
+      for (int k = 0; k < 30; ++k) {
+        const double a = 2.0 * M_PI * u(rng), r = 0.05 * std::sqrt(u(rng));
+        cloud.points.push_back(centre + Eigen::Vector3d(r * std::cos(a), r * std::sin(a), 0.0));
+      }
+    }
+    for (std::size_t n : {2000u, 3000u}) {
+      const auto r = iires::resample(cloud, paramsFor(n));
+      ASSERT_EQ(r.cloud.size(), n);
+      const iires::KnnIndex index(r.cloud.points);
+      std::size_t stacked = 0;
+      std::vector<std::uint32_t> idx;
+      std::vector<double> d2;
+      for (const auto& p : r.cloud.points) stacked += index.knn(p, 2, idx, d2) == 2 && d2[1] < 1e-18;
+      EXPECT_EQ(stacked, 0u) << "seed " << seed << ", N = " << n;
+    }
+  }
+}
+
 TEST(Resample, RejectsBadInputAndParameters) {
   iires::PointCloud empty;
   EXPECT_THROW(iires::resample(empty, paramsFor(10)), iires::InputError);

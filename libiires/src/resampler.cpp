@@ -37,6 +37,7 @@ constexpr double kCollapseOffLimit = 1.0;
 // bounds help sparse inputs more but, on a very noisy input, leave holes the mesh closes with a handle.
 constexpr double kSplitSagitta = 1.0;
 constexpr double kCarryShare = 0.05;     // edits touching more than this share of samples restart the relaxation
+constexpr double kCoincident = 1e-9;     // a split's sample this close to one (× the edge): at its position
 constexpr std::size_t kWiderQuery = 3;   // candidates queried for a sample the rule refuses some of
 constexpr double kCellSheetHeight = 1.25;  // voxel cells: another sheet lies this × the sheet height off a plane
 
@@ -374,6 +375,7 @@ EditMap Resampler::splitAndCollapse(Samples& s, const std::vector<Edge>& sorted,
   // midpoint leaves the surface) is not split.
   std::vector<Eigen::Vector3d> newPos, newNrm;
   std::vector<const Edge*> batch;
+  const KnnIndex samples(s.pos);
   auto next = sorted.rbegin();
   while (newPos.size() < splits && next != sorted.rend() && next->length > minSplit) {
     batch.clear();
@@ -382,13 +384,21 @@ EditMap Resampler::splitAndCollapse(Samples& s, const std::vector<Edge>& sorted,
       batch.push_back(&*next);
     std::vector<Eigen::Vector3d> pos(batch.size()), nrm(batch.size());
     std::vector<double> off(batch.size()), out(batch.size());
+    std::vector<char> clear(batch.size(), 1);
     parallelFor(batch.size(), exec_.threads, [&](std::size_t c) {
       const Edge& e = *batch[c];
       pos[c] = surface_.project(0.5 * (s.pos[e.a] + s.pos[e.b]), &nrm[c], &off[c], &s.nrm[e.a], nullptr, 0, &out[c]);
+      // Never onto a sample already there: the ends of an edge that passes over a part of its own to the rule
+      // (a dense speck) do not see the sample its split put there, and the next pass splits the edge again, onto
+      // the same spot (samples at one position also share a cell and move together for good).
+      thread_local std::vector<std::uint32_t> idx;
+      thread_local std::vector<double> d2;
+      const double tiny = kCoincident * (s.pos[e.a] - s.pos[e.b]).norm();
+      clear[c] = samples.knn(pos[c], 1, idx, d2) == 0 || d2[0] > tiny * tiny;
     });
     for (std::size_t c = 0; c < batch.size() && newPos.size() < splits; ++c) {
       const Eigen::Vector3d &a = s.pos[batch[c]->a], &b = s.pos[batch[c]->b];
-      if (off[c] <= kOffSurfaceLimit && out[c] <= kBeyondLimit &&
+      if (clear[c] && off[c] <= kOffSurfaceLimit && out[c] <= kBeyondLimit &&
           (pos[c] - 0.5 * (a + b)).norm() <= kSplitSagitta * (a - b).norm()) {
         newPos.push_back(pos[c]), newNrm.push_back(nrm[c]);
         map.touched.push_back(batch[c]->a), map.touched.push_back(batch[c]->b);
