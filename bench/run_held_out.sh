@@ -1,0 +1,49 @@
+#!/bin/sh
+# SPDX-License-Identifier: GPL-3.0-or-later
+# title: Models outside the corpus (held out)
+# about: `bench/run_held_out.sh quick|full`: files of CGAL's data archive that DEVELOPERS.md's corpus does not list
+# about: (fetched by datasets/fetch.sh), run through the corpus benchmarks with their defaults, nothing tuned on them.
+# about: mesh rows: `reconstruct_bench --dense 200000 --counts 10000,30000 --density-ratio 1 --seed 1 --methods local`
+# about: (genus against the true mesh's, na where it is not a closed 2-manifold); scan rows: `reconstruct_bench
+# about: --points F --point-counts 5000,10000`; misses = issue 19's genus/closure and issue 20's validity and
+# about: quality bounds (closure not asked of the scans). quick: 6 meshes and 3 scans; full: 26 meshes and 8 scans.
+# columns: model n genus_truth genus components closed si nm q_avg q_min lt30 uncov cv misses
+cd "$(dirname "$0")/.." || exit 1
+B=${BUILD:-build-bench}/bin/reconstruct_bench
+if [ "${1:-quick}" = full ]; then
+  meshes="bear blade bull camel cow dino elephant elk femur homer man pig pinion rotor turbine triceratops
+double-torus-3-holes cheese bones mannequin-devil diplodocus ChineseDragon-10kv blobby torus_quad star cylinder"
+  scans="oni.ply radar.xyz poste_france.xyz ball.ply b9_training.ply spheres.ply fin90_with_PCA_normals.xyz blobby.xyz"
+else
+  meshes="bear camel cow elephant man pinion"
+  scans="oni.ply radar.xyz b9_training.ply"
+fi
+# The lists split into words on purpose (one name each).
+# shellcheck disable=SC2086
+comma() { printf '%s\n' $1 | paste -sd, -; }
+files=""
+for m in $meshes; do files="$files meshes/$m.off"; done
+for s in $scans; do files="$files points_3/$s"; done
+# shellcheck disable=SC2086
+bash datasets/fetch.sh $files >/dev/null || exit 1
+{
+  "$B" --models "$(comma "$meshes")" --dense 200000 --counts 10000,30000 --density-ratio 1 --seed 1 --methods local
+  "$B" --models none --points "$(comma "$scans")" --point-counts 5000,10000 --seed 1 --methods local
+} | awk '
+  /method=resample/ { cv = ""; for (i = 1; i <= NF; i++) if ($i ~ /^spacing_cv=/) cv = substr($i, 12); next }
+  /method=local/ {
+    delete kv
+    for (i = 1; i <= NF; i++) { p = index($i, "="); if (p) kv[substr($i, 1, p - 1)] = substr($i, p + 1) }
+    m = ""
+    if (kv["genus_truth"] != "na" && kv["genus"] != kv["genus_truth"]) m = m ",genus"
+    if (kv["genus_truth"] != "na" && kv["closed"] != 1) m = m ",closed"
+    if (kv["self_intersections"] > 0) m = m ",si"
+    if (kv["nonmanifold_edges"] + kv["nonmanifold_vertices"] > 0) m = m ",nm"
+    if (kv["q_avg"] < 0.9) m = m ",q_avg"
+    if (kv["q_min"] < 0.4) m = m ",q_min"
+    if (kv["pct_angle_lt30"] >= 1) m = m ",lt30"
+    printf "model=%s n=%s genus_truth=%s genus=%s components=%s closed=%s si=%s nm=%s q_avg=%.4f q_min=%.3f " \
+      "lt30=%.2f uncov=%s cv=%s misses=%s\n", kv["model"], kv["n"], kv["genus_truth"], kv["genus"],
+      kv["components"], kv["closed"], kv["self_intersections"], kv["nonmanifold_edges"] + kv["nonmanifold_vertices"],
+      kv["q_avg"], kv["q_min"], kv["pct_angle_lt30"], kv["uncovered_pct"], cv, m == "" ? "none" : substr(m, 2)
+  }'
