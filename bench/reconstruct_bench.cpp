@@ -214,9 +214,15 @@ void runCase(const Case& c, const std::vector<std::string>& counts, const std::v
     iires::ResampleParams rp = iires::meshResampling();  // the resampling reconstruct() does
     rp.targetCount = std::stoul(count);
     const auto t = Clock::now();
-    const iires::ResampleResult rs = iires::resample(c.input, rp, iires::Execution{threads});
     const std::string head = "model=" + c.name + " density_ratio=" + (c.truthFile.empty() ? "real" : std::to_string(ratio).substr(0, 3)) +
                              " input_points=" + std::to_string(c.input.size()) + " n=" + count + " genus_truth=" + genusTruth;
+    iires::ResampleResult rs;
+    try {  // an input the resampler refuses (exit 1 or 2 from the CLI) is a row, not the end of the run
+      rs = iires::resample(c.input, rp, iires::Execution{threads});
+    } catch (const std::exception& e) {
+      std::cout << head << " method=resample status=error message=\"" << e.what() << "\"" << std::endl;
+      continue;
+    }
     std::cout << head << " method=resample spacing_cv=" << rs.spacing.cv << " time_s=" << since(t) << std::endl;
     iires::writePointCloud(cloudFile, rs.cloud);
     for (const std::string& m : methods) {

@@ -6,14 +6,16 @@
 # about: mesh rows: `reconstruct_bench --dense 200000 --counts 10000,30000 --density-ratio 1 --seed 1 --methods local`
 # about: (genus against the true mesh's, na where it is not a closed 2-manifold); scan rows: `reconstruct_bench
 # about: --points F --point-counts 5000,10000`; misses = issue 19's genus/closure and issue 20's validity and
-# about: quality bounds (closure not asked of the scans). quick: 6 meshes and 3 scans; full: 26 meshes and 8 scans.
+# about: quality bounds (closure not asked of the scans). quick: 6 meshes and 3 scans; full: 26 meshes and 9 scans
+# about: (a run the resampler refuses: misses=failed).
 # columns: model n genus_truth genus components closed si nm q_avg q_min lt30 uncov cv misses
 cd "$(dirname "$0")/.." || exit 1
 B=${BUILD:-build-bench}/bin/reconstruct_bench
 if [ "${1:-quick}" = full ]; then
   meshes="bear blade bull camel cow dino elephant elk femur homer man pig pinion rotor turbine triceratops
 double-torus-3-holes cheese bones mannequin-devil diplodocus ChineseDragon-10kv blobby torus_quad star cylinder"
-  scans="oni.ply radar.xyz poste_france.xyz ball.ply b9_training.ply spheres.ply fin90_with_PCA_normals.xyz blobby.xyz"
+  scans="oni.ply radar.xyz poste_france.xyz ball.ply b9_training.ply spheres.ply circles.ply fin90_with_PCA_normals.xyz
+blobby.xyz"
 else
   meshes="bear camel cow elephant man pinion"
   scans="oni.ply radar.xyz b9_training.ply"
@@ -30,7 +32,16 @@ bash datasets/fetch.sh $files >/dev/null || exit 1
   "$B" --models "$(comma "$meshes")" --dense 200000 --counts 10000,30000 --density-ratio 1 --seed 1 --methods local
   "$B" --models none --points "$(comma "$scans")" --point-counts 5000,10000 --seed 1 --methods local
 } | awk '
-  /method=resample/ { cv = ""; for (i = 1; i <= NF; i++) if ($i ~ /^spacing_cv=/) cv = substr($i, 12); next }
+  /method=resample/ {
+    cv = ""
+    for (i = 1; i <= NF; i++) if ($i ~ /^spacing_cv=/) cv = substr($i, 12)
+    if (/status=error/) {
+      delete kv
+      for (i = 1; i <= NF; i++) { p = index($i, "="); if (p) kv[substr($i, 1, p - 1)] = substr($i, p + 1) }
+      printf "model=%s n=%s genus_truth=%s misses=failed\n", kv["model"], kv["n"], kv["genus_truth"]
+    }
+    next
+  }
   /method=local/ {
     delete kv
     for (i = 1; i <= NF; i++) { p = index($i, "="); if (p) kv[substr($i, 1, p - 1)] = substr($i, p + 1) }
