@@ -39,7 +39,6 @@ constexpr double kSplitSagitta = 1.0;
 constexpr double kCarryShare = 0.05;     // edits touching more than this share of samples restart the relaxation
 constexpr double kCoincident = 1e-9;     // a split's sample this close to one (× the edge): at its position
 constexpr std::size_t kWiderQuery = 3;   // candidates queried for a sample the rule refuses some of
-constexpr double kCellSheetHeight = 1.25;  // voxel cells: another sheet lies this × the sheet height off a plane
 
 /// The samples of @p s not marked in @p removed, in Morton order (loops over samples and their k-NN queries then
 /// stay in cache).
@@ -388,13 +387,11 @@ EditMap Resampler::splitAndCollapse(Samples& s, const std::vector<Edge>& sorted,
     parallelFor(batch.size(), exec_.threads, [&](std::size_t c) {
       const Edge& e = *batch[c];
       pos[c] = surface_.project(0.5 * (s.pos[e.a] + s.pos[e.b]), &nrm[c], &off[c], &s.nrm[e.a], nullptr, 0, &out[c]);
-      // Never onto a sample already there: the ends of an edge that passes over a part of its own to the rule
-      // (a dense speck) do not see the sample its split put there, and the next pass splits the edge again, onto
-      // the same spot (samples at one position also share a cell and move together for good).
-      thread_local std::vector<std::uint32_t> idx;
-      thread_local std::vector<double> d2;
-      const double tiny = kCoincident * (s.pos[e.a] - s.pos[e.b]).norm();
-      clear[c] = samples.knn(pos[c], 1, idx, d2) == 0 || d2[0] > tiny * tiny;
+      // Never onto a sample already there: the ends of an edge over a dense speck (a part of its own to the rule)
+      // do not see the sample its split put there, and every pass would split the edge onto that spot again.
+      const std::int64_t q = samples.nearest(pos[c]);
+      const double edge = (s.pos[e.a] - s.pos[e.b]).norm();
+      clear[c] = q < 0 || (s.pos[static_cast<std::size_t>(q)] - pos[c]).norm() > kCoincident * edge;
     });
     for (std::size_t c = 0; c < batch.size() && newPos.size() < splits; ++c) {
       const Eigen::Vector3d &a = s.pos[batch[c]->a], &b = s.pos[batch[c]->b];
@@ -651,25 +648,6 @@ void Resampler::forceCount(Samples& s, Relaxation& relaxation) {
   s = std::move(kept);
   updateRule(s);
   relaxation = {};
-}
-
-std::vector<std::uint32_t> initialCandidates(const PointCloud& cloud, const MlsSurface& surface,
-                                             const ResampleParams& params, int threads) {
-  const std::size_t count =
-      static_cast<std::size_t>(params.candidateFactor *
-                               static_cast<double>(params.targetCount + params.contextSamples.size()));
-  if (cloud.size() <= count) {
-    std::vector<std::uint32_t> all(cloud.size());
-    std::iota(all.begin(), all.end(), 0u);
-    return all;
-  }
-  // Intrinsic control: one candidate per sheet in each cell (sheets.hpp's height, without the slope term:
-  // a cell spans several spacings, and a curved sheet split in two only adds a candidate).
-  const double sheetHeight = params.intrinsic ? kCellSheetHeight * params.preprocessing.sheet.heightSpacings *
-                                                    surface.meanSpacing()
-                                              : 0.0;
-  return voxelThin(cloud.points, cloud.normals, count, std::sqrt(surface.area() / static_cast<double>(count)),
-                   params.seed, threads, sheetHeight);
 }
 
 Samples Resampler::initialise(const std::vector<std::uint32_t>& chosen, ResampleResult& result) {

@@ -7,10 +7,16 @@
 #include <numeric>
 
 #include "iires/detail/parallel.hpp"
+#include "iires/mls.hpp"
+#include "iires/resample.hpp"
 #include "iires/detail/radix_sort.hpp"
 #include "cell_layers.hpp"
+#include "resampler.hpp"
 
 namespace iires::detail {
+namespace {
+constexpr double kCellSheetHeight = 1.25;  // voxel cells: another sheet lies this × the sheet height off a plane
+}  // namespace
 
 std::vector<std::uint32_t> voxelThin(const std::vector<Eigen::Vector3d>& pts, const std::vector<Eigen::Vector3d>& normals,
                                      std::size_t target, double cell, std::uint64_t seed, int threads,
@@ -113,6 +119,26 @@ std::vector<std::uint32_t> voxelThin(const std::vector<Eigen::Vector3d>& pts, co
   for (std::size_t i = 0; i < n; ++i)
     if (picked[i]) chosen.push_back(static_cast<std::uint32_t>(i));
   return chosen;
+}
+
+
+std::vector<std::uint32_t> initialCandidates(const PointCloud& cloud, const MlsSurface& surface,
+                                             const ResampleParams& params, int threads) {
+  const std::size_t count =
+      static_cast<std::size_t>(params.candidateFactor *
+                               static_cast<double>(params.targetCount + params.contextSamples.size()));
+  if (cloud.size() <= count) {
+    std::vector<std::uint32_t> all(cloud.size());
+    std::iota(all.begin(), all.end(), 0u);
+    return all;
+  }
+  // Intrinsic control: one candidate per sheet in each cell (sheets.hpp's height, without the slope term:
+  // a cell spans several spacings, and a curved sheet split in two only adds a candidate).
+  const double sheetHeight = params.intrinsic ? kCellSheetHeight * params.preprocessing.sheet.heightSpacings *
+                                                    surface.meanSpacing()
+                                              : 0.0;
+  return voxelThin(cloud.points, cloud.normals, count, std::sqrt(surface.area() / static_cast<double>(count)),
+                   params.seed, threads, sheetHeight);
 }
 
 }  // namespace iires::detail
