@@ -151,5 +151,33 @@ TEST(Validate, SignedZeroesAreTheSamePoint) {
   EXPECT_EQ(cloud.size(), 4u);
 }
 
+// A volume is rejected; a surface is not, however noisy: a shell whose radial noise is 12 % of its radius (the
+// neighbourhoods are three-dimensional up to 256 points and flat at a tenth of the cloud), a plane with noise of
+// one spacing, a sheet scanned in lines ten times farther apart than the points along them.
+TEST(SurfaceCheck, AVolumeIsRejectedANoisySurfaceIsNot) {
+  std::mt19937_64 rng(9);
+  std::normal_distribution<double> g(0.0, 1.0);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::vector<Vector3d> ball, shell, plane, lines;
+  while (ball.size() < 5000) {
+    const Vector3d p(2 * u(rng) - 1, 2 * u(rng) - 1, 2 * u(rng) - 1);
+    if (p.norm() <= 1) ball.push_back(p);
+  }
+  for (int i = 0; i < 20000; ++i)
+    shell.push_back((1.0 + 0.12 * g(rng)) * Vector3d(g(rng), g(rng), g(rng)).normalized());
+  for (int i = 0; i < 20000; ++i) plane.emplace_back(141 * u(rng), 141 * u(rng), g(rng));
+  for (int line = 0; line < 30; ++line)
+    for (int i = 0; i < 300; ++i) lines.emplace_back(0.1 * i, 1.0 * line, 0.01 * g(rng));
+  try {
+    checkSamplesASurface(ball, "ball.xyz");
+    ADD_FAILURE() << "a solid ball was accepted";
+  } catch (const InputError& e) {
+    EXPECT_TRUE(contains(e.what(), "ball.xyz: the points fill a volume"));
+  }
+  EXPECT_NO_THROW(checkSamplesASurface(shell, "shell.xyz"));
+  EXPECT_NO_THROW(checkSamplesASurface(plane, "plane.xyz"));
+  EXPECT_NO_THROW(checkSamplesASurface(lines, "lines.xyz"));
+}
+
 }  // namespace
 }  // namespace iires

@@ -25,6 +25,8 @@
 namespace iires {
 namespace {
 
+constexpr std::size_t kPreprocessMinPoints = 25;  // fewer points are resampled without pre-processing
+
 using detail::initialCandidates;
 using detail::Resampler;
 using detail::Samples;
@@ -290,12 +292,12 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params, const Ex
 
   auto t = clock.begin("validate");
   result.duplicatesMerged = validateCloud(cloud, 4, "input", exec.threads).duplicatesMerged;
+  checkSamplesASurface(cloud.points, "input", exec.threads);
   clock.end("validate", t);
 
   cloud = workingCloud(std::move(cloud), params, exec, clock);
   result.thinnedPoints = cloud.size();
 
-  constexpr std::size_t kPreprocessMinPoints = 25;
   const bool preprocessing = params.preprocess && cloud.size() >= kPreprocessMinPoints;
   PreprocessParams pp = params.preprocessing;
   const GeodesicParams& gp = params.geodesic;

@@ -5,6 +5,9 @@
 
 #include <cstddef>
 #include <string>
+#include <vector>
+
+#include <Eigen/Core>
 
 #include "iires/types.hpp"
 
@@ -37,5 +40,14 @@ constexpr double kTinyCoordinate = 1e-150;
 /// @param threads threads for the per-point checks (0 = all cores); the result does not depend on it.
 ValidationReport validateCloud(PointCloud& cloud, std::size_t minPoints, const std::string& what = "input",
                                int threads = 0);
+
+/// @brief Reject a cloud that fills a volume instead of sampling a surface: most of the neighbourhoods probed
+/// (256 of an even subsample of at most 20,000 points) are three-dimensional — surface variation λ₀/Σλ above 0.1 —
+/// at 16, 64 and 256 neighbours and at a tenth of the subsample (up to 2,048). A noisy scan is flat at one of
+/// these scales (a shell with noise of 12 % of its radius at the largest); clouds under 64 points pass unchecked.
+/// @throws InputError naming @p what and the share of three-dimensional neighbourhoods.
+/// @param threads threads for the probes (0 = all cores); the result does not depend on it.
+void checkSamplesASurface(const std::vector<Eigen::Vector3d>& points, const std::string& what = "input",
+                          int threads = 0);
 
 }  // namespace iires
