@@ -13,14 +13,14 @@
 namespace iires {
 namespace {
 
-constexpr std::size_t kMinPoints = 64;      // fewer points cannot tell a surface from a volume
+constexpr std::size_t kMinPoints = 1000;    // fewer: a thin tube sampled that sparsely looks three-dimensional
 constexpr std::size_t kMaxProbed = 20000;   // the test reads an even subsample of at most this many points
 constexpr std::size_t kProbes = 256;        // neighbourhoods looked at
 constexpr std::size_t kMaxScale = 2048;     // largest neighbourhood (points of the subsample)
 // Surface variation λ₀/(λ₀ + λ₁ + λ₂) of a neighbourhood's covariance: 0 on a plane, 1/3 in a uniform ball.
 // A noisy shell (σ = 12 % of a sphere's radius) stays under it at the largest scale, a solid over it at all.
 constexpr double kFlatVariation = 0.1;
-constexpr double kVolumeShare = 0.5;  // of the probes three-dimensional at every scale: the points fill a volume
+constexpr double kVolumeShare = 0.75;  // of the probes three-dimensional at every scale: the points fill a volume
 
 double variation(const std::vector<Eigen::Vector3d>& points, const std::vector<std::uint32_t>& idx) {
   Eigen::Vector3d mean = Eigen::Vector3d::Zero();

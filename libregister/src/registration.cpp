@@ -379,11 +379,14 @@ RegistrationResult registerClouds(const PointCloud& sourceIn, const PointCloud& 
   RegistrationResult r;
   auto stage = [&](const char* name, Clock::time_point t) { r.timings.push_back({name, since(t)}); };
 
-  // 1. Validate: empty, NaN/Inf, too few distinct points, collinear → InputError naming the cloud.
+  // 1. Validate: empty, NaN/Inf, too few distinct points, collinear, a volume → InputError naming the cloud.
   auto t = Clock::now();
   PointCloud source = sourceIn, target = targetIn;
   validateCloud(source, kMinPoints, "source", exec.threads);
   validateCloud(target, kMinPoints, "target", exec.threads);
+  // On the clouds as given: the working clouds resampled below may be too small for the check.
+  checkSamplesASurface(source.points, "source", exec.threads);
+  checkSamplesASurface(target.points, "target", exec.threads);
   r.sourcePoints = sourceIn.size();
   r.targetPoints = targetIn.size();
   r.samples = params.samples;

@@ -41,10 +41,11 @@ constexpr double kTinyCoordinate = 1e-150;
 ValidationReport validateCloud(PointCloud& cloud, std::size_t minPoints, const std::string& what = "input",
                                int threads = 0);
 
-/// @brief Reject a cloud that fills a volume instead of sampling a surface: most of the neighbourhoods probed
-/// (256 of an even subsample of at most 20,000 points) are three-dimensional — surface variation λ₀/Σλ above 0.1 —
-/// at 16, 64 and 256 neighbours and at a tenth of the subsample (up to 2,048). A noisy scan is flat at one of
-/// these scales (a shell with noise of 12 % of its radius at the largest); clouds under 64 points pass unchecked.
+/// @brief Reject a cloud that fills a volume instead of sampling a surface: over three quarters of the
+/// neighbourhoods probed (256 of an even subsample of at most 20,000 points) are three-dimensional — surface
+/// variation λ₀/Σλ above 0.1 — at 16, 64 and 256 neighbours and at a tenth of the subsample (up to 2,048). A noisy
+/// scan is flat at one of these scales (a shell with noise of 12 % of its radius at the largest). Clouds under
+/// 1,000 points pass unchecked: a knot or a pipe sampled with 500 looks three-dimensional at 16 neighbours.
 /// @throws InputError naming @p what and the share of three-dimensional neighbourhoods.
 /// @param threads threads for the probes (0 = all cores); the result does not depend on it.
 void checkSamplesASurface(const std::vector<Eigen::Vector3d>& points, const std::string& what = "input",
