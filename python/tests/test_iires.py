@@ -27,9 +27,10 @@ def data(relative):
 
 # ------------------------------------------------------------------------------------------------ resample
 
-def test_resample_random_cube_gives_exactly_n():
-    # The README's one-liner: a volumetric cloud (uniform in a cube) is a valid input.
-    p = np.random.default_rng(0).random((20000, 3))
+def test_resample_random_sphere_gives_exactly_n():
+    # The README's one-liner: random points on a unit sphere.
+    p = np.random.default_rng(0).normal(size=(20000, 3))
+    p /= np.linalg.norm(p, axis=1, keepdims=True)
     r = iires.resample(p, 1000)
     assert r.points.shape == (1000, 3)
     assert r.normals.shape == (1000, 3)
@@ -124,6 +125,7 @@ def test_mesh_quality_of_a_reconstruction_against_its_input():
     (np.array([[0, 0, 0], [1, 0, 0], [np.nan, 0, 0], [0, 1, 0], [0, 0, 1]], float), "non-finite coordinate"),
     (np.array([[0, 0, 0], [1, 1, 1], [2, 2, 2], [3, 3, 3], [4, 4, 4]], float), "collinear"),
     (np.zeros((10, 2)), "points: expected an (n, 3) array"),
+    (np.random.default_rng(0).random((20000, 3)), "the points fill a volume rather than sample a surface"),
 ])
 def test_bad_clouds_raise_value_error(points, message):
     with pytest.raises(ValueError, match=message.replace("(", r"\(").replace(")", r"\)")):
