@@ -338,6 +338,14 @@ TEST(Reconstruct, DegenerateInputIsAnInputError) {
   few.points = {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(1, 0, 0), Eigen::Vector3d(0, 1, 0)};
   EXPECT_THROW(reconstruct(few), InputError);
   EXPECT_THROW(reconstruct(PointCloud{}), InputError);
+  PointCloud solid;  // points filling a cube: no surface, with or without resampling
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  for (int i = 0; i < 5000; ++i) solid.points.emplace_back(u(rng), u(rng), u(rng));
+  ReconstructParams asIs;
+  asIs.resample = false;
+  EXPECT_THROW(reconstruct(solid), InputError);
+  EXPECT_THROW(reconstruct(solid, asIs), InputError);
   ReconstructParams p;
   p.targetCount = 2;
   EXPECT_THROW(reconstruct(test::sphereCloud(100), p), std::invalid_argument);

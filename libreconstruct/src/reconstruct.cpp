@@ -316,6 +316,7 @@ ReconstructResult reconstruct(const PointCloud& input, const ReconstructParams& 
   cloud.points = input.points;
   cloud.normals = input.normals;
   validateCloud(cloud, 4, "input", exec.threads);
+  if (!params.resample) checkSamplesASurface(cloud.points, "input", exec.threads);  // resample() checks it too
   clock.end("validate", t);
 
   t = params.resample ? Clock::now() : clock.begin("normals");
