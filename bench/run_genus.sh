@@ -7,21 +7,16 @@
 # about: genus against the true mesh's (boeing has none: its mesh is not a closed 2-manifold); si = self-intersecting
 # about: face pairs. misses = genus, closed or si. quick: 6 models at 10k; full: the 29 closed models at 10k and 20k.
 # columns: model n genus_truth genus closed si q_min misses
-cd "$(dirname "$0")/.."
+cd "$(dirname "$0")/.." || exit 1
 B=${BUILD:-build-bench}/bin/reconstruct_bench
 if [ "${1:-quick}" = full ]; then
   models=closed counts=10000,20000
 else
   models=hand,armadillo,knot2,eight,3torus,couplingdown counts=10000
 fi
-"$B" --models "$models" --dense 200000 --counts "$counts" --density-ratio 1 --seed 1 --methods local | awk '
+"$B" --models "$models" --dense 200000 --counts "$counts" --density-ratio 1 --seed 1 --methods local | awk "$(cat bench/mesh_misses.awk)"'
   /method=local/ {
-    delete kv
-    for (i = 1; i <= NF; i++) { p = index($i, "="); if (p) kv[substr($i, 1, p - 1)] = substr($i, p + 1) }
-    m = ""
-    if (kv["genus_truth"] != "na" && kv["genus"] != kv["genus_truth"]) m = m ",genus"
-    if (kv["genus_truth"] != "na" && kv["closed"] != 1) m = m ",closed"
-    if (kv["self_intersections"] > 0) m = m ",si"
+    parse(kv)
     printf "model=%s n=%s genus_truth=%s genus=%s closed=%s si=%s q_min=%s misses=%s\n", kv["model"], kv["n"],
-      kv["genus_truth"], kv["genus"], kv["closed"], kv["self_intersections"], kv["q_min"], m == "" ? "none" : substr(m, 2)
+      kv["genus_truth"], kv["genus"], kv["closed"], kv["self_intersections"], kv["q_min"], misses(kv, "si,closed,genus")
   }'

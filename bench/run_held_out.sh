@@ -31,30 +31,17 @@ bash datasets/fetch.sh $files >/dev/null || exit 1
 {
   "$B" --models "$(comma "$meshes")" --dense 200000 --counts 10000,30000 --density-ratio 1 --seed 1 --methods local
   "$B" --models none --points "$(comma "$scans")" --point-counts 5000,10000 --seed 1 --methods local
-} | awk '
+} | awk "$(cat bench/mesh_misses.awk)"'
   /method=resample/ {
-    cv = ""
-    for (i = 1; i <= NF; i++) if ($i ~ /^spacing_cv=/) cv = substr($i, 12)
-    if (/status=error/) {
-      delete kv
-      for (i = 1; i <= NF; i++) { p = index($i, "="); if (p) kv[substr($i, 1, p - 1)] = substr($i, p + 1) }
-      printf "model=%s n=%s genus_truth=%s misses=failed\n", kv["model"], kv["n"], kv["genus_truth"]
-    }
+    parse(kv)
+    cv = kv["spacing_cv"]
+    if (kv["status"] == "error") printf "model=%s n=%s genus_truth=%s misses=failed\n", kv["model"], kv["n"], kv["genus_truth"]
     next
   }
   /method=local/ {
-    delete kv
-    for (i = 1; i <= NF; i++) { p = index($i, "="); if (p) kv[substr($i, 1, p - 1)] = substr($i, p + 1) }
-    m = ""
-    if (kv["genus_truth"] != "na" && kv["genus"] != kv["genus_truth"]) m = m ",genus"
-    if (kv["genus_truth"] != "na" && kv["closed"] != 1) m = m ",closed"
-    if (kv["self_intersections"] > 0) m = m ",si"
-    if (kv["nonmanifold_edges"] + kv["nonmanifold_vertices"] > 0) m = m ",nm"
-    if (kv["q_avg"] < 0.9) m = m ",q_avg"
-    if (kv["q_min"] < 0.4) m = m ",q_min"
-    if (kv["pct_angle_lt30"] >= 1) m = m ",lt30"
+    parse(kv)
     printf "model=%s n=%s genus_truth=%s genus=%s components=%s closed=%s si=%s nm=%s q_avg=%.4f q_min=%.3f " \
       "lt30=%.2f uncov=%s cv=%s misses=%s\n", kv["model"], kv["n"], kv["genus_truth"], kv["genus"],
       kv["components"], kv["closed"], kv["self_intersections"], kv["nonmanifold_edges"] + kv["nonmanifold_vertices"],
-      kv["q_avg"], kv["q_min"], kv["pct_angle_lt30"], kv["uncovered_pct"], cv, m == "" ? "none" : substr(m, 2)
+      kv["q_avg"], kv["q_min"], kv["pct_angle_lt30"], kv["uncovered_pct"], cv, misses(kv, "si,nm,closed,q_avg,q_min,lt30,genus")
   }'

@@ -13,7 +13,7 @@
 # about: 122 open pieces that intersect, so neither closure nor genus is asked of it). quick: 8 models, N = 10k, local
 # about: only; full: every closed model, N = 10k and 30k, with the peers.
 # columns: model density_ratio n method si nm genus_truth genus loops q_avg q_min lt30 h_to h_from uncov time_s checks misses
-cd "$(dirname "$0")/.."
+cd "$(dirname "$0")/.." || exit 1
 B=${BUILD:-build-bench}/bin/reconstruct_bench
 mode=${1:-quick}
 if [ "$mode" = full ]; then
@@ -26,22 +26,12 @@ fi
     "$B" --models "$models" --dense 200000 --counts "$counts" --density-ratio $r --seed 1 --methods "$methods"
   done
   "$B" --models none --points real --point-counts 5000,10000,30000 --methods "$methods"
-} | awk '
+} | awk "$(cat bench/mesh_misses.awk)"'
   /method=/ && !/method=resample/ {
-    delete kv
-    for (i = 1; i <= NF; i++) { p = index($i, "="); if (p) kv[substr($i, 1, p - 1)] = substr($i, p + 1) }
+    parse(kv)
     if (kv["status"] != "ok") { print; next }
-    m = ""
-    if (kv["self_intersections"] > 0) m = m ",si"
-    if (kv["nonmanifold_edges"] + kv["nonmanifold_vertices"] > 0) m = m ",nm"
-    if (kv["oriented"] != 1) m = m ",oriented"
-    if (kv["genus_truth"] != "na" && kv["closed"] != 1) m = m ",closed"
-    if (kv["q_avg"] < 0.90) m = m ",q_avg"
-    if (kv["q_min"] < 0.40) m = m ",q_min"
-    if (kv["pct_angle_lt30"] >= 1) m = m ",lt30"
-    if (kv["genus_truth"] != "na" && kv["genus"] != kv["genus_truth"]) m = m ",genus"
     printf "%s si=%s nm=%d loops=%s lt30=%s h_to=%s h_from=%s uncov=%s checks=%s misses=%s\n", $0,
       kv["self_intersections"], kv["nonmanifold_edges"] + kv["nonmanifold_vertices"], kv["boundary_loops"],
       kv["pct_angle_lt30"], kv["mesh_to_truth_pct_diag"], kv["truth_to_mesh_pct_diag"], kv["uncovered_pct"],
-      kv["method"] == "local" ? kv["validity_pct_of_meshing"] : "", m == "" ? "none" : substr(m, 2)
+      kv["method"] == "local" ? kv["validity_pct_of_meshing"] : "", misses(kv, "si,nm,oriented,closed,q_avg,q_min,lt30,genus")
   }'
