@@ -364,6 +364,29 @@ TEST(Resample, ContextSamplesAreHeldButNeitherCountedNorOutput) {
   EXPECT_LT(left, p.targetCount / 50) << "the free samples stay out of the covered half";
 }
 
+// Two faces meeting at 90° along the x axis, cut off at x = 0 and x = 2 (open ends of the crease): the crease's
+// samples end where the input does. Traced on along the planes fitted behind an end, they stood up to two local
+// spacings past it (0.45 output spacings at N = 4000).
+TEST(Resample, SharpEdgeSamplesEndWithTheInput) {
+  for (std::uint64_t seed : {1u, 2u, 3u}) {
+    std::mt19937_64 rng(seed);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    iires::PointCloud cloud;
+    for (int i = 0; i < 80000; ++i) {
+      const double x = 2.0 * u(rng), t = u(rng);
+      cloud.points.push_back(i % 2 ? Eigen::Vector3d(x, t, 0.0) : Eigen::Vector3d(x, 0.0, t));
+    }
+    iires::ResampleParams p = paramsFor(4000);
+    p.sharpEdges = true;
+    const auto r = iires::resample(cloud, p);
+    ASSERT_EQ(r.cloud.size(), 4000u);
+    ASSERT_FALSE(r.fixedIndices.empty());
+    double past = 0;
+    for (std::uint32_t i : r.fixedIndices) past = std::max({past, -r.cloud.points[i].x(), r.cloud.points[i].x() - 2.0});
+    EXPECT_LT(past, 0.1 * r.spacing.mean) << "seed " << seed;
+  }
+}
+
 // With sharp edges the free samples beside a crease are fitted to their own face (the MLS fits weight the input
 // points by their normals): on a prism sampled 5× denser at one end, positions only, their mean distance to the
 // true surface is a fraction of what the plain fits leave, which round the 60° creases between the side faces.

@@ -192,7 +192,7 @@ class CreaseTracer {
       }
       // Off the input (its fits' ball, a few local spacings read at y, grows as y leaves the surface): the line
       // followed has run past the input's end.
-      if (offInput(cloud_, index_, y, h_) > 2.0 * params_.maxOffCrease) break;
+      if (offInput(cloud_, index_, y, h_) > 2.0 * params_.maxOffCrease || pastInput(y, tr.dir)) break;
       add(tr, y);
       if (!oneSided) last = c;
       tr.dir = (c.direction.dot(tr.dir) < 0 ? -c.direction : c.direction);
@@ -202,6 +202,16 @@ class CreaseTracer {
     if (!tr.added.empty() || runs_.size() > runsBefore) tracedFrom_[job.run] = 1;
     Run& run = runs_[job.run];
     (job.back ? run.pts : run.front).insert(job.back ? run.pts.end() : run.front.end(), tr.added.begin(), tr.added.end());
+  }
+
+  /// Whether @p y lies past the input's end along @p dir: no input point within 2 local spacings of it reaches to
+  /// within half a local spacing behind it. The planes fitted on the points behind an open end (a part's edge, a
+  /// hole's rim) go on past it, and the off-input test alone lets a sample stand up to 2 spacings out.
+  bool pastInput(const Eigen::Vector3d& y, const Eigen::Vector3d& dir) {
+    const double hl = localSpacing(index_, y, h_);
+    index_.radius(y, 2.0 * hl, idx_, d2_);
+    return std::none_of(idx_.begin(), idx_.end(),
+                        [&](std::uint32_t j) { return (cloud_.points[j] - y).dot(dir) >= -0.5 * hl; });
   }
 
   /// Whether the input points just ahead of @p y (within 2 local spacings, on the side @p dir points to) include
