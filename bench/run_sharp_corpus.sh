@@ -9,11 +9,15 @@
 # about: time over the isotropic run's. misses = the bounds of issue 22 a row does not meet (edge ≤ 0.5, or 0.6 with
 # about: noise; err_mean and err_max not above the isotropic mode's, free_cv ≤ 0.08, t_vs_iso ≤ 1.5). Each model also
 # about: runs with Gaussian noise of σ = 0.2 input spacings along the normal (noise = 0.2: R = 1, N = 10000).
-# about: quick: fandisk, cube, tripod; full: the 13 CAD parts.
+# about: quick: fandisk, cube, tripod; full: the 13 CAD parts; held-out: 7 parts of CGAL's archive outside the corpus.
 # columns: model density_ratio noise N edge err_mean err_mean_iso err_max err_max_iso free_cv t_vs_iso misses
-cd "$(dirname "$0")/.."
+cd "$(dirname "$0")/.." || exit 1
 B=${BUILD:-build-bench}/bin/sharp_edge_bench
-if [ "${1:-quick}" = full ]; then
+if [ "${1:-quick}" = held-out ]; then  # CAD parts outside the corpus (see run_held_out.sh), fetched here
+  models="pinion rotor turbine blade cheese star torus_quad"
+  # shellcheck disable=SC2046,SC2086 # one name per word
+  bash datasets/fetch.sh $(printf 'meshes/%s.off ' $models) >/dev/null || exit 1
+elif [ "${1:-quick}" = full ]; then
   models="fandisk joint anchor couplingdown part dragknob spool cross tripod cube beam boeing mech-holes-shark"
 else
   models="fandisk cube tripod"
