@@ -374,7 +374,7 @@ EditMap Resampler::splitAndCollapse(Samples& s, const std::vector<Edge>& sorted,
   // midpoint leaves the surface) is not split.
   std::vector<Eigen::Vector3d> newPos, newNrm;
   std::vector<const Edge*> batch;
-  const KnnIndex samples(s.pos);
+  std::optional<KnnIndex> samples;  // built for the first batch (a round without splits needs none)
   auto next = sorted.rbegin();
   while (newPos.size() < splits && next != sorted.rend() && next->length > minSplit) {
     batch.clear();
@@ -384,12 +384,13 @@ EditMap Resampler::splitAndCollapse(Samples& s, const std::vector<Edge>& sorted,
     std::vector<Eigen::Vector3d> pos(batch.size()), nrm(batch.size());
     std::vector<double> off(batch.size()), out(batch.size());
     std::vector<char> clear(batch.size(), 1);
+    if (!samples) samples.emplace(s.pos);
     parallelFor(batch.size(), exec_.threads, [&](std::size_t c) {
       const Edge& e = *batch[c];
       pos[c] = surface_.project(0.5 * (s.pos[e.a] + s.pos[e.b]), &nrm[c], &off[c], &s.nrm[e.a], nullptr, 0, &out[c]);
       // Never onto a sample already there: the ends of an edge over a dense speck (a part of its own to the rule)
       // do not see the sample its split put there, and every pass would split the edge onto that spot again.
-      const std::int64_t q = samples.nearest(pos[c]);
+      const std::int64_t q = samples->nearest(pos[c]);
       const double edge = (s.pos[e.a] - s.pos[e.b]).norm();
       clear[c] = q < 0 || (s.pos[static_cast<std::size_t>(q)] - pos[c]).norm() > kCoincident * edge;
     });

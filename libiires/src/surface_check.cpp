@@ -9,6 +9,7 @@
 #include "iires/detail/parallel.hpp"
 #include "iires/knn.hpp"
 #include "iires/validate.hpp"
+#include "scan_lines.hpp"
 
 namespace iires {
 namespace {
@@ -22,14 +23,11 @@ constexpr std::size_t kMaxScale = 2048;     // largest neighbourhood (points of 
 constexpr double kFlatVariation = 0.1;
 constexpr double kVolumeShare = 0.75;  // of the probes three-dimensional at every scale: the points fill a volume
 
-double variation(const std::vector<Eigen::Vector3d>& points, const std::vector<std::uint32_t>& idx) {
-  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-  for (std::uint32_t j : idx) mean += points[j];
-  mean /= static_cast<double>(idx.size());
-  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-  for (std::uint32_t j : idx) cov += (points[j] - mean) * (points[j] - mean).transpose();
+/// Of point @p q and its neighbours @p idx (q itself first, as KnnIndex::knn returns them).
+double variation(const std::vector<Eigen::Vector3d>& points, const Eigen::Vector3d& q,
+                 const std::vector<std::uint32_t>& idx) {
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
-  eig.computeDirect(cov, Eigen::EigenvaluesOnly);
+  eig.computeDirect(detail::scatter(points, q, idx.data() + 1, idx.size() - 1), Eigen::EigenvaluesOnly);
   const Eigen::Vector3d l = eig.eigenvalues().cwiseMax(0.0);
   return l.sum() > 0 ? l[0] / l.sum() : 0.0;
 }
@@ -56,7 +54,7 @@ void checkSamplesASurface(const std::vector<Eigen::Vector3d>& points, const std:
     const Eigen::Vector3d& q = sub[p * m / probes];
     for (std::size_t k : scales) {
       index.knn(q, k, idx, d2);
-      if (variation(sub, idx) <= kFlatVariation) {
+      if (variation(sub, q, idx) <= kFlatVariation) {
         solid[p] = 0;
         return;
       }

@@ -121,7 +121,6 @@ std::vector<std::uint32_t> voxelThin(const std::vector<Eigen::Vector3d>& pts, co
   return chosen;
 }
 
-
 std::vector<std::uint32_t> initialCandidates(const PointCloud& cloud, const MlsSurface& surface,
                                              const ResampleParams& params, int threads) {
   const std::size_t count =
