@@ -14,7 +14,8 @@ if [ "${1:-quick}" = full ]; then
 else
   models=hand,armadillo,knot2,eight,3torus,couplingdown counts=10000
 fi
-"$B" --models "$models" --dense 200000 --counts "$counts" --density-ratio 1 --seed 1 --methods local | awk "$(cat bench/mesh_misses.awk)"'
+"$B" --models "$models" --dense 200000 --counts "$counts" --density-ratio 1 --seed 1 --methods local |
+  awk "$(cat bench/mesh_misses.awk)"'
   /method=local/ {
     parse(kv)
     printf "model=%s n=%s genus_truth=%s genus=%s closed=%s si=%s q_min=%s misses=%s\n", kv["model"], kv["n"],

@@ -35,7 +35,8 @@ bash datasets/fetch.sh $files >/dev/null || exit 1
   /method=resample/ {
     parse(kv)
     cv = kv["spacing_cv"]
-    if (kv["status"] == "error") printf "model=%s n=%s genus_truth=%s misses=failed\n", kv["model"], kv["n"], kv["genus_truth"]
+    if (kv["status"] == "error")
+      printf "model=%s n=%s genus_truth=%s misses=failed\n", kv["model"], kv["n"], kv["genus_truth"]
     next
   }
   /method=local/ {
@@ -43,5 +44,6 @@ bash datasets/fetch.sh $files >/dev/null || exit 1
     printf "model=%s n=%s genus_truth=%s genus=%s components=%s closed=%s si=%s nm=%s q_avg=%.4f q_min=%.3f " \
       "lt30=%.2f uncov=%s cv=%s misses=%s\n", kv["model"], kv["n"], kv["genus_truth"], kv["genus"],
       kv["components"], kv["closed"], kv["self_intersections"], kv["nonmanifold_edges"] + kv["nonmanifold_vertices"],
-      kv["q_avg"], kv["q_min"], kv["pct_angle_lt30"], kv["uncovered_pct"], cv, misses(kv, "si,nm,closed,q_avg,q_min,lt30,genus")
+      kv["q_avg"], kv["q_min"], kv["pct_angle_lt30"], kv["uncovered_pct"], cv,
+      misses(kv, "si,nm,closed,q_avg,q_min,lt30,genus")
   }'

@@ -33,5 +33,6 @@ fi
     printf "%s si=%s nm=%d loops=%s lt30=%s h_to=%s h_from=%s uncov=%s checks=%s misses=%s\n", $0,
       kv["self_intersections"], kv["nonmanifold_edges"] + kv["nonmanifold_vertices"], kv["boundary_loops"],
       kv["pct_angle_lt30"], kv["mesh_to_truth_pct_diag"], kv["truth_to_mesh_pct_diag"], kv["uncovered_pct"],
-      kv["method"] == "local" ? kv["validity_pct_of_meshing"] : "", misses(kv, "si,nm,oriented,closed,q_avg,q_min,lt30,genus")
+      kv["method"] == "local" ? kv["validity_pct_of_meshing"] : "",
+      misses(kv, "si,nm,oriented,closed,q_avg,q_min,lt30,genus")
   }'
