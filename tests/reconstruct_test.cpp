@@ -215,6 +215,24 @@ TEST(Reconstruct, SphereCloudClosedGenus0) {
   EXPECT_NE(r.toJson().find("\"method\": \"local\""), std::string::npos);
 }
 
+// Every point given twice a hair apart (a scan exported twice, rounded differently), triangulated as it is: the
+// twins are merged first. Before, every triangle between twins was degenerate and nothing was written ("the
+// reconstruction produced no triangles").
+TEST(Reconstruct, PointsGivenTwiceAHairApartAreMeshedAsOnce) {
+  PointCloud cloud = test::sphereCloud(3000, 1.0, 9);
+  cloud.normals.clear();
+  std::mt19937_64 rng(4);
+  std::uniform_real_distribution<double> u(-1e-9, 1e-9);
+  for (std::size_t i = 0; i < 3000; ++i)
+    cloud.points.push_back(cloud.points[i] + Eigen::Vector3d(u(rng), u(rng), u(rng)));
+  ReconstructParams asIs;
+  asIs.resample = false;
+  const ReconstructResult r = reconstruct(cloud, asIs);
+  EXPECT_GE(r.nearDuplicatesMerged, 3000u);
+  EXPECT_LE(r.samples.size(), 3000u);
+  expectClosedGenus(r.quality, 2);
+}
+
 // A lidar's scan lines (positions only: 0.02 apart, points 0.002 apart along them) meshed at an edge length about
 // the lines' distance: one piece of well-shaped triangles. With every stage's neighbours on one line the normals
 // came out oriented line by line (two pieces) and the samples uneven (Q_avg 0.84).

@@ -317,6 +317,23 @@ TEST(Resample, SplitsNeverStackSamplesOnADenseSpeck) {
   }
 }
 
+// The same scan exported twice, rounded differently (or merged with itself): every point has a twin a hair
+// away. Every spacing measured from nearest neighbours took the hair for the sampling's step: the output came
+// out in clumps (spacing cv 0.5, pairs of samples 2 % of the spacing apart). The twins are merged first.
+TEST(Resample, PointsGivenTwiceAHairApartAreResampledAsOnce) {
+  iires::PointCloud cloud = iires::test::sphereCloud(20000, 1.0, 23);
+  cloud.normals.clear();
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(-1e-9, 1e-9);
+  for (std::size_t i = 0; i < 20000; ++i)
+    cloud.points.push_back(cloud.points[i] + Eigen::Vector3d(u(rng), u(rng), u(rng)));
+  const auto r = iires::resample(cloud, paramsFor(3000));
+  ASSERT_EQ(r.cloud.size(), 3000u);
+  EXPECT_GE(r.nearDuplicatesMerged, 20000u);
+  EXPECT_LT(r.spacing.cv, 0.08);
+  EXPECT_GT(r.spacing.min, 0.5 * r.spacing.mean);
+}
+
 TEST(Resample, RejectsBadInputAndParameters) {
   iires::PointCloud empty;
   EXPECT_THROW(iires::resample(empty, paramsFor(10)), iires::InputError);

@@ -110,6 +110,19 @@ TEST(Validate, CollinearSinglePointAndIdenticalPoints) {
   EXPECT_TRUE(contains(validationError(identical, 3), "at least 3 distinct points, the cloud has 1"));
 }
 
+// One point 10⁸ sizes away makes the covariance a line through it; the cloud is not collinear (the outlier
+// stage removes that point). Points on a line with such a point off it still are.
+TEST(Validate, AFarOutlierDoesNotMakeACloudCollinear) {
+  PointCloud plane;
+  for (int i = 0; i < 400; ++i) plane.points.push_back({0.05 * (i % 20), 0.05 * (i / 20), 0.0});
+  plane.points.push_back({1e8, 0, 0});
+  EXPECT_NO_THROW(validateCloud(plane, 4));
+  PointCloud line;
+  for (int i = 0; i < 50; ++i) line.points.push_back(Vector3d(0.1, 0.3, 0.7) * i);
+  line.points.push_back({1e8, -1e8, 0});
+  EXPECT_TRUE(contains(validationError(line), "all points are collinear"));
+}
+
 TEST(Validate, ThinButPlanarCloudIsAccepted) {
   PointCloud strip;
   for (int i = 0; i < 100; ++i) strip.points.push_back({i * 1.0, (i % 2) * 1e-4, 0});

@@ -256,7 +256,8 @@ void ResampleParams::validate() const {
 std::string ResampleResult::toJson() const {
   detail::JsonWriter j;
   j.beginObject(true).member("input_points", inputPoints).member("duplicates_merged", duplicatesMerged);
-  j.member("requested_points", requestedPoints).member("output_points", cloud.size());
+  j.member("near_duplicates_merged", nearDuplicatesMerged);
+  j.member("requested_points", requestedPoints).member("output_points", outputPoints);
   j.member("working_points", thinnedPoints).member("scan_line_points", scanLinePoints);
   j.member("initial_samples", initialSamples).member("passes", passes);
   j.member("relax_iterations", relaxIterations).member("splits", splits).member("collapses", collapses);
@@ -310,6 +311,14 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params, const Ex
       std::max(params.intrinsic ? static_cast<std::size_t>(gp.k) + 1 : 0, MlsSurface::kWidthNeighbours);
   const std::size_t tableK = std::max(preprocessing ? preprocessNeighbours(pp) : std::size_t{0}, laterK);
   std::optional<NeighbourTable> neighbours(std::in_place, *index, cloud.points, tableK, exec.threads);
+  if (const auto kept = withoutNearDuplicates(*neighbours, cloud.points, exec.threads); kept.size() < cloud.size()) {
+    result.nearDuplicatesMerged = cloud.size() - kept.size();
+    cloud = select(cloud, kept);
+    result.thinnedPoints = cloud.size();
+    neighbours.reset();
+    index.emplace(cloud.points);
+    neighbours.emplace(*index, cloud.points, tableK, exec.threads);
+  }
   clock.end("neighbours", t);
   const SheetParams& sp = params.preprocessing.sheet;
   pp.sheets = params.intrinsic;
@@ -420,6 +429,7 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params, const Ex
         carryAttributes(attributeSource, result.cloud.points, result.cloud.normals, rule.get(), exec);
     clock.end("attributes", t);
   }
+  result.outputPoints = result.cloud.size();
   clock.end("total", start);
   return result;
 }

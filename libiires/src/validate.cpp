@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstring>
 #include <sstream>
+#include <stdexcept>
 #include <vector>
 
 #include "iires/detail/parallel.hpp"
@@ -77,6 +78,29 @@ bool collinear(const std::vector<Vector3d>& points) {
   return eigenvalues[2] <= 0 || eigenvalues[1] <= 1e-12 * eigenvalues[2];
 }
 
+/// The points within ten times the median distance from the coordinate-wise median: a cloud looks collinear
+/// to the covariance when one point lies 10⁸ sizes away (the outlier stage removes it), its core does not.
+std::vector<Vector3d> core(const std::vector<Vector3d>& points) {
+  const std::size_t half = points.size() / 2;
+  auto median = [&](std::vector<double> v) {
+    std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(half), v.end());
+    return v[half];
+  };
+  Vector3d centre;
+  for (int k = 0; k < 3; ++k) {
+    std::vector<double> c(points.size());
+    for (std::size_t i = 0; i < points.size(); ++i) c[i] = points[i][k];
+    centre[k] = median(std::move(c));
+  }
+  std::vector<double> dist(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i) dist[i] = (points[i] - centre).norm();
+  const double reach = 10.0 * median(dist);
+  std::vector<Vector3d> kept;
+  for (std::size_t i = 0; i < points.size(); ++i)
+    if (dist[i] <= reach) kept.push_back(points[i]);
+  return kept;
+}
+
 /// The lowest index i < n with bad(i), or n when there is none (in parallel; independent of the thread count).
 template <typename Pred>
 std::size_t firstWhere(std::size_t n, int threads, Pred bad) {
@@ -135,8 +159,47 @@ ValidationReport validateCloud(PointCloud& cloud, std::size_t minPoints, const s
     throw InputError(what + ": needs at least " + std::to_string(minPoints) +
                      " distinct points, the cloud has " + std::to_string(cloud.size()));
   if (cloud.size() == 1) throw InputError(what + ": all points are collinear (they all coincide)");
-  if (collinear(cloud.points)) throw InputError(what + ": all points are collinear");
+  if (collinear(cloud.points) && collinear(core(cloud.points)))
+    throw InputError(what + ": all points are collinear");
   return report;
+}
+
+std::vector<std::uint32_t> withoutNearDuplicates(const NeighbourTable& table, const std::vector<Eigen::Vector3d>& points,
+                                                 int threads) {
+  constexpr std::size_t kRef = 9;  // the point itself and its 8 nearest
+  if (table.k() < kRef) throw std::invalid_argument("withoutNearDuplicates: the table needs 9 columns");
+  std::vector<char> merged(points.size(), 0);
+  parallelFor(points.size(), threads, [&](std::size_t i) {
+    thread_local std::vector<std::uint32_t> idx;
+    thread_local std::vector<double> d2;
+    if (table.get(i, kRef, idx, d2) < kRef) return;
+    const double limit = kNearDuplicate * kNearDuplicate * d2[kRef - 1];
+    for (std::size_t t = 0; t < kRef; ++t)
+      if (idx[t] < i && d2[t] <= limit) merged[i] = 1;
+  });
+  std::vector<std::uint32_t> kept;
+  kept.reserve(points.size());
+  const auto twins = static_cast<std::size_t>(std::count(merged.begin(), merged.end(), 1));
+  const bool doubled = static_cast<double>(twins) >= kDoubledShare * static_cast<double>(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i)
+    if (!doubled || !merged[i]) kept.push_back(static_cast<std::uint32_t>(i));
+  return kept;
+}
+
+std::size_t mergeNearDuplicates(PointCloud& cloud, int threads) {
+  if (cloud.size() < 9) return 0;
+  const KnnIndex index(cloud.points);
+  const NeighbourTable table(index, cloud.points, 9, threads);
+  const auto kept = withoutNearDuplicates(table, cloud.points, threads);
+  const std::size_t merged = cloud.size() - kept.size();
+  if (merged == 0) return 0;
+  for (std::size_t t = 0; t < kept.size(); ++t) {
+    cloud.points[t] = cloud.points[kept[t]];
+    if (cloud.hasNormals()) cloud.normals[t] = cloud.normals[kept[t]];
+  }
+  cloud.points.resize(kept.size());
+  if (!cloud.normals.empty()) cloud.normals.resize(kept.size());
+  return merged;
 }
 
 }  // namespace iires

@@ -69,6 +69,7 @@ double ReconstructResult::meshingSeconds() const {
 std::string ReconstructResult::toJson() const {
   detail::JsonWriter j;
   j.beginObject(true).member("method", method).member("input_points", inputPoints).member("resampled", resampled);
+  if (!resampled) j.member("near_duplicates_merged", nearDuplicatesMerged);
   j.member("samples", samples.size()).member("mesh_vertices", mesh.vertices.size());
   j.member("mesh_faces", mesh.triangles.size()).member("unused_samples", unusedVertices);
   j.member("small_component_faces_removed", smallComponentFaces);
@@ -316,7 +317,10 @@ ReconstructResult reconstruct(const PointCloud& input, const ReconstructParams& 
   cloud.points = input.points;
   cloud.normals = input.normals;
   validateCloud(cloud, 4, "input", exec.threads);
-  if (!params.resample) checkSamplesASurface(cloud.points, "input", exec.threads);  // resample() checks it too
+  if (!params.resample) {  // resample() does both itself
+    result.nearDuplicatesMerged = mergeNearDuplicates(cloud, exec.threads);
+    checkSamplesASurface(cloud.points, "input", exec.threads);
+  }
   clock.end("validate", t);
 
   t = params.resample ? Clock::now() : clock.begin("normals");

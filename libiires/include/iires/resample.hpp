@@ -93,7 +93,9 @@ struct ResampleResult {
   PointCloud cloud;                  ///< exactly requestedPoints points, with unit normals
   std::size_t inputPoints = 0;       ///< points read
   std::size_t duplicatesMerged = 0;  ///< exact duplicates merged during validation
+  std::size_t nearDuplicatesMerged = 0;  ///< points a hair from an earlier one merged (withoutNearDuplicates())
   std::size_t requestedPoints = 0;   ///< N
+  std::size_t outputPoints = 0;      ///< points output: cloud.size(), also once a caller has moved the cloud out
   std::size_t thinnedPoints = 0;     ///< input points the pipeline worked on (after validation and thinning)
   std::size_t scanLinePoints = 0;    ///< of those, points on scan lines (neighbours taken across the lines too)
   std::size_t initialSamples = 0;    ///< samples after density initialisation

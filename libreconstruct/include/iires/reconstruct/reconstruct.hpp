@@ -85,6 +85,7 @@ struct ReconstructResult {
   PointCloud samples;                ///< the points that were triangulated (resampled or the input), with normals
   std::string method;                ///< "local" or "advancing-front"
   std::size_t inputPoints = 0;       ///< points read
+  std::size_t nearDuplicatesMerged = 0;  ///< without resampling: points a hair apart merged (validate.hpp)
   bool resampled = false;            ///< whether the input was resampled
   ResampleResult resampling;         ///< the resampler's report (its cloud is moved into samples)
   TriangulateResult triangulation;   ///< the local method's diagnostics (its mesh is moved into mesh)
