@@ -826,3 +826,51 @@ TEST(Features, TraceStopsWhereTheInputEnds) {
   EXPECT_GE(first, -2 * h) << "a sample " << -first / h << " spacings past the input's end";
   EXPECT_LE(last, 0.5 + 2 * h) << "a sample " << (last - 0.5) / h << " spacings past the input's end";
 }
+
+/// A lens extruded along y over [0, @p length], open at both ends: the arcs of two circles of radius @p r
+/// centred at z = ∓@p d (the upper and the lower face) meet at the creases x = ±√(r² − d²), z = 0. Both
+/// faces curve across the creases, with a radius of a few fit widths at the test's sampling.
+iires::TriangleMesh extrudedLens(double r, double d, double length, int arc, int along) {
+  iires::TriangleMesh m;
+  const double half = std::asin(std::sqrt(r * r - d * d) / r);
+  for (int face = 0; face < 2; ++face) {
+    const double sign = face == 0 ? 1.0 : -1.0;
+    const int base = static_cast<int>(m.vertices.size());
+    for (int j = 0; j <= along; ++j)
+      for (int i = 0; i <= arc; ++i) {
+        const double a = -half + 2.0 * half * i / arc;
+        m.vertices.emplace_back(r * std::sin(a), length * j / along, sign * (r * std::cos(a) - d));
+      }
+    for (int j = 0; j < along; ++j)
+      for (int i = 0; i < arc; ++i) {
+        const int v = base + j * (arc + 1) + i, w = v + arc + 1;
+        if (face == 0) m.triangles.emplace_back(v, v + 1, w + 1), m.triangles.emplace_back(v, w + 1, w);
+        else m.triangles.emplace_back(v, w + 1, v + 1), m.triangles.emplace_back(v, w, w + 1);
+      }
+  }
+  return m;
+}
+
+// Two faces that curve across their crease (a blade's edge, a lens): a plane fitted to either face over the
+// fit's ball lies off the face's tangent at the crease, and the planes' line runs past the edge, off the
+// surface (here the held samples lay 0.073 h off the creases on average, 12 k points). The faces fitted as
+// height fields that bend across the crease as well as along it put them on it (0.014 h).
+TEST(Features, HeldSamplesOnACreaseBetweenFacesCurvedAcrossIt) {
+  const double r = 0.1, d = 0.08, xe = std::sqrt(r * r - d * d);  // creases at x = ±0.06, normals 106° apart
+  const auto cloud = sampledWithEstimatedNormals(extrudedLens(r, d, 2.0, 96, 40), 12000);
+  FeatureParams p;
+  const double h = iires::estimateSpacing(cloud.points);
+  p.sampleSpacing = 3 * h;
+  const auto f = iires::detectFeatures(cloud, p);
+  ASSERT_GE(f.samples.size(), 2 * static_cast<std::size_t>(1.5 / p.sampleSpacing));
+  double worst = 0, sum = 0;
+  std::size_t n = 0;
+  for (const auto& q : f.samples) {
+    if (q.y() < 0.2 || q.y() > 1.8) continue;  // the open ends are another test's
+    ++n;
+    const double off = std::hypot(std::abs(q.x()) - xe, q.z());
+    worst = std::max(worst, off);
+    sum += off;
+  }
+  EXPECT_LE(sum / static_cast<double>(n), 0.03 * h) << "worst " << worst / h << " h";
+}

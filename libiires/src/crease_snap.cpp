@@ -62,40 +62,56 @@ bool refitPlanesRobust(const std::vector<Eigen::Vector3d>& points, const Eigen::
 }
 
 /// A sheet curving along a crease, as a height field over its plane: the points x with n·(x − o) = h(u, v),
-/// (u, v) = (e1·(x − o), e2·(x − o)), e1 along the crease, h = c0 + c1 u + c2 v + c3 u². The one curvature
-/// term is the bend along the crease (a cylinder meeting a plate at its foot); terms across it would let a
-/// sheet bend onto a stray point next to the crease.
+/// (u, v) = (e1·(x − o), e2·(x − o)), e1 along the crease, h = c0 + c1 u + c2 v + c3 u² + c4 v². The bend along
+/// the crease (a cylinder meeting a plate at its foot) is always fitted; the bend across it (a blade's faces
+/// rounding into its edge) only where the sheet does not fit without it (fitAcross()): on a flat face with
+/// noise it would bend onto the noise next to the crease.
+constexpr double kAcrossGain = 0.45;
+
 struct CreaseSheet {
+  using Coefficients = Eigen::Matrix<double, 5, 1>;
   Eigen::Vector3d o, e1, e2, n;
-  Eigen::Vector4d c = Eigen::Vector4d::Zero();
+  Coefficients c = Coefficients::Zero();
   /// n·(x − o) − h(u, v) (about the signed distance near the sheet) and, if @p grad, its gradient.
   double value(const Eigen::Vector3d& x, Eigen::Vector3d* grad = nullptr) const {
     const Eigen::Vector3d d = x - o;
     const double u = e1.dot(d), v = e2.dot(d);
-    if (grad) *grad = n - (c(1) + 2 * c(3) * u) * e1 - c(2) * e2;
-    return n.dot(d) - (c(0) + c(1) * u + c(2) * v + c(3) * u * u);
+    if (grad) *grad = n - (c(1) + 2 * c(3) * u) * e1 - (c(2) + 2 * c(4) * v) * e2;
+    return n.dot(d) - (c(0) + c(1) * u + c(2) * v + c(3) * u * u + c(4) * v * v);
   }
-  /// Fitted by least squares to @p idx, idx[t] weighted rw[t]·exp(−|idx[t] − o|²/σ²); returns the weighted
-  /// RMS residual (infinity with fewer than 10 points).
+  /// Fitted by least squares to @p idx, idx[t] weighted rw[t]·exp(−|idx[t] − o|²/σ²), with the first @p terms
+  /// of h (4: no bend across); returns the weighted RMS residual (infinity with fewer than 10 points).
   double fit(const std::vector<Eigen::Vector3d>& points, const std::vector<std::uint32_t>& idx,
-             const std::vector<double>& rw, double sigma) {
+             const std::vector<double>& rw, double sigma, int terms = 4) {
     if (idx.size() < 10) return std::numeric_limits<double>::infinity();
-    Eigen::Matrix4d ata = Eigen::Matrix4d::Zero();
-    Eigen::Vector4d atb = Eigen::Vector4d::Zero();
+    Eigen::Matrix<double, 5, 5> ata = Eigen::Matrix<double, 5, 5>::Zero();
+    Coefficients atb = Coefficients::Zero();
     std::vector<double> w(idx.size());
     for (std::size_t t = 0; t < idx.size(); ++t) {
       const Eigen::Vector3d d = points[idx[t]] - o;
       w[t] = rw[t] * std::exp(-d.squaredNorm() / (sigma * sigma));
       const double u = e1.dot(d) / sigma, v = e2.dot(d) / sigma;  // in units of σ: well conditioned
-      const Eigen::Vector4d a(1, u, v, u * u);
+      const Coefficients a = (Coefficients() << 1, u, v, u * u, v * v).finished();
       ata += w[t] * a * a.transpose();
       atb += w[t] * a * n.dot(d);
     }
-    c = ata.ldlt().solve(atb).cwiseQuotient(Eigen::Vector4d(1, sigma, sigma, sigma * sigma));
+    c.setZero();
+    c.head(terms) = ata.topLeftCorner(terms, terms).ldlt().solve(atb.head(terms));
+    c = c.cwiseQuotient((Coefficients() << 1, sigma, sigma, sigma * sigma, sigma * sigma).finished());
     if (!c.allFinite()) return std::numeric_limits<double>::infinity();
     double r2 = 0, sum = 0;
     for (std::size_t t = 0; t < idx.size(); ++t) r2 += w[t] * std::pow(value(points[idx[t]]), 2), sum += w[t];
     return std::sqrt(r2 / sum);
+  }
+  /// fit() with the bend across the crease where it leaves under kAcrossGain of the residual without it.
+  double fitAcross(const std::vector<Eigen::Vector3d>& points, const std::vector<std::uint32_t>& idx,
+                   const std::vector<double>& rw, double sigma) {
+    const double flat = fit(points, idx, rw, sigma, 4);
+    const Coefficients along = c;
+    const double bent = fit(points, idx, rw, sigma, 5);
+    if (bent < kAcrossGain * flat) return bent;
+    c = along;
+    return flat;
   }
 };
 
@@ -141,7 +157,7 @@ bool curvedCreasePoint(const PointCloud& cloud, const KnnIndex& index, double hl
     }
     if (it == 3 && 10 * (part[0].size() + part[1].size()) < 9 * nbr.size()) return false;  // a third sheet
     for (int s = 0; s < 2; ++s) {
-      const double r = sheet[s].fit(cloud.points, part[s], rw[s], sigma);
+      const double r = sheet[s].fitAcross(cloud.points, part[s], rw[s], sigma);
       if (!std::isfinite(r) || (it == 3 && r > tau)) return false;
     }
   }
