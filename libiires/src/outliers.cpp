@@ -308,15 +308,21 @@ std::size_t outlierNeighbours(const OutlierParams& params) {
   return std::max({k, planeK, kSpacingNeighbours}) + 1;
 }
 
-OutlierResult processOutliers(const PointCloud& input, const OutlierParams& params, const Execution& exec,
-                              const NeighbourTable* table) {
-  params.validate();
-  const auto start = Clock::now();
+namespace {
+
+/// What one round of the outlier test found, per point.
+struct Detection {
+  std::vector<std::uint8_t> outlier, trusted, isolated;
+};
+
+/// One round of the outlier test over @p P (its k-NN rows from @p table when that holds enough columns).
+/// @p strongOnly: only the points off the plane of their neighbours by twice planeThreshold, or isolated, are
+/// outliers (not the suspects off it by planeThreshold).
+Detection detect(const std::vector<Eigen::Vector3d>& P, const OutlierParams& params, const Execution& exec,
+                 const NeighbourTable* table, bool strongOnly) {
   const std::size_t k = static_cast<std::size_t>(params.k);
   const std::size_t planeK = static_cast<std::size_t>(params.planeNeighbours);
-  checkCloud(input, std::max(planeK, k) + 1);
-  const std::size_t n = input.size();
-  const auto& P = input.points;
+  const std::size_t n = P.size();
   // Neighbours per point, itself first (index 0).
   const std::size_t K = outlierNeighbours(params);
 
@@ -372,7 +378,10 @@ OutlierResult processOutliers(const PointCloud& input, const OutlierParams& para
   // nearest, in local spacings. A suspect beyond planeThreshold, or beyond nearPlaneThreshold from the small
   // plane of the nearest of those points, is an outlier; so is any point beyond twice planeThreshold (a small cluster of
   // outliers can be mutual among itself). Trusted = mutual and near its plane.
-  std::vector<std::uint8_t> outlier(n, 0), trusted(n, 0);
+  Detection d;
+  std::vector<std::uint8_t>&outlier = d.outlier, &trusted = d.trusted, &isolated = d.isolated;
+  outlier.assign(n, 0);
+  trusted.assign(n, 0);
   std::vector<double> localSpacing(n, 0.0);
   // Isolated points: every local test above compares a point with its neighbours, and points scattered far from
   // the object (and from each other) are each other's neighbours. Against the whole cloud they stand out: their
@@ -382,7 +391,7 @@ OutlierResult processOutliers(const PointCloud& input, const OutlierParams& para
   // where it curves within them, they spread in two dimensions, not three (kVolumeDimension).
   const double p90 = quantile(spacing, 0.9), surface = std::min(p90, kSurfaceSpread * quantile(spacing, 0.5));
   const double isolation = kIsolation * surface;
-  std::vector<std::uint8_t> isolated(n, 0);
+  isolated.assign(n, 0);
   // The local dimension reads more neighbours than the table holds: the cloud's own index, built only when a
   // point is that sparse.
   if (!own && std::any_of(spacing.begin(), spacing.end(), [&](double x) { return x > isolation; })) own.emplace(P);
@@ -412,7 +421,7 @@ OutlierResult processOutliers(const PointCloud& input, const OutlierParams& para
     if (spacing[i] > isolation)
       isolated[i] =
           isolatedPoint(P, spacing, i, std::vector<std::uint32_t>(ri + 1, ri + ki), local, surface, p90, *own);
-    outlier[i] = (suspect[i] && off) || ratio > 2 * params.planeThreshold || isolated[i];
+    outlier[i] = (suspect[i] && off && !strongOnly) || ratio > 2 * params.planeThreshold || isolated[i];
     trusted[i] = !suspect[i] && !isolated[i] && ratio <= params.planeThreshold;
     localSpacing[i] = local;
   });
@@ -443,6 +452,35 @@ OutlierResult processOutliers(const PointCloud& input, const OutlierParams& para
       }
       if (onSharedPlane(P, ri, std::min<std::size_t>(planeK + 1, count[i]), localSpacing[i])) outlier[i] = 0;
     });
+
+  return d;
+}
+
+}  // namespace
+
+OutlierResult processOutliers(const PointCloud& input, const OutlierParams& params, const Execution& exec,
+                              const NeighbourTable* table) {
+  params.validate();
+  const auto start = Clock::now();
+  const std::size_t minPoints = static_cast<std::size_t>(std::max(params.planeNeighbours, params.k)) + 1;
+  checkCloud(input, minPoints);
+  const std::size_t n = input.size();
+  Detection d = detect(input.points, params, exec, table, false);
+  // Outliers scattered near one another are one another's mutual neighbours and planes: the test passes them
+  // while their company is there. A second round over the points the first kept sees them stand alone; it takes
+  // only the clear cases (between two close sheets, true points whose neighbours the first round took would
+  // turn suspect).
+  std::vector<std::uint32_t> kept;
+  for (std::size_t i = 0; i < n; ++i)
+    if (!d.outlier[i]) kept.push_back(static_cast<std::uint32_t>(i));
+  if (kept.size() < n && kept.size() >= minPoints) {
+    std::vector<Eigen::Vector3d> rest(kept.size());
+    for (std::size_t t = 0; t < kept.size(); ++t) rest[t] = input.points[kept[t]];
+    const Detection again = detect(rest, params, exec, nullptr, true);
+    for (std::size_t t = 0; t < kept.size(); ++t)
+      if (again.outlier[t]) d.outlier[kept[t]] = 1, d.trusted[kept[t]] = 0, d.isolated[kept[t]] = again.isolated[t];
+  }
+  const std::vector<std::uint8_t>&outlier = d.outlier, &trusted = d.trusted, &isolated = d.isolated;
 
   OutlierResult result;
   for (std::size_t i = 0; i < n; ++i)

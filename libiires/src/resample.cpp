@@ -215,6 +215,31 @@ void workingNormals(PointCloud& cloud, const NormalParams& params, bool sheetRul
   if (!sheetRuleRan) repairOrientation(cloud.points, cloud.normals, params.k, exec.threads);
 }
 
+/// The input's attributes are interpolated onto the output at the end, from the input as given (the stages
+/// merge, thin, move and drop points): its positions and attributes, the attributes taken out of @p cloud.
+PointCloud takeAttributes(PointCloud& cloud) {
+  PointCloud source;
+  if (cloud.attributes.empty()) return source;
+  source.points = cloud.points;
+  source.attributes = std::move(cloud.attributes);
+  cloud.attributes.clear();
+  return source;
+}
+
+/// A doubled cloud (withoutNearDuplicates()) loses its twins; the tree and the table (@p k columns) are rebuilt
+/// on the rest. A cloud that is not doubled is left as it is.
+void mergeTwins(PointCloud& cloud, std::optional<KnnIndex>& index, std::optional<NeighbourTable>& neighbours,
+                std::size_t k, const Execution& exec, ResampleResult& result) {
+  const auto kept = withoutNearDuplicates(*neighbours, cloud.points, exec.threads);
+  if (kept.size() == cloud.size()) return;
+  result.nearDuplicatesMerged = cloud.size() - kept.size();
+  neighbours.reset();
+  cloud = select(cloud, kept);
+  result.thinnedPoints = cloud.size();
+  index.emplace(cloud.points);
+  neighbours.emplace(*index, cloud.points, k, exec.threads);
+}
+
 /// After pre-processing moved or dropped points: the later stages' table (@p laterK columns) on the final
 /// positions, through the sheet rule (@p params; null: it did not run) again, on rows as long as the first time
 /// (@p tableK: shorter ones would not reach a sheet as far off); returns which points have another sheet near.
@@ -282,14 +307,7 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params, const Ex
   result.requestedPoints = params.targetCount;
   result.inputPoints = cloud.size();
   const StageClock clock(result.timings, exec.progress);
-  // The input's attributes are interpolated onto the output at the end, from the input as given (the stages
-  // below merge, thin, move and drop points).
-  PointCloud attributeSource;
-  if (!cloud.attributes.empty()) {
-    attributeSource.points = cloud.points;
-    attributeSource.attributes = std::move(cloud.attributes);
-    cloud.attributes.clear();
-  }
+  const PointCloud attributeSource = takeAttributes(cloud);
 
   auto t = clock.begin("validate");
   result.duplicatesMerged = validateCloud(cloud, 4, "input", exec.threads).duplicatesMerged;
@@ -311,14 +329,7 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params, const Ex
       std::max(params.intrinsic ? static_cast<std::size_t>(gp.k) + 1 : 0, MlsSurface::kWidthNeighbours);
   const std::size_t tableK = std::max(preprocessing ? preprocessNeighbours(pp) : std::size_t{0}, laterK);
   std::optional<NeighbourTable> neighbours(std::in_place, *index, cloud.points, tableK, exec.threads);
-  if (const auto kept = withoutNearDuplicates(*neighbours, cloud.points, exec.threads); kept.size() < cloud.size()) {
-    result.nearDuplicatesMerged = cloud.size() - kept.size();
-    cloud = select(cloud, kept);
-    result.thinnedPoints = cloud.size();
-    neighbours.reset();
-    index.emplace(cloud.points);
-    neighbours.emplace(*index, cloud.points, tableK, exec.threads);
-  }
+  mergeTwins(cloud, index, neighbours, tableK, exec, result);
   clock.end("neighbours", t);
   const SheetParams& sp = params.preprocessing.sheet;
   pp.sheets = params.intrinsic;
