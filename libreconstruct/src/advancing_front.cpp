@@ -4,6 +4,7 @@
 #include <CGAL/Advancing_front_surface_reconstruction.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 
+#include <algorithm>
 #include <array>
 #include <stdexcept>
 #include <string>
@@ -31,6 +32,11 @@ AdvancingFrontResult advancingFront(const PointCloud& cloud, const AdvancingFron
   std::vector<std::array<std::size_t, 3>> facets;
   CGAL::advancing_front_surface_reconstruction(points.begin(), points.end(), std::back_inserter(facets),
                                                params.radiusRatioBound, params.beta);
+  // CGAL lists the facets in an order that follows its cells' addresses, which differ from run to run: each
+  // facet starts at its lowest vertex (its orientation kept) and the list is sorted, so that the stages after it
+  // (hole filling, repairs) and the file are the same on every run.
+  for (auto& f : facets) std::rotate(f.begin(), std::min_element(f.begin(), f.end()), f.end());
+  std::sort(facets.begin(), facets.end());
   AdvancingFrontResult result;
   result.mesh.vertices = cloud.points;
   result.mesh.triangles.reserve(facets.size());
