@@ -10,6 +10,8 @@
 #include <cstring>
 #include <fstream>
 #include <iterator>
+#include <utility>
+#include <vector>
 
 #include "iires/io.hpp"
 #include "iires/outliers.hpp"
@@ -347,6 +349,40 @@ TEST(AttributesIo, ToolsCarryColumnsToThePly) {
   EXPECT_NE(out.find("iires-resample: error: " + dir + "/out.ply: column names apply to .xyz files only"),
             std::string::npos)
       << out;
+  // --denoise-only keeps each point's own values (it wrote positions and normals only).
+  for (const char* outliers : {"pull", "remove"}) {
+    ASSERT_EQ(iires::test::run(iires::test::tool("iires-resample") + " " + dir + "/in.xyz " + dir +
+                                   "/clean.ply --denoise-only -q --columns x,y,z,red --outliers " + outliers,
+                               &out),
+              0)
+        << out;
+    const PointCloud cleaned = iires::readPointCloud(dir + "/clean.ply");
+    ASSERT_EQ(cleaned.attributes.size(), 1u) << outliers;
+    double off = 0;
+    for (std::size_t i = 0; i < cleaned.size(); ++i)
+      off = std::max(off, std::abs(cleaned.attributes[0].values[i] - 127.5 * (1 + cleaned.points[i].z())));
+    EXPECT_LE(off, 1.0) << outliers;  // rounding only
+  }
+}
+
+// A flag that would change nothing is refused (exit 2, the flag named), not ignored.
+TEST(AttributesIo, FlagsWithoutEffectAreRefused) {
+  const std::string dir = iires::test::tempDir();
+  iires::writePointCloud(dir + "/in.ply", iires::test::sphereCloud(3000, 1.0, 8));
+  const std::string resample = iires::test::tool("iires-resample") + " " + dir + "/in.ply " + dir + "/o.ply ";
+  const std::string reconstruct = iires::test::tool("iires-reconstruct") + " " + dir + "/in.ply ";
+  for (const auto& [command, flag] : std::vector<std::pair<std::string, std::string>>{
+           {resample + "--denoise-only -n 100", "-n"},
+           {resample + "--denoise-only --sharp-edges", "--sharp-edges"},
+           {resample + "-n 100 --mode curvature --levels 6 --ratios 3,2,1,0.5", "--levels 6"},
+           {reconstruct + dir + "/m.ply --no-resample -n 500", "-n"},
+           {reconstruct + "--quality-only " + dir + "/in.ply --method advancing-front", "--method"}}) {
+    std::string out;
+    EXPECT_EQ(iires::test::run(command + " 2>&1", &out), 2) << command << "\n" << out;
+    EXPECT_NE(out.find(flag), std::string::npos) << out;
+  }
+  EXPECT_FALSE(iires::test::fileExists(dir + "/o.ply"));
+  EXPECT_FALSE(iires::test::fileExists(dir + "/m.ply"));
 }
 
 }  // namespace

@@ -9,6 +9,7 @@
 #include "common.hpp"
 #include "progress.hpp"
 #include "tiling.hpp"
+#include "iires/attributes.hpp"
 #include "iires/geodesic.hpp"
 #include "iires/io.hpp"
 #include "iires/preprocess.hpp"
@@ -55,6 +56,10 @@ int main(int argc, char** argv) {
     exec.progress = progress.callback();
     options.applyToParams(!denoiseOnly);
     if (denoiseOnly) {
+      for (const char* flag : {"-n", "--mode", "--levels", "--ratios", "--sharp-edges", "--edge-ratio",
+                               "--export-geodesic", "--tiles"})
+        if (app.count(flag) > 0)
+          throw iires::InputError(std::string(flag) + " has no effect with --denoise-only (it keeps the cloud's points)");
       progress.update("read", 0.0);
       const iires::PointCloud cloud = iires::readSurfacePoints(input, columns);
       iires::PreprocessResult cleaned;
@@ -62,6 +67,14 @@ int main(int argc, char** argv) {
         cleaned = iires::preprocess(cloud, params.preprocessing, exec);
       } catch (const iires::InputError& e) {
         throw iires::InputError(input + ": " + e.what());
+      }
+      // The points keep their attributes: in order where none was removed, else each its nearest input point's.
+      if (cleaned.cloud.size() == cloud.size()) {
+        cleaned.cloud.attributes = cloud.attributes;
+      } else if (!cloud.attributes.empty()) {
+        iires::AttributeParams nearest;
+        nearest.neighbours = 1;
+        cleaned.cloud.attributes = iires::interpolateAttributes(cloud, cleaned.cloud.points, {}, {}, nearest, exec);
       }
       iires::OutputBatch outputs;
       outputs.pointCloud(output, cleaned.cloud);
@@ -81,6 +94,10 @@ int main(int argc, char** argv) {
     } else if (levels > 0 || !ratios.empty()) {
       throw iires::InputError("--levels and --ratios need --mode curvature");
     }
+    if (ratios.size() == 1) throw iires::InputError("--ratios needs one length ratio per level, two levels at least");
+    if (levels > 0 && !ratios.empty() && static_cast<std::size_t>(levels) != ratios.size())
+      throw iires::InputError("--levels " + std::to_string(levels) + " and " + std::to_string(ratios.size()) +
+                              " --ratios disagree (give one of them, or as many ratios as levels)");
     if (!geodesicPath.empty() && options.noIntrinsic)
       throw iires::InputError("--export-geodesic needs intrinsic control (drop --no-intrinsic)");
     if (!geodesicPath.empty() && iires::extensionOf(geodesicPath) != ".ply")
