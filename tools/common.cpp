@@ -139,4 +139,9 @@ void checkCount(const std::string& flag, long long count, std::size_t bytesPerPo
 
 std::string versionString() { return std::string("iires ") + IIRES_VERSION; }
 
+void refuseFlags(const CLI::App& app, std::initializer_list<const char*> flags, const std::string& why) {
+  for (const char* flag : flags)
+    if (app.count(flag) > 0) throw InputError(std::string(flag) + " has no effect with " + why);
+}
+
 }  // namespace iires::tools

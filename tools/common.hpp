@@ -5,6 +5,7 @@
 #include <CLI/CLI.hpp>
 #include <cstddef>
 #include <functional>
+#include <initializer_list>
 #include <string>
 #include <vector>
 
@@ -54,6 +55,10 @@ std::size_t availableMemory();
 /// @param bytesPerPoint a generous estimate of the memory one output point costs in the tool's pipeline
 /// @throws InputError when @p count exceeds kMaxCount, or count · bytesPerPoint exceeds availableMemory().
 void checkCount(const std::string& flag, long long count, std::size_t bytesPerPoint);
+
+/// @brief A flag that would change nothing is refused rather than ignored.
+/// @throws InputError "FLAG has no effect with WHY" for the first of @p flags given on the command line.
+void refuseFlags(const CLI::App& app, std::initializer_list<const char*> flags, const std::string& why);
 
 /// "iires <version>" for --version.
 std::string versionString();

@@ -71,16 +71,11 @@ int main(int argc, char** argv) {
     iires::tools::Progress progress("iires-reconstruct", showProgress, quiet);
     exec.progress = progress.callback();  // resampling and meshing stages
 
-    // A flag that would change nothing is refused rather than ignored.
-    const auto refuse = [&](std::initializer_list<const char*> flags, const std::string& with) {
-      for (const char* flag : flags)
-        if (app.count(flag) > 0) throw iires::InputError(std::string(flag) + " has no effect with " + with);
-    };
     if (!qualityOnly.empty()) {
       if (!output.empty()) throw iires::InputError("--quality-only takes no OUTPUT_MESH (got " + output + ")");
-      refuse({"-n", "--no-resample", "--method", "--no-hole-filling", "--no-validity-repair", "--max-hole-edges",
-              "--max-hole-extent", "--columns"},
-             "--quality-only (it reports on the given mesh)");
+      iires::tools::refuseFlags(app, {"-n", "--no-resample", "--method", "--no-hole-filling", "--no-validity-repair",
+                                      "--max-hole-edges", "--max-hole-extent", "--columns"},
+                                "--quality-only (it reports on the given mesh)");
       progress.update("read", 0.0);
       const iires::TriangleMesh mesh = iires::readMesh(qualityOnly);
       // NaN/Inf or overflowing coordinates would poison every distance: reject them, naming the file.
@@ -107,7 +102,7 @@ int main(int argc, char** argv) {
       return iires::tools::kOk;
     }
     if (output.empty()) throw iires::InputError("OUTPUT_MESH is required (or use --quality-only MESH)");
-    if (noResample) refuse({"-n"}, "--no-resample (the input's points are the vertices)");
+    if (noResample) iires::tools::refuseFlags(app, {"-n"}, "--no-resample (the input's points are the vertices)");
     if (count < 4) throw iires::InputError("-n must be at least 4 (got " + std::to_string(count) + ")");
     if (!noResample) iires::tools::checkCount("-n", count, kBytesPerVertex);
     // Fail on a bad output extension before the work, not after it.

@@ -56,10 +56,9 @@ int main(int argc, char** argv) {
     exec.progress = progress.callback();
     options.applyToParams(!denoiseOnly);
     if (denoiseOnly) {
-      for (const char* flag : {"-n", "--mode", "--levels", "--ratios", "--sharp-edges", "--edge-ratio",
-                               "--export-geodesic", "--tiles"})
-        if (app.count(flag) > 0)
-          throw iires::InputError(std::string(flag) + " has no effect with --denoise-only (it keeps the cloud's points)");
+      iires::tools::refuseFlags(app, {"-n", "--mode", "--levels", "--ratios", "--sharp-edges", "--edge-ratio",
+                                      "--export-geodesic", "--tiles"},
+                                "--denoise-only (it keeps the cloud's points)");
       progress.update("read", 0.0);
       const iires::PointCloud cloud = iires::readSurfacePoints(input, columns);
       iires::PreprocessResult cleaned;

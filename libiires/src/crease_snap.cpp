@@ -61,13 +61,14 @@ bool refitPlanesRobust(const std::vector<Eigen::Vector3d>& points, const Eigen::
   return true;
 }
 
+/// A sheet keeps the bend across its crease where that leaves under this share of the residual without it.
+constexpr double kAcrossGain = 0.45;
+
 /// A sheet curving along a crease, as a height field over its plane: the points x with n·(x − o) = h(u, v),
 /// (u, v) = (e1·(x − o), e2·(x − o)), e1 along the crease, h = c0 + c1 u + c2 v + c3 u² + c4 v². The bend along
 /// the crease (a cylinder meeting a plate at its foot) is always fitted; the bend across it (a blade's faces
-/// rounding into its edge) only where the sheet does not fit without it (fitAcross()): on a flat face with
+/// rounding into its edge) only where it explains the points far better (fitAcross()): on a flat face with
 /// noise it would bend onto the noise next to the crease.
-constexpr double kAcrossGain = 0.45;
-
 struct CreaseSheet {
   using Coefficients = Eigen::Matrix<double, 5, 1>;
   Eigen::Vector3d o, e1, e2, n;

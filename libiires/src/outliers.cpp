@@ -379,7 +379,9 @@ Detection detect(const std::vector<Eigen::Vector3d>& P, const OutlierParams& par
   // plane of the nearest of those points, is an outlier; so is any point beyond twice planeThreshold (a small cluster of
   // outliers can be mutual among itself). Trusted = mutual and near its plane.
   Detection d;
-  std::vector<std::uint8_t>&outlier = d.outlier, &trusted = d.trusted, &isolated = d.isolated;
+  std::vector<std::uint8_t>& outlier = d.outlier;
+  std::vector<std::uint8_t>& trusted = d.trusted;
+  std::vector<std::uint8_t>& isolated = d.isolated;
   outlier.assign(n, 0);
   trusted.assign(n, 0);
   std::vector<double> localSpacing(n, 0.0);
@@ -480,7 +482,9 @@ OutlierResult processOutliers(const PointCloud& input, const OutlierParams& para
     for (std::size_t t = 0; t < kept.size(); ++t)
       if (again.outlier[t]) d.outlier[kept[t]] = 1, d.trusted[kept[t]] = 0, d.isolated[kept[t]] = again.isolated[t];
   }
-  const std::vector<std::uint8_t>&outlier = d.outlier, &trusted = d.trusted, &isolated = d.isolated;
+  const std::vector<std::uint8_t>& outlier = d.outlier;
+  const std::vector<std::uint8_t>& trusted = d.trusted;
+  const std::vector<std::uint8_t>& isolated = d.isolated;
 
   OutlierResult result;
   for (std::size_t i = 0; i < n; ++i)
