@@ -33,8 +33,9 @@ AdvancingFrontResult advancingFront(const PointCloud& cloud, const AdvancingFron
   CGAL::advancing_front_surface_reconstruction(points.begin(), points.end(), std::back_inserter(facets),
                                                params.radiusRatioBound, params.beta);
   // CGAL lists the facets in an order that follows its cells' addresses, which differ from run to run: each
-  // facet starts at its lowest vertex (its orientation kept) and the list is sorted, so that the stages after it
-  // (hole filling, repairs) and the file are the same on every run.
+  // facet starts at its lowest vertex (its orientation kept) and the list is sorted, so that the same facets give
+  // the same mesh after the later stages and the same file. (CGAL also breaks ties between edges of equal priority
+  // by address, which can change the facets themselves: see the README.)
   for (auto& f : facets) std::rotate(f.begin(), std::min_element(f.begin(), f.end()), f.end());
   std::sort(facets.begin(), facets.end());
   AdvancingFrontResult result;

@@ -26,7 +26,8 @@ struct AdvancingFrontResult {
 
 /// @brief Run CGAL::advancing_front_surface_reconstruction on the points of @p cloud (normals are not used).
 /// @throws InputError for fewer than 4 points or non-finite coordinates.
-/// @note Sequential (CGAL's 3-D Delaunay triangulation); deterministic.
+/// @note Sequential (CGAL's 3-D Delaunay triangulation). The facets come sorted, each from its lowest vertex;
+/// which facets CGAL keeps may depend on memory addresses where edges tie in priority.
 AdvancingFrontResult advancingFront(const PointCloud& cloud, const AdvancingFrontParams& params = {});
 
 }  // namespace iires
