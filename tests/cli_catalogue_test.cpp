@@ -275,6 +275,18 @@ TEST_P(Catalogue, CollinearPoints) {
   expectRejected(input, {"collinear"});
 }
 
+// CLI11 wrapped --seed -1 around to 2^64 − 1 and saturated 2^64: both ran with exit 0.
+TEST_P(Catalogue, SeedOutsideItsRange) {
+  const std::string input = dir_ + "/cloud.ply";
+  writePointCloud(input, smallSphere());
+  for (const char* seed : {"-1", "18446744073709551616", "1e3"}) {
+    std::string message;
+    EXPECT_EQ(run(command(input, output(), spec_.goodCount, std::string("--seed ") + seed), &message), 2) << seed;
+    EXPECT_NE(message.find("--seed"), std::string::npos) << message;
+    EXPECT_FALSE(fs::exists(output()));
+  }
+}
+
 TEST_P(Catalogue, CountNotPositive) {
   const std::string input = dir_ + "/cloud.ply";
   writePointCloud(input, smallSphere());

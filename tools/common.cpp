@@ -139,6 +139,18 @@ void checkCount(const std::string& flag, long long count, std::size_t bytesPerPo
 
 std::string versionString() { return std::string("iires ") + IIRES_VERSION; }
 
+const CLI::Validator& seedValidator() {
+  static const CLI::Validator check(
+      [](const std::string& text) -> std::string {
+        const bool digits = !text.empty() && text.size() <= 20 &&
+                            std::all_of(text.begin(), text.end(), [](char c) { return c >= '0' && c <= '9'; });
+        if (digits && (text.size() < 20 || text <= "18446744073709551615")) return "";
+        return "the seed must be a whole number from 0 to 18446744073709551615, got " + text;
+      },
+      "UINT64");
+  return check;
+}
+
 void refuseFlags(const CLI::App& app, std::initializer_list<const char*> flags, const std::string& why) {
   for (const char* flag : flags)
     if (app.count(flag) > 0) throw InputError(std::string(flag) + " has no effect with " + why);

@@ -56,6 +56,10 @@ std::size_t availableMemory();
 /// @throws InputError when @p count exceeds kMaxCount, or count · bytesPerPoint exceeds availableMemory().
 void checkCount(const std::string& flag, long long count, std::size_t bytesPerPoint);
 
+/// @brief --seed's check: a whole number in [0, 2^64 − 1], written in decimal digits (CLI11 wraps "-1" around
+/// and saturates 2^64 otherwise).
+const CLI::Validator& seedValidator();
+
 /// @brief A flag that would change nothing is refused rather than ignored.
 /// @throws InputError "FLAG has no effect with WHY" for the first of @p flags given on the command line.
 void refuseFlags(const CLI::App& app, std::initializer_list<const char*> flags, const std::string& why);

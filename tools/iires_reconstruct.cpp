@@ -56,7 +56,8 @@ int main(int argc, char** argv) {
                    "cover) to this point cloud file");
     app.add_option("--threads", exec.threads, "threads (0 = all cores); the output does not depend on it")
         ->check(CLI::NonNegativeNumber);
-    app.add_option("--seed", params.seed, "seed; same seed -> same mesh");
+    app.add_option("--seed", params.seed, "seed; same seed -> same mesh")
+        ->check(iires::tools::seedValidator());
     app.add_flag("-q,--quiet", quiet, "print nothing on success (no report, no progress)");
     app.add_flag("--progress", showProgress, "progress on stderr even when it is not a terminal");
     app.set_version_flag("--version", iires::tools::versionString());

@@ -40,7 +40,8 @@ int main(int argc, char** argv) {
     app.add_option("--outliers", outlierMode,
                    "outliers of both clouds (and of the -o output): pull back onto the surface, remove, or keep")
         ->check(CLI::IsMember({"pull", "remove", "keep"}));
-    app.add_option("--seed", params.seed, "seed; same seed -> same result");
+    app.add_option("--seed", params.seed, "seed; same seed -> same result")
+        ->check(iires::tools::seedValidator());
     app.add_option("--threads", exec.threads, "threads (0 = all cores); the result does not depend on it")
         ->check(CLI::NonNegativeNumber);
     app.add_flag("--full-resample", fullResample,

@@ -58,7 +58,8 @@ int run(int argc, char** argv) {
   auto* outMaxRel = app.add_option("--outlier-max-spacing", outlierMaxSpacing, "largest outlier offset / l")
                         ->check(CLI::NonNegativeNumber)
                         ->excludes(outMax);
-  app.add_option("--seed", params.seed, "random seed; same seed, same cloud")->capture_default_str();
+  app.add_option("--seed", params.seed, "random seed; same seed, same cloud")->capture_default_str()
+        ->check(iires::tools::seedValidator());
   if (const int code = iires::tools::parseArgs(app, argc, argv); code != iires::tools::kContinue) return code;
   if (count < 1) throw std::invalid_argument("-n/--count must be at least 1, got " + std::to_string(count));
   iires::tools::checkCount("-n/--count", count, kBytesPerPoint);

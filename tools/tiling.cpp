@@ -66,7 +66,8 @@ void ResampleOptions::addRunFlags(CLI::App& app) {
   app.add_option("--outliers", outlierMode, "outliers: pull back onto the surface, remove, or keep")
       ->check(CLI::IsMember({"pull", "remove", "keep"}));
   app.add_flag("--no-denoise", noDenoise, "skip the MLS denoising of the input");
-  app.add_option("--seed", params.seed, "seed of the initial candidates' grid; same seed -> same output");
+  app.add_option("--seed", params.seed, "seed of the initial candidates' grid; same seed -> same output")
+        ->check(iires::tools::seedValidator());
   app.add_option("--input-per-sample", params.maxInputPerSample,
                  "thin inputs denser than this many points per output point first (default 6; 0 = never)");
   app.add_option("--threads", exec.threads, "threads (0 = all cores); the output does not depend on it")
