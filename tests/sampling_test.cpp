@@ -198,6 +198,11 @@ TEST(SampleMeshTool, WritesTheRequestedCloudAndRejectsBadInput) {
   EXPECT_EQ(test::run(bin + mesh + " " + out + " -n -3", &log), 2) << log;
   EXPECT_EQ(test::run(bin + mesh + " " + out + " -n 10 --outliers 0.1", &log), 2) << log;
   EXPECT_EQ(test::run(bin + mesh + " " + out + " -n 10 --noise 1 --noise-spacing 1", &log), 2) << log;
+  // Flags that would change nothing (no outliers, no noise) are refused, not ignored.
+  EXPECT_EQ(test::run(bin + mesh + " " + out + " -n 10 --outlier-max 0.1 2>&1", &log), 2) << log;
+  EXPECT_NE(log.find("--outlier-max has no effect"), std::string::npos) << log;
+  EXPECT_EQ(test::run(bin + mesh + " " + out + " -n 10 --uniform-noise 2>&1", &log), 2) << log;
+  EXPECT_NE(log.find("--uniform-noise has no effect"), std::string::npos) << log;
 }
 
 }  // namespace

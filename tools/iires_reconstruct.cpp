@@ -33,7 +33,9 @@ int main(int argc, char** argv) {
     app.add_option("INPUT", input, "input cloud (.ply .pcd .xyz .xyzn .pts, or a mesh .obj .off .stl: its surface)")
         ->required();
     app.add_option("OUTPUT_MESH", output, "output mesh (.ply .obj .off by extension)");
-    app.add_option("-n,--count", count, "resample to exactly N points first and mesh them (>= 4; the report counts samples the mesh leaves out and vertices hole filling adds)");
+    app.add_option("-n,--count", count,
+                   "resample to exactly N points first and mesh them (>= 4; the report counts samples the mesh "
+                   "leaves out and vertices hole filling adds)");
     app.add_flag("--no-resample", noResample, "triangulate the input points as they are");
     app.add_option("--method", method, "triangulation: local (default) or advancing-front")
         ->check(CLI::IsMember({"local", "advancing-front"}));

@@ -68,6 +68,10 @@ int run(int argc, char** argv) {
   if (*fraction && params.outlierFraction > 0 && !*outMax && !*outMaxRel)
     throw std::invalid_argument("--outliers needs --outlier-max or --outlier-max-spacing");
   params.gaussianNoise = !uniformNoise;
+  if (!*fraction)
+    iires::tools::refuseFlags(app, {"--outlier-min", "--outlier-max", "--outlier-min-spacing", "--outlier-max-spacing"},
+                "no --outliers (no point is made an outlier)");
+  if (!*noise && !*noiseRel) iires::tools::refuseFlags(app, {"--uniform-noise"}, "no --noise or --noise-spacing");
 
   const iires::TriangleMesh mesh = iires::readMesh(meshPath);
   double l = 0;
