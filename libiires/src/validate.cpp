@@ -17,6 +17,23 @@ namespace {
 
 using Eigen::Vector3d;
 
+/// Keeps the points (and their normals) with @p keep[i] set, in order. @return the number of points removed.
+template <typename Mask>
+std::size_t keepMarked(PointCloud& cloud, const Mask& keep) {
+  const std::size_t n = cloud.size();
+  std::size_t kept = 0;
+  while (kept < n && keep[kept]) ++kept;  // points before the first one removed stay where they are
+  for (std::size_t i = kept; i < n; ++i) {
+    if (!keep[i]) continue;
+    cloud.points[kept] = cloud.points[i];
+    if (cloud.hasNormals()) cloud.normals[kept] = cloud.normals[i];
+    ++kept;
+  }
+  cloud.points.resize(kept);
+  if (!cloud.normals.empty()) cloud.normals.resize(kept);
+  return n - kept;
+}
+
 /// Removes exact duplicate positions, keeping the first occurrence and the normals of the kept points.
 /// @return the number of points removed. O(n): points are sorted by a 32-bit hash of their coordinates (radix
 /// sort, stable), so duplicates share a run; within a run a point is a duplicate when an earlier one equals
@@ -47,17 +64,7 @@ std::size_t mergeDuplicates(PointCloud& cloud, int threads) {
         }
   }
 
-  std::size_t kept = 0;
-  while (kept < n && keep[kept]) ++kept;  // points before the first duplicate stay where they are
-  for (std::size_t i = kept; i < n; ++i) {
-    if (!keep[i]) continue;
-    cloud.points[kept] = cloud.points[i];
-    if (cloud.hasNormals()) cloud.normals[kept] = cloud.normals[i];
-    ++kept;
-  }
-  cloud.points.resize(kept);
-  if (!cloud.normals.empty()) cloud.normals.resize(kept);
-  return n - kept;
+  return keepMarked(cloud, keep);
 }
 
 /// True when the points span no more than a line: the second-largest eigenvalue of their covariance is
@@ -190,16 +197,9 @@ std::size_t mergeNearDuplicates(PointCloud& cloud, int threads) {
   if (cloud.size() < 9) return 0;
   const KnnIndex index(cloud.points);
   const NeighbourTable table(index, cloud.points, 9, threads);
-  const auto kept = withoutNearDuplicates(table, cloud.points, threads);
-  const std::size_t merged = cloud.size() - kept.size();
-  if (merged == 0) return 0;
-  for (std::size_t t = 0; t < kept.size(); ++t) {
-    cloud.points[t] = cloud.points[kept[t]];
-    if (cloud.hasNormals()) cloud.normals[t] = cloud.normals[kept[t]];
-  }
-  cloud.points.resize(kept.size());
-  if (!cloud.normals.empty()) cloud.normals.resize(kept.size());
-  return merged;
+  std::vector<char> keep(cloud.size(), 0);
+  for (std::uint32_t i : withoutNearDuplicates(table, cloud.points, threads)) keep[i] = 1;
+  return keepMarked(cloud, keep);
 }
 
 }  // namespace iires
