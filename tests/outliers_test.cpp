@@ -173,10 +173,10 @@ TEST(Outliers, ScatteredFarPointsAreFoundAndNeverPulledOffTheSurface) {
 
 // Outliers scattered near the surface (2 % of the points, 5–20 spacings off it, as a noisy scanner makes them) have
 // one another among their nearest: the ones a round of the test passes keep each other company. Each one left
-// stands for a surface patch and drew an output sample (fandisk: 2.4 % of the samples 1.5 spacings off). The second
-// round, over the points the first kept, finds them alone: here 0 points are left over 3 spacings off the sphere
-// (pull and remove), 55 and 40 after one round.
-TEST(Outliers, OutliersInOneAnothersCompanyAreFoundInASecondRound) {
+// stands for a surface patch and drew an output sample (fandisk: 2.4 % of the samples 1.5 spacings off). The later
+// rounds, each over the points the last one kept, find them alone: here 0 points are left over 3 spacings off the
+// sphere (pull and remove), 55 and 40 after one round.
+TEST(Outliers, OutliersInOneAnothersCompanyAreFoundInLaterRounds) {
   PointCloud cloud;
   std::mt19937_64 rng(25);
   std::normal_distribution<double> noise(0.0, 0.003);

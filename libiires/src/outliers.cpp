@@ -17,6 +17,7 @@ namespace iires {
 namespace {
 
 using Clock = std::chrono::steady_clock;
+constexpr int kMaxRounds = 6;  // of the outlier test: scattered outliers are gone after three or four
 constexpr std::size_t kSpacingNeighbours = 6;  // l = mean distance to the 6 nearest neighbours (paper §6.1)
 constexpr std::size_t kNearPlaneSheets = 4;  // a flagged point's trusted neighbours whose planes are tried
 // How far past the trusted points around it, on its plane, a pulled point may land, in units of the fit's radius h:
@@ -469,18 +470,21 @@ OutlierResult processOutliers(const PointCloud& input, const OutlierParams& para
   const std::size_t n = input.size();
   Detection d = detect(input.points, params, exec, table, false);
   // Outliers scattered near one another are one another's mutual neighbours and planes: the test passes them
-  // while their company is there. A second round over the points the first kept sees them stand alone; it takes
-  // only the clear cases (between two close sheets, true points whose neighbours the first round took would
-  // turn suspect).
-  std::vector<std::uint32_t> kept;
-  for (std::size_t i = 0; i < n; ++i)
-    if (!d.outlier[i]) kept.push_back(static_cast<std::uint32_t>(i));
-  if (kept.size() < n && kept.size() >= minPoints) {
+  // while their company is there. Another round over the points the last one kept sees them stand alone, until
+  // a round finds none; those rounds take only the clear cases (between two close sheets, true points whose
+  // neighbours an earlier round took would turn suspect).
+  for (int round = 1; round < kMaxRounds; ++round) {
+    std::vector<std::uint32_t> kept;
+    for (std::size_t i = 0; i < n; ++i)
+      if (!d.outlier[i]) kept.push_back(static_cast<std::uint32_t>(i));
+    if (kept.size() == n || kept.size() < minPoints) break;
     std::vector<Eigen::Vector3d> rest(kept.size());
     for (std::size_t t = 0; t < kept.size(); ++t) rest[t] = input.points[kept[t]];
     const Detection again = detect(rest, params, exec, nullptr, true);
+    std::size_t found = 0;
     for (std::size_t t = 0; t < kept.size(); ++t)
-      if (again.outlier[t]) d.outlier[kept[t]] = 1, d.trusted[kept[t]] = 0, d.isolated[kept[t]] = again.isolated[t];
+      if (again.outlier[t]) ++found, d.outlier[kept[t]] = 1, d.trusted[kept[t]] = 0, d.isolated[kept[t]] = again.isolated[t];
+    if (found == 0) break;
   }
   const std::vector<std::uint8_t>& outlier = d.outlier;
   const std::vector<std::uint8_t>& trusted = d.trusted;
