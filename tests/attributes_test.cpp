@@ -349,15 +349,22 @@ TEST(AttributesIo, ToolsCarryColumnsToThePly) {
   EXPECT_NE(out.find("iires-resample: error: " + dir + "/out.ply: column names apply to .xyz files only"),
             std::string::npos)
       << out;
-  // --denoise-only keeps each point's own values (it wrote positions and normals only).
-  for (const char* outliers : {"pull", "remove"}) {
-    ASSERT_EQ(iires::test::run(iires::test::tool("iires-resample") + " " + dir + "/in.xyz " + dir +
+  // --denoise-only keeps each point's own values (it wrote positions and normals only); where --outliers remove
+  // drops points (scattered ones added to the sphere here), each point left keeps its own.
+  {
+    std::ofstream xyz(dir + "/scattered.xyz");
+    xyz << std::ifstream(dir + "/in.xyz").rdbuf();
+    for (int i = 0; i < 40; ++i) xyz << 3 + 0.05 * i << " " << 2 - 0.1 * i << " " << 4 << " 0\n";
+  }
+  for (const auto& [file, outliers] : {std::pair{"in", "pull"}, std::pair{"scattered", "remove"}}) {
+    ASSERT_EQ(iires::test::run(iires::test::tool("iires-resample") + " " + dir + "/" + file + ".xyz " + dir +
                                    "/clean.ply --denoise-only -q --columns x,y,z,red --outliers " + outliers,
                                &out),
               0)
         << out;
     const PointCloud cleaned = iires::readPointCloud(dir + "/clean.ply");
     ASSERT_EQ(cleaned.attributes.size(), 1u) << outliers;
+    EXPECT_LE(cleaned.size(), cloud.size()) << outliers;  // the scattered points removed
     double off = 0;
     for (std::size_t i = 0; i < cleaned.size(); ++i)
       off = std::max(off, std::abs(cleaned.attributes[0].values[i] - 127.5 * (1 + cleaned.points[i].z())));
