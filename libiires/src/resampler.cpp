@@ -296,6 +296,7 @@ double Resampler::relax(Samples& s, double l, int iterations, Relaxation& state,
   constexpr double kStillMove = 0.005;  // in units of l
   constexpr int kRequeryEvery = 4;     // iterations between fresh k-d tree candidate lists
   constexpr double kRuleDrift = 0.5;   // in units of l: a drift from the rule's last positions that updates it
+  constexpr double kStaleReach = 2.0;  // in units of l: around a drifted sample, the candidate lists it may join
   const std::size_t n = s.size(), k = static_cast<std::size_t>(params_.neighbours);
   double cv = 0;
   std::vector<Eigen::Vector3d> pos, nrm;  // the moved samples; swapped with s's, so both keep their memory
@@ -348,9 +349,23 @@ double Resampler::relax(Samples& s, double l, int iterations, Relaxation& state,
     // can then be refused as neighbours — where the geodesic coordinates are a few tens of per cent off over
     // that distance — and their cells overlap, so they pile up. Such a drift updates the rule.
     const double drift2 = kRuleDrift * kRuleDrift * l * l;
-    bool drifted = false;
-    for (std::size_t i = 0; i < n && !drifted; ++i) drifted = (s.pos[i] - rulePos_[i]).squaredNorm() > drift2;
-    if (drifted) updateRule(s);
+    std::vector<std::uint32_t> drifted;
+    for (std::size_t i = 0; i < n; ++i)
+      if ((s.pos[i] - rulePos_[i]).squaredNorm() > drift2) drifted.push_back(static_cast<std::uint32_t>(i));
+    if (!drifted.empty()) {
+      updateRule(s);
+      // The candidate lists hold the samples the rule accepted at their last query: a drifted sample, judged where
+      // it was, is missing from the lists around where it is now (two samples on one sheet would sit on each
+      // other unseen). Those lists are queried anew next iteration.
+      const KnnIndex index(s.pos);
+      std::vector<std::uint32_t> idx;
+      std::vector<double> d2;
+      state.stale.assign(n, 0);
+      for (std::uint32_t j : drifted) {
+        index.radius(s.pos[j], kStaleReach * l, idx, d2);
+        for (std::uint32_t i : idx) state.stale[i] = next[i] = 1;
+      }
+    }
     double sum = 0, sq = 0;
     for (double d : r.nearest) sum += d, sq += d * d;
     const double mean = sum / static_cast<double>(n);
