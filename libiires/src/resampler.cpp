@@ -57,32 +57,6 @@ float pow8(double x) {
   return static_cast<float>(x * x);
 }
 
-/// A monotone stand-in for the angle of the unit vector @p d, in [0, 4): sorts directions counter-clockwise
-/// from +x like atan2 does from −x, without the transcendental call.
-double pseudoAngle(const Eigen::Vector2d& d) {
-  const double s = std::abs(d.x()) + std::abs(d.y());
-  const double t = d.y() / s;  // in [−1, 1]
-  return d.x() >= 0 ? (d.y() >= 0 ? t : 4.0 + t) : 2.0 - t;
-}
-
-/// The counter-clockwise gap from unit direction @p from to the next one @p to of a 1-ring: its bisector when
-/// the gap is wider than 135°, else nothing. @p full: the two are the same direction and the gap is the whole
-/// circle (a ring with one direction).
-std::optional<Eigen::Vector2d> gapBisector(const Eigen::Vector2d& from, const Eigen::Vector2d& to,
-                                           bool full) {
-  if (full) return -from;
-  const double cross = from.x() * to.y() - from.y() * to.x(), dot = from.dot(to);
-  if (cross > 0) {
-    if (dot >= -std::sqrt(0.5)) return std::nullopt;  // at most 135°
-    return (from + to).normalized();
-  }
-  if (cross == 0) {
-    if (dot > 0) return std::nullopt;             // the same direction: no gap
-    return Eigen::Vector2d(-from.y(), from.x());  // exactly 180°
-  }
-  return -(from + to).normalized();  // more than 180°
-}
-
 }  // namespace
 
 /// Neighbours are filtered by the neighbour rule as of its last update, which follows every change of the
@@ -349,16 +323,14 @@ double Resampler::relax(Samples& s, double l, int iterations, Relaxation& state,
     // can then be refused as neighbours — where the geodesic coordinates are a few tens of per cent off over
     // that distance — and their cells overlap, so they pile up. Such a drift updates the rule.
     const double drift2 = kRuleDrift * kRuleDrift * l * l;
-    std::vector<std::uint32_t> drifted;
+    std::vector<std::uint32_t> drifted, idx;
     for (std::size_t i = 0; i < n; ++i)
       if ((s.pos[i] - rulePos_[i]).squaredNorm() > drift2) drifted.push_back(static_cast<std::uint32_t>(i));
     if (!drifted.empty()) {
       updateRule(s);
       // The candidate lists hold the samples the rule accepted at their last query: a drifted sample, judged where
-      // it was, is missing from the lists around where it is now (two samples on one sheet would sit on each
-      // other unseen). Those lists are queried anew next iteration.
+      // it was, is missing from those around where it is now (it could sit on a sample unseen). They are queried anew.
       const KnnIndex index(s.pos);
-      std::vector<std::uint32_t> idx;
       std::vector<double> d2;
       state.stale.assign(n, 0);
       for (std::uint32_t j : drifted) {

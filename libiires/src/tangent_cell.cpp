@@ -47,4 +47,24 @@ Eigen::Vector2d polygonCentroid(const std::vector<Eigen::Vector2d>& v) {
   return std::abs(area) < 1e-300 ? Eigen::Vector2d::Zero() : Eigen::Vector2d(c / (3.0 * area));
 }
 
+double pseudoAngle(const Eigen::Vector2d& d) {
+  const double s = std::abs(d.x()) + std::abs(d.y());
+  const double t = d.y() / s;  // in [−1, 1]
+  return d.x() >= 0 ? (d.y() >= 0 ? t : 4.0 + t) : 2.0 - t;
+}
+
+std::optional<Eigen::Vector2d> gapBisector(const Eigen::Vector2d& from, const Eigen::Vector2d& to, bool full) {
+  if (full) return -from;
+  const double cross = from.x() * to.y() - from.y() * to.x(), dot = from.dot(to);
+  if (cross > 0) {
+    if (dot >= -std::sqrt(0.5)) return std::nullopt;  // at most 135°
+    return (from + to).normalized();
+  }
+  if (cross == 0) {
+    if (dot > 0) return std::nullopt;             // the same direction: no gap
+    return Eigen::Vector2d(-from.y(), from.x());  // exactly 180°
+  }
+  return -(from + to).normalized();  // more than 180°
+}
+
 }  // namespace iires

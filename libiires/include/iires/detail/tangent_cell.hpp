@@ -7,6 +7,7 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 namespace iires {
@@ -20,5 +21,14 @@ void clipByBisector(std::vector<Eigen::Vector2d>& v, std::vector<std::uint32_t>&
 
 /// @brief Area centroid of a simple polygon (the origin for a degenerate one).
 Eigen::Vector2d polygonCentroid(const std::vector<Eigen::Vector2d>& v);
+
+/// @brief A monotone stand-in for the angle of the unit vector @p d, in [0, 4): sorts directions counter-clockwise
+/// from +x like atan2 does from −x, without the transcendental call.
+double pseudoAngle(const Eigen::Vector2d& d);
+
+/// @brief The counter-clockwise gap from unit direction @p from to the next one @p to of a 1-ring: its bisector
+/// when the gap is wider than 135°, else nothing. @p full: the two are the same direction and the gap is the whole
+/// circle (a ring with one direction).
+std::optional<Eigen::Vector2d> gapBisector(const Eigen::Vector2d& from, const Eigen::Vector2d& to, bool full);
 
 }  // namespace iires
