@@ -2,6 +2,8 @@
 // End-to-end acceptance of the isotropic resampler on CGAL's real models (issue: foundation).
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
+#include <algorithm>
 #include <utility>
 
 #include "iires/features.hpp"
@@ -327,6 +329,23 @@ TEST(SharpEdges, SamplesBesideFourFaceCornersNoFartherFromTheMeshThanIsotropic) 
   EXPECT_LT(e.sharp.mean, e.isotropic.mean);
   EXPECT_LE(e.sharp.max, e.isotropic.max);
   RecordProperty("err_max_ratio", std::to_string(e.sharp.max / e.isotropic.max));
+}
+
+// CGAL's oni scan (1,435 points with normals) ends at its neck in a ring of a few dozen points. Upsampled ten
+// times and more, samples crept past that rim until the run failed ("output points left the input's bounding
+// box", from 15,000 up): the footprint test read the rim in the tangent plane of a quadric fitted past it.
+TEST(RealScan, OniUpsampledPastTenTimesStaysWithinTheInput) {
+  const iires::PointCloud cloud = iires::readPointCloud(dataPath("points_3/oni.ply"));
+  Eigen::AlignedBox3d box;
+  for (const auto& p : cloud.points) box.extend(p);
+  for (const std::size_t n : {15000u, 20000u}) {
+    iires::ResampleResult r;
+    ASSERT_NO_THROW(r = resampleTo(cloud, n)) << n;
+    ASSERT_EQ(r.cloud.size(), n);
+    double outside = 0;
+    for (const auto& p : r.cloud.points) outside = std::max(outside, box.exteriorDistance(p));
+    EXPECT_LE(outside, r.spacing.mean) << n;
+  }
 }
 
 // --sharp-edges on CGAL's two real hippo scans (6k points, noisy, no CAD creases): the detector finds crease-like

@@ -101,6 +101,7 @@ Eigen::Vector3d MlsSurface::project(const Eigen::Vector3d& x0, Eigen::Vector3d* 
   Eigen::Vector3d x = x0, normal = Eigen::Vector3d::UnitZ();
   double off = 0, h = 0;
   Eigen::Vector3d queried = x;
+  Eigen::Vector3d planeNormal = normal;  // the fit's frame: its neighbours' averaged normal, before the quadric's tilt
   double lastH = 0;
   if (cache && cache->h > 0 && (x - cache->centre).squaredNorm() <= 0.0625 * cache->h * cache->h) {
     idx.assign(cache->indices.begin(), cache->indices.end());
@@ -179,6 +180,7 @@ Eigen::Vector3d MlsSurface::project(const Eigen::Vector3d& x0, Eigen::Vector3d* 
     a /= wsum;
     if (nsum.squaredNorm() < 1e-24) nsum = normals_[idx[0]];
     normal = nsum.normalized();
+    planeNormal = normal;
     Eigen::Vector3d next = x - normal * normal.dot(x - a);  // eq. (3): project onto the tangent plane at a
     if (params_.degree >= 2 && found >= 8) {
       // Quadric height field over the tangent plane: f(u,v) = c0 + c1 u + c2 v + c3 u² + c4 uv + c5 v².
@@ -237,7 +239,7 @@ Eigen::Vector3d MlsSurface::project(const Eigen::Vector3d& x0, Eigen::Vector3d* 
   if (offSurface) *offSurface = off;
   if (beyond)
     *beyond = idx.empty() || h <= 0 ? 0.0
-                                    : detail::beyondHull(points_, idx.data(), idx.size(), w.data(), x, normal) / h;
+                                    : detail::beyondHull(points_, idx.data(), idx.size(), w.data(), x, planeNormal) / h;
   return x;
 }
 
