@@ -293,7 +293,8 @@ TEST(Resample, UpsampledSparseTubeEndsStayAtTheInputsRims) {
 // upsampled to 15,000. The quadric fits at the rim extrapolate the tube, tilting the normal they give, and the
 // rim's curve seen in that tilted plane bends around points below it: the footprint test judged them inside the
 // input and samples went up to 2.6 output spacings past the rim (or out of the input's box: the run failed, as
-// CGAL's oni scan did from 15,000 up). The footprint is now judged in the plane of the neighbours' normals.
+// CGAL's oni scan did from 15,000 up). A sample now counts as inside only if it is inside
+// in the plane of the neighbours' averaged normal too.
 TEST(Resample, UpsampledSparseNeckStaysAboveItsRim) {
   for (const std::uint64_t seed : {1u, 2u, 3u, 4u}) {
     std::mt19937_64 rng(seed);

@@ -237,9 +237,14 @@ Eigen::Vector3d MlsSurface::project(const Eigen::Vector3d& x0, Eigen::Vector3d* 
   }
   if (normalOut) *normalOut = normal;
   if (offSurface) *offSurface = off;
+  // Outside the footprint in either frame: the quadric's tangent plane follows the surface's curvature inside the
+  // data, the fit's plane does not tilt where the quadric extrapolates past a rim.
   if (beyond)
-    *beyond = idx.empty() || h <= 0 ? 0.0
-                                    : detail::beyondHull(points_, idx.data(), idx.size(), w.data(), x, planeNormal) / h;
+    *beyond = idx.empty() || h <= 0
+                  ? 0.0
+                  : std::max(detail::beyondHull(points_, idx.data(), idx.size(), w.data(), x, normal),
+                             detail::beyondHull(points_, idx.data(), idx.size(), w.data(), x, planeNormal)) /
+                        h;
   return x;
 }
 

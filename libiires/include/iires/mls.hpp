@@ -72,11 +72,11 @@ class MlsSurface {
   /// @p iterations (optional, > 0) overrides MlsParams::iterations: one step is enough for a point that was on
   /// the surface before a small move (a relaxation step), the full count for a point from anywhere.
   /// @p beyond (optional) receives how far the projected point lies outside the input's local extent: its
-  /// distance, in the plane of the neighbours' averaged normal (the fit's frame, not the quadric's tangent plane,
-  /// which tilts where the fit extrapolates past a rim), to the convex hull of the input neighbours of the last
-  /// step (those of its sheet), divided by their mean kernel width — 0 inside the cloud, even in a sampling hole,
-  /// and growing from 0 right at an open boundary, where offSurface only measures the distance to the nearest
-  /// input point.
+  /// distance to the convex hull of the input neighbours of the last step (those of its sheet), divided by their
+  /// mean kernel width, the larger of the distances in the quadric's tangent plane and in the plane of the
+  /// neighbours' averaged normal (which does not tilt where the quadric extrapolates past a rim) — 0 inside the
+  /// cloud, even in a sampling hole, and growing from 0 right at an open boundary, where offSurface only measures
+  /// the distance to the nearest input point.
   Eigen::Vector3d project(const Eigen::Vector3d& x, Eigen::Vector3d* normal = nullptr, double* offSurface = nullptr,
                           const Eigen::Vector3d* hint = nullptr, MlsCache* cache = nullptr, int iterations = 0,
                           double* beyond = nullptr) const;
