@@ -20,6 +20,16 @@ constexpr double kMaxQuadricHeight = 2.0;     // kernel widths: a quadric fit be
 const double kSpacingPerWidth = 0.5 / std::sqrt(8.0 / M_PI);
 const double kGapParallelCos = std::cos(25.0 * M_PI / 180.0);  // SheetParams::gapAngleDeg
 
+/// How far @p x lies outside the footprint of its fit's neighbours (those with weight): the larger of its hull
+/// distances in the quadric's tangent plane (@p tangentNormal), which follows the surface's curvature inside the
+/// data, and in the fit's plane (@p planeNormal), which does not tilt where the quadric extrapolates past a rim.
+double beyondFootprint(const std::vector<Eigen::Vector3d>& points, const std::vector<std::uint32_t>& idx,
+                       const std::vector<double>& w, const Eigen::Vector3d& x, const Eigen::Vector3d& tangentNormal,
+                       const Eigen::Vector3d& planeNormal) {
+  return std::max(detail::beyondHull(points, idx.data(), idx.size(), w.data(), x, tangentNormal),
+                  detail::beyondHull(points, idx.data(), idx.size(), w.data(), x, planeNormal));
+}
+
 }  // namespace
 
 MlsSurface::MlsSurface(const std::vector<Eigen::Vector3d>& points,
@@ -101,7 +111,7 @@ Eigen::Vector3d MlsSurface::project(const Eigen::Vector3d& x0, Eigen::Vector3d* 
   Eigen::Vector3d x = x0, normal = Eigen::Vector3d::UnitZ();
   double off = 0, h = 0;
   Eigen::Vector3d queried = x;
-  Eigen::Vector3d planeNormal = normal;  // the fit's frame: its neighbours' averaged normal, before the quadric's tilt
+  Eigen::Vector3d planeNormal = normal;  // the neighbours' averaged normal, before the quadric's tilt
   double lastH = 0;
   if (cache && cache->h > 0 && (x - cache->centre).squaredNorm() <= 0.0625 * cache->h * cache->h) {
     idx.assign(cache->indices.begin(), cache->indices.end());
@@ -237,14 +247,7 @@ Eigen::Vector3d MlsSurface::project(const Eigen::Vector3d& x0, Eigen::Vector3d* 
   }
   if (normalOut) *normalOut = normal;
   if (offSurface) *offSurface = off;
-  // Outside the footprint in either frame: the quadric's tangent plane follows the surface's curvature inside the
-  // data, the fit's plane does not tilt where the quadric extrapolates past a rim.
-  if (beyond)
-    *beyond = idx.empty() || h <= 0
-                  ? 0.0
-                  : std::max(detail::beyondHull(points_, idx.data(), idx.size(), w.data(), x, normal),
-                             detail::beyondHull(points_, idx.data(), idx.size(), w.data(), x, planeNormal)) /
-                        h;
+  if (beyond) *beyond = idx.empty() || h <= 0 ? 0.0 : beyondFootprint(points_, idx, w, x, normal, planeNormal) / h;
   return x;
 }
 
