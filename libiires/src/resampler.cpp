@@ -84,7 +84,8 @@ void Resampler::acceptedNearest(const KnnIndex& index, const Samples& s, std::si
   d2.resize(w);
 }
 
-Rings Resampler::computeRings(const Samples& s, double cellRadius, Relaxation* relaxation, bool requery) const {
+Rings Resampler::computeRings(const Samples& s, double cellRadius, Relaxation* relaxation, bool requery,
+                              const KnnIndex* built) const {
   const bool previous = relaxation && relaxation->rings;
   if (!previous) requery = true;
   auto active = [&](std::size_t i) { return !previous || relaxation->active[i]; };
@@ -108,8 +109,9 @@ Rings Resampler::computeRings(const Samples& s, double cellRadius, Relaxation* r
     parallelFor(s.size(), exec_.threads, [&](std::size_t i) {
       if (active(i)) r.size[i] = (*size_)[surface_.index().nearest(s.pos[i])];
     });
-  std::optional<KnnIndex> index;
-  if (requery || stale) index.emplace(s.pos);
+  std::optional<KnnIndex> own;
+  const KnnIndex* index = built;
+  if ((requery || stale) && !index) index = &own.emplace(s.pos);
   // The disc bounding each cell, as a polygon circumscribing the unit circle.
   constexpr int kDiscEdges = 16;
   std::array<Eigen::Vector2d, kDiscEdges> unitDisc;
@@ -274,9 +276,11 @@ double Resampler::relax(Samples& s, double l, int iterations, Relaxation& state,
   const std::size_t n = s.size(), k = static_cast<std::size_t>(params_.neighbours);
   double cv = 0;
   std::vector<Eigen::Vector3d> pos, nrm;  // the moved samples; swapped with s's, so both keep their memory
+  std::optional<KnnIndex> afterDrift;      // over the positions the next iteration starts from, when a drift built it
   for (int it = 0; it < iterations; ++it) {
     const bool requery = !state.rings || state.sinceQuery >= kRequeryEvery;
-    Rings r = computeRings(s, l, &state, requery);
+    Rings r = computeRings(s, l, &state, requery, afterDrift ? &*afterDrift : nullptr);
+    afterDrift.reset();
     state.sinceQuery = requery ? 1 : state.sinceQuery + 1;
     state.stale.clear();
     if (!state.rings) state.active.assign(n, 1);
@@ -330,7 +334,7 @@ double Resampler::relax(Samples& s, double l, int iterations, Relaxation& state,
       updateRule(s);
       // The candidate lists hold the samples the rule accepted at their last query: a drifted sample, judged where
       // it was, is missing from those around where it is now (it could sit on a sample unseen). They are queried anew.
-      const KnnIndex index(s.pos);
+      const KnnIndex& index = afterDrift.emplace(s.pos);
       std::vector<double> d2;
       state.stale.assign(n, 0);
       for (std::uint32_t j : drifted) {

@@ -76,8 +76,9 @@ class Resampler {
   void run(Samples& s, ResampleResult& result);
 
  private:
+  /// @p built (optional): a k-d tree over s.pos already at hand, used instead of building one.
   Rings computeRings(const Samples& s, double cellRadius, Relaxation* relaxation = nullptr,
-                     bool requery = true) const;
+                     bool requery = true, const KnnIndex* built = nullptr) const;
   /// The stride nearest samples to sample i in @p index that the rule accepts (i itself among them), nearest
   /// first.
   void acceptedNearest(const KnnIndex& index, const Samples& s, std::size_t i, std::size_t stride,
