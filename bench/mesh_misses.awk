@@ -6,7 +6,8 @@ function parse(kv,    i, p) {
   for (i = 1; i <= NF; i++) { p = index($i, "="); if (p) kv[substr($i, 1, p - 1)] = substr($i, p + 1) }
 }
 # The bounds among @p checks (comma-separated: si nm oriented closed q_avg q_min lt30 genus) the row misses, in
-# that order, comma-separated; "none" when it meets them all. closed and genus only where the truth is known.
+# that order, comma-separated; "none" when it meets them all. closed where the true mesh is closed, genus where
+# its genus is known (closed and not intersecting itself).
 function misses(kv, checks,    want, known, m) {
   want = "," checks ","
   known = kv["genus_truth"] != "na"
@@ -14,7 +15,7 @@ function misses(kv, checks,    want, known, m) {
   if (index(want, ",si,") && kv["self_intersections"] > 0) m = m ",si"
   if (index(want, ",nm,") && kv["nonmanifold_edges"] + kv["nonmanifold_vertices"] > 0) m = m ",nm"
   if (index(want, ",oriented,") && kv["oriented"] != 1) m = m ",oriented"
-  if (index(want, ",closed,") && known && kv["closed"] != 1) m = m ",closed"
+  if (index(want, ",closed,") && kv["truth_closed"] == 1 && kv["closed"] != 1) m = m ",closed"
   if (index(want, ",q_avg,") && kv["q_avg"] < 0.90) m = m ",q_avg"
   if (index(want, ",q_min,") && kv["q_min"] < 0.40) m = m ",q_min"
   if (index(want, ",lt30,") && kv["pct_angle_lt30"] >= 1) m = m ",lt30"
