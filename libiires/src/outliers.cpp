@@ -25,6 +25,10 @@ constexpr std::size_t kNearPlaneSheets = 4;  // a flagged point's trusted neighb
 // noisy plane's edge); the points of a face seen at a grazing angle, pulled onto the face they meet at a crease,
 // up to 1.4 h (a one-view scan of a hexagonal nut).
 constexpr double kPullBeyond = 0.75;
+// The least elevation, seen from its nearest trusted point q, of a point the pull moves (the move over its distance
+// from q): past the plane's points a surface of radius R ≥ t bends away from their plane by t²/2R at a distance t,
+// by up to t/2; a point lower than that lies beside the plane's points, not above them.
+constexpr double kPullElevation = 0.5;
 // A flagged point that a plane through it shares with this share of its planeNeighbours nearest (within this many
 // local spacings of the plane, around the point within this largest angular gap, three of them within the reach)
 // is on a sheet (onSharedPlane).
@@ -208,7 +212,10 @@ bool onSharedPlane(const std::vector<Eigen::Vector3d>& P, const std::uint32_t* r
 /// whose projection lands past the trusted points around it on the plane (by more than kPullBeyond·h): there the
 /// plane extrapolates. Such points are mostly true ones beside a crease or an open boundary: a face seen at a
 /// grazing angle, sparse beside the face it meets, had its points pulled onto that face's plane, past the crease
-/// and five spacings from any input point.
+/// and five spacings from any input point. Nor is a point moved that lies beside the plane's points rather than
+/// above them (its move under kPullElevation of its distance from q): a true point of a curved surface sampled
+/// sparsely beside a dense patch — a radar's far field on its sphere, 17–29 units from the patch and 2–6 units
+/// off its plane — was pulled that far off the surface, and the MLS surface bulged over it.
 void pullOutliers(const PointCloud& input, const OutlierParams& params, const std::vector<std::uint8_t>& trusted,
                   const std::vector<std::uint8_t>& isolated, OutlierResult& result, int threads) {
   const std::size_t n = input.size();
@@ -262,6 +269,7 @@ void pullOutliers(const PointCloud& input, const OutlierParams& params, const st
     double rss = 0;
     for (std::size_t j = 0; j < f; ++j) rss += std::pow(plane.normal.dot(cleanPoints[idx[j]] - plane.centre), 2);
     if ((pulled - P[o]).norm() <= 2.0 * std::sqrt(rss / static_cast<double>(f))) return;
+    if ((pulled - P[o]).norm() < kPullElevation * (cleanPoints[q] - P[o]).norm()) return;
     result.cloud.points[o] = pulled;
     if (normals) result.cloud.normals[o] = plane.normal;
     moved[o] = 1;

@@ -56,7 +56,7 @@ struct OutlierResult {
   PointCloud cloud;
   std::vector<std::uint32_t> outliers;  ///< indices (into the input) of the detected outliers, ascending
   std::size_t found = 0;                ///< outliers detected
-  std::size_t pulled = 0;               ///< outliers projected back (pull; those within the plane's scatter stay)
+  std::size_t pulled = 0;  ///< outliers projected back (pull; those within the plane's scatter or beside it stay)
   std::size_t removed = 0;              ///< outliers dropped (remove; pull: those with no surface near)
   double seconds = 0;                   ///< wall time
 };
@@ -90,7 +90,9 @@ std::size_t outlierNeighbours(const OutlierParams& params);
 /// distance to the farthest of them, so the plane is stable under noise); its normal becomes n_a, oriented
 /// like q's normal when the input has normals. An isolated point has no surface to land on and is removed
 /// instead, and so is an outlier whose projection lands more than 2h from a(q), beyond where the plane stands
-/// for the surface. An outlier no farther from the plane than twice its points' RMS distance stays where it is.
+/// for the surface. An outlier no farther from the plane than twice its points' RMS distance stays where it is,
+/// and so does one beside the plane's points rather than above them (the move under half its distance from q:
+/// a curved surface may bend that far from the plane past its points).
 /// @throws InputError when the cloud is empty, holds NaN/Inf, or has fewer than planeNeighbours + 1
 /// points; std::invalid_argument for bad parameters.
 /// @param table (optional) neighbour lists of exactly input.points with k ≥ outlierNeighbours(params),
