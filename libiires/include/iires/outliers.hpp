@@ -56,7 +56,7 @@ struct OutlierResult {
   PointCloud cloud;
   std::vector<std::uint32_t> outliers;  ///< indices (into the input) of the detected outliers, ascending
   std::size_t found = 0;                ///< outliers detected
-  std::size_t pulled = 0;  ///< outliers projected back (pull; those within the plane's scatter or beside it stay)
+  std::size_t pulled = 0;               ///< outliers projected back (pull; not those in or beside the plane)
   std::size_t removed = 0;              ///< outliers dropped (remove; pull: those with no surface near)
   double seconds = 0;                   ///< wall time
 };
