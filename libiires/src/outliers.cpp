@@ -214,7 +214,7 @@ bool onSharedPlane(const std::vector<Eigen::Vector3d>& P, const std::uint32_t* r
 /// grazing angle, sparse beside the face it meets, had its points pulled onto that face's plane, past the crease
 /// and five spacings from any input point. Nor is a point moved that lies beside the plane's points rather than
 /// above them (its move under kPullElevation of its distance from q): a true point of a curved surface sampled
-/// sparsely beside a dense patch — a radar's far field on its sphere, 17–29 units from the patch and 2–6 units
+/// sparsely beside a dense patch — a radar's far field on its sphere, 17–29 units from the patch and 1.8–6.1 units
 /// off its plane — would land that far off the surface, and the MLS surface bulge over it.
 void pullOutliers(const PointCloud& input, const OutlierParams& params, const std::vector<std::uint8_t>& trusted,
                   const std::vector<std::uint8_t>& isolated, OutlierResult& result, int threads) {
