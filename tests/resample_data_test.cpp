@@ -4,6 +4,7 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <random>
 #include <utility>
 
 #include "iires/features.hpp"
@@ -346,6 +347,32 @@ TEST(RealScan, OniUpsampledPastTenTimesStaysWithinTheInput) {
     double outside = 0;
     for (const auto& p : r.cloud.points) outside = std::max(outside, box.exteriorDistance(p));
     EXPECT_LE(outside, r.spacing.mean) << n;
+  }
+}
+
+// Normals that do not describe the surface — tangent to it (a file whose normal columns hold something else) or
+// random — were trusted: a bunny sampling with tangent normals resampled with cv 0.090 against 0.050 with its true
+// normals. They are set aside and estimated from the points; true normals are kept.
+TEST(GivenNormals, TangentOrRandomOnesAreEstimatedInstead) {
+  iires::MeshSamplingParams sp;
+  sp.count = 30000;
+  sp.seed = 1;
+  const iires::PointCloud truth = iires::sampleMesh(iires::readMesh(dataPath("meshes/bunny00.off")), sp);
+  ASSERT_TRUE(truth.hasNormals());
+  const iires::ResampleResult kept = resampleTo(truth, 5000);
+  EXPECT_FALSE(kept.givenNormalsReplaced);
+  std::mt19937_64 rng(5);
+  std::normal_distribution<double> g(0.0, 1.0);
+  iires::PointCloud tangent = truth, random = truth;
+  for (std::size_t i = 0; i < truth.size(); ++i) {
+    const Eigen::Vector3d r(g(rng), g(rng), g(rng));
+    tangent.normals[i] = truth.normals[i].cross(r).normalized();
+    random.normals[i] = r.normalized();
+  }
+  for (const iires::PointCloud* cloud : {&tangent, &random}) {
+    const iires::ResampleResult r = resampleTo(*cloud, 5000);
+    EXPECT_TRUE(r.givenNormalsReplaced);
+    EXPECT_LE(r.spacing.cv, kept.spacing.cv + 0.01);
   }
 }
 

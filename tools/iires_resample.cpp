@@ -126,6 +126,10 @@ int main(int argc, char** argv) {
     if (!options.reportPath.empty()) outputs.text(options.reportPath, result.toJson());
     outputs.commit();
     progress.finish();
+    if (!options.quiet && result.givenNormalsReplaced)
+      std::cerr << "iires-resample: warning: " << input
+                << ": its normals disagree with the points' surface on most points (tangent to it or random); "
+                   "they were estimated from the points instead\n";
     if (!options.quiet) std::cout << result.toJson();
     return iires::tools::kOk;
   });

@@ -281,7 +281,7 @@ void ResampleParams::validate() const {
 std::string ResampleResult::toJson() const {
   detail::JsonWriter j;
   j.beginObject(true).member("input_points", inputPoints).member("duplicates_merged", duplicatesMerged);
-  j.member("near_duplicates_merged", nearDuplicatesMerged);
+  j.member("near_duplicates_merged", nearDuplicatesMerged).member("given_normals_replaced", givenNormalsReplaced);
   j.member("requested_points", requestedPoints).member("output_points", outputPoints);
   j.member("working_points", thinnedPoints).member("scan_line_points", scanLinePoints);
   j.member("initial_samples", initialSamples).member("passes", passes);
@@ -335,6 +335,14 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params, const Ex
   pp.sheets = params.intrinsic;
   const bool sheets = params.intrinsic && cloud.size() > static_cast<std::size_t>(sp.pcaNeighbours);
   std::vector<std::uint8_t> nearSheets;  // per point of the final working cloud (the MLS surface's gate)
+  // Given normals that do not describe the points' surface are estimated instead: a surface's own agree on over
+  // 95 % of the points givenNormalsAgreement() judges, random ones on half, tangent ones on none.
+  if (cloud.hasNormals()) {
+    constexpr double kAgreement = 0.75;
+    const double agreement = givenNormalsAgreement(cloud.points, cloud.normals, *neighbours, exec.threads);
+    result.givenNormalsReplaced = agreement >= 0 && agreement < kAgreement;
+    if (result.givenNormalsReplaced) cloud.normals.clear();
+  }
   // Normals the sheet rule estimates give way to the denoiser's fits on a clean input; given ones are kept.
   pp.denoise.keepGivenNormals = pp.denoise.keepGivenNormals && cloud.hasNormals();
   if (sheets) nearSheets = sheetRule(cloud, *neighbours, sp, exec, clock, result);

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "iires/execution.hpp"
+#include "iires/knn.hpp"
 
 namespace iires {
 
@@ -23,6 +24,15 @@ struct NormalParams {
 /// @note O(n k log n). Deterministic for any thread count.
 std::vector<Eigen::Vector3d> estimateNormals(const std::vector<Eigen::Vector3d>& points,
                                              const NormalParams& params = {}, const Execution& exec = {});
+
+/// @brief How well given normals describe the points' surface: the share of the points whose normal lies within
+/// 60° of the normal of the plane through their 16 nearest (@p table's rows), among the points whose neighbours
+/// spread over a plane (not along a line: a scan line's or a crease's points leave the plane undetermined); −1
+/// when fewer than a tenth of the points do. A surface's normals, noisy or estimated elsewhere, agree on over 95 %
+/// of such points (CGAL's real point sets); normals tangent to the surface on none, random ones on half.
+/// @note O(n k). Deterministic for any thread count.
+double givenNormalsAgreement(const std::vector<Eigen::Vector3d>& points, const std::vector<Eigen::Vector3d>& normals,
+                             const NeighbourTable& table, int threads = 0);
 
 /// @brief Orient given (unoriented) normals consistently, as estimateNormals does.
 void orientNormals(const std::vector<Eigen::Vector3d>& points, std::vector<Eigen::Vector3d>& normals,
