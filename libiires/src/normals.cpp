@@ -434,7 +434,7 @@ double givenNormalsAgreement(const std::vector<Eigen::Vector3d>& points, const s
     if (!(l(1) >= kSpread * l(2) && l(0) <= kFlat * l(1))) return;
     verdict[i] = std::abs(eig.eigenvectors().col(0).dot(normals[i].normalized())) >= kAgreeCos ? 2 : 1;
   });
-  const auto planar = static_cast<std::size_t>(std::count_if(verdict.begin(), verdict.end(), [](auto v) { return v; }));
+  const auto planar = n - static_cast<std::size_t>(std::count(verdict.begin(), verdict.end(), 0));
   if (10 * planar < n || planar == 0) return -1.0;
   return static_cast<double>(std::count(verdict.begin(), verdict.end(), 2)) / static_cast<double>(planar);
 }
