@@ -268,8 +268,9 @@ void pullOutliers(const PointCloud& input, const OutlierParams& params, const st
     // it would move it inside the object. It stays where it is.
     double rss = 0;
     for (std::size_t j = 0; j < f; ++j) rss += std::pow(plane.normal.dot(cleanPoints[idx[j]] - plane.centre), 2);
-    if ((pulled - P[o]).norm() <= 2.0 * std::sqrt(rss / static_cast<double>(f))) return;
-    if ((pulled - P[o]).norm() < kPullElevation * (cleanPoints[q] - P[o]).norm()) return;
+    const double move = (pulled - P[o]).norm();
+    if (move <= 2.0 * std::sqrt(rss / static_cast<double>(f))) return;
+    if (move < kPullElevation * (cleanPoints[q] - P[o]).norm()) return;
     result.cloud.points[o] = pulled;
     if (normals) result.cloud.normals[o] = plane.normal;
     moved[o] = 1;
