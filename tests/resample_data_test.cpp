@@ -13,6 +13,7 @@
 #include "iires/metrics.hpp"
 #include "iires/normals.hpp"
 #include "iires/outliers.hpp"
+#include "iires/preprocess.hpp"
 #include "iires/resample.hpp"
 #include "iires/sampling.hpp"
 #include "test_util.hpp"
@@ -352,7 +353,8 @@ TEST(RealScan, OniUpsampledPastTenTimesStaysWithinTheInput) {
 
 // Normals that do not describe the surface — tangent to it (a file whose normal columns hold something else) or
 // random — were trusted: a bunny sampling with tangent normals resampled with cv 0.090 against 0.050 with its true
-// normals. They are set aside and estimated from the points; true normals are kept.
+// normals, and --denoise-only wrote them back out. They are set aside and estimated from the points; true normals
+// are kept.
 TEST(GivenNormals, TangentOrRandomOnesAreEstimatedInstead) {
   iires::MeshSamplingParams sp;
   sp.count = 30000;
@@ -374,6 +376,15 @@ TEST(GivenNormals, TangentOrRandomOnesAreEstimatedInstead) {
     EXPECT_TRUE(r.givenNormalsReplaced);
     EXPECT_LE(r.spacing.cv, kept.spacing.cv + 0.01);
   }
+  // Pre-processing alone (--denoise-only) wrote the tangent normals back out unchanged.
+  const iires::PreprocessResult cleaned = iires::preprocess(tangent);
+  EXPECT_TRUE(cleaned.givenNormalsReplaced);
+  ASSERT_EQ(cleaned.cloud.size(), truth.size());
+  std::size_t right = 0;
+  for (std::size_t i = 0; i < truth.size(); ++i)
+    right += std::abs(cleaned.cloud.normals[i].dot(truth.normals[i])) >= std::cos(30.0 * M_PI / 180.0);
+  EXPECT_GE(static_cast<double>(right), 0.95 * static_cast<double>(truth.size()));
+  EXPECT_FALSE(iires::preprocess(truth).givenNormalsReplaced);
 }
 
 // CGAL's radar scan: 20,950 points on a sphere of radius 100, spaced 0.04 to 30 units. The outlier test flags some

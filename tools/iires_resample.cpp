@@ -16,6 +16,16 @@
 #include "iires/resample.hpp"
 #include "iires/tile_executor.hpp"
 
+namespace {
+
+void warnNormalsReplaced(const std::string& input) {
+  std::cerr << "iires-resample: warning: " << input
+            << ": its normals do not describe the points' surface (tangent to it, or random); they were estimated "
+               "from the points instead\n";
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
   return iires::tools::guardedMain("iires-resample", [&]() -> int {
     CLI::App app{"Resample a point cloud to exactly N points on its surface (isotropic)."};
@@ -79,6 +89,7 @@ int main(int argc, char** argv) {
       outputs.pointCloud(output, cleaned.cloud);
       if (!options.reportPath.empty()) outputs.text(options.reportPath, cleaned.toJson() + "\n");
       outputs.commit();
+      if (!options.quiet && cleaned.givenNormalsReplaced) warnNormalsReplaced(input);
       if (!options.quiet) std::cout << cleaned.toJson() << "\n";
       return iires::tools::kOk;
     }
@@ -126,10 +137,7 @@ int main(int argc, char** argv) {
     if (!options.reportPath.empty()) outputs.text(options.reportPath, result.toJson());
     outputs.commit();
     progress.finish();
-    if (!options.quiet && result.givenNormalsReplaced)
-      std::cerr << "iires-resample: warning: " << input
-                << ": its normals disagree with the points' surface on most points (tangent to it or random); "
-                   "they were estimated from the points instead\n";
+    if (!options.quiet && result.givenNormalsReplaced) warnNormalsReplaced(input);
     if (!options.quiet) std::cout << result.toJson();
     return iires::tools::kOk;
   });

@@ -15,6 +15,7 @@
 #include "iires/detail/parallel.hpp"
 #include "iires/detail/radix_sort.hpp"
 #include "patch_orientation.hpp"
+#include "scan_lines.hpp"
 
 namespace iires {
 namespace {
@@ -407,12 +408,13 @@ double orientationConflicts(const std::vector<Eigen::Vector3d>& points, const st
   return pairs > 0 ? conflicts / pairs : 0.0;
 }
 
-double givenNormalsAgreement(const std::vector<Eigen::Vector3d>& points, const std::vector<Eigen::Vector3d>& normals,
-                             const NeighbourTable& table, int threads) {
+bool givenNormalsDescribeSurface(const std::vector<Eigen::Vector3d>& points,
+                                 const std::vector<Eigen::Vector3d>& normals, const NeighbourTable& table,
+                                 int threads) {
   constexpr std::size_t kPlaneNeighbours = 16;
-  constexpr double kSpread = 0.1;    // middle over largest eigenvalue: the neighbours spread in two directions
-  constexpr double kFlat = 0.25;     // smallest over middle: and lie about a plane
-  constexpr double kAgreeCos = 0.5;  // within 60° of the plane's normal, either sign
+  constexpr double kFlat = 0.25;      // smallest over middle eigenvalue: the neighbours lie about a plane
+  constexpr double kAgreeCos = 0.5;   // within 60° of the plane's normal, either sign
+  constexpr double kAgreement = 0.75;  // a surface's own normals agree on over 95 %, random ones on half
   const std::size_t n = points.size();
   std::vector<std::uint8_t> verdict(n, 0);  // 0: no plane, 1: disagrees, 2: agrees
   parallelFor(n, threads, [&](std::size_t i) {
@@ -420,23 +422,15 @@ double givenNormalsAgreement(const std::vector<Eigen::Vector3d>& points, const s
     thread_local std::vector<double> d2;
     const std::size_t f = table.get(i, std::min(kPlaneNeighbours, table.k()), idx, d2);
     if (f < 8) return;
-    Eigen::Vector3d c = Eigen::Vector3d::Zero();
-    for (std::size_t j = 0; j < f; ++j) c += points[idx[j]];
-    c /= static_cast<double>(f);
-    Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-    for (std::size_t j = 0; j < f; ++j) {
-      const Eigen::Vector3d d = points[idx[j]] - c;
-      cov.noalias() += d * d.transpose();
-    }
     Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
-    eig.computeDirect(cov);
+    eig.computeDirect(detail::scatter(points, points[i], idx.data() + 1, f - 1));  // row 0 is the point itself
     const Eigen::Vector3d& l = eig.eigenvalues();
-    if (!(l(1) >= kSpread * l(2) && l(0) <= kFlat * l(1))) return;
+    if (detail::onALine(l) || l(0) > kFlat * l(1)) return;
     verdict[i] = std::abs(eig.eigenvectors().col(0).dot(normals[i].normalized())) >= kAgreeCos ? 2 : 1;
   });
   const auto planar = n - static_cast<std::size_t>(std::count(verdict.begin(), verdict.end(), 0));
-  if (10 * planar < n || planar == 0) return -1.0;
-  return static_cast<double>(std::count(verdict.begin(), verdict.end(), 2)) / static_cast<double>(planar);
+  if (10 * planar < n || planar == 0) return true;  // too few planes to judge by
+  return static_cast<double>(std::count(verdict.begin(), verdict.end(), 2)) >= kAgreement * static_cast<double>(planar);
 }
 
 std::size_t repairOrientation(const std::vector<Eigen::Vector3d>& points, std::vector<Eigen::Vector3d>& normals,

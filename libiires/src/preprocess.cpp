@@ -2,6 +2,7 @@
 #include "iires/preprocess.hpp"
 
 #include "iires/detail/json.hpp"
+#include "iires/normals.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -24,6 +25,7 @@ std::string PreprocessResult::toJson() const {
   j.member("outliers_found", outliersFound).member("outliers_pulled", outliersPulled);
   j.member("outliers_removed", outliersRemoved).member("denoise_iterations", denoiseIterations);
   j.member("clean_input", cleanInput).member("mean_displacement", meanDisplacement);
+  j.member("given_normals_replaced", givenNormalsReplaced);
   j.member("outlier_time_s", outlierSeconds).member("denoise_time_s", denoiseSeconds).member("time_s", seconds);
   j.key("sheets").embed(sheets.toJson());
   return j.endObject().str();
@@ -54,13 +56,21 @@ PreprocessResult preprocess(const PointCloud& input, const PreprocessParams& par
     if (input.empty()) throw InputError("preprocess: the cloud is empty");
     index.emplace(input.points);
     table = &own.emplace(*index, input.points, preprocessNeighbours(params), exec.threads);
+    // Given normals that do not describe the points' surface are estimated like absent ones (as in resample()).
+    result.givenNormalsReplaced =
+        input.hasNormals() && !givenNormalsDescribeSurface(input.points, input.normals, *own, exec.threads);
+    const bool given = input.hasNormals() && !result.givenNormalsReplaced;
     if (params.sheets && input.size() > static_cast<std::size_t>(sp.pcaNeighbours)) {
       withNormals.emplace();
       withNormals->points = input.points;
       result.sheets = separateSheets(input.points, *own, withNormals->normals, sp, exec,
-                                     input.hasNormals() ? &input.normals : nullptr);
+                                     given ? &input.normals : nullptr);
       // the rule's estimates give way to the denoiser's fits (as in resample())
-      dp.keepGivenNormals = dp.keepGivenNormals && input.hasNormals();
+      dp.keepGivenNormals = dp.keepGivenNormals && given;
+      cloud = &*withNormals;
+    } else if (result.givenNormalsReplaced) {
+      withNormals.emplace(input);
+      withNormals->normals.clear();
       cloud = &*withNormals;
     }
   }

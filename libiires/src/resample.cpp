@@ -204,18 +204,6 @@ std::vector<std::uint8_t> sheetRule(PointCloud& cloud, NeighbourTable& neighbour
   return near;
 }
 
-/// Given normals that do not describe the points' surface are set aside (then estimated like absent ones): a
-/// surface's own agree on over 95 % of the points givenNormalsAgreement() judges, random ones on half, tangent
-/// ones on none. Sets result.givenNormalsReplaced.
-void setAsideWrongNormals(PointCloud& cloud, const NeighbourTable& neighbours, const Execution& exec,
-                          ResampleResult& result) {
-  constexpr double kAgreement = 0.75;
-  if (!cloud.hasNormals()) return;
-  const double agreement = givenNormalsAgreement(cloud.points, cloud.normals, neighbours, exec.threads);
-  result.givenNormalsReplaced = agreement >= 0 && agreement < kAgreement;
-  if (result.givenNormalsReplaced) cloud.normals.clear();
-}
-
 /// The working cloud's unit normals: estimated and oriented where none were given; given ones normalised and,
 /// where their signs disagree, oriented (the sheet rule, when it ran, did that already).
 void workingNormals(PointCloud& cloud, const NormalParams& params, bool sheetRuleRan, const Execution& exec) {
@@ -347,7 +335,10 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params, const Ex
   pp.sheets = params.intrinsic;
   const bool sheets = params.intrinsic && cloud.size() > static_cast<std::size_t>(sp.pcaNeighbours);
   std::vector<std::uint8_t> nearSheets;  // per point of the final working cloud (the MLS surface's gate)
-  setAsideWrongNormals(cloud, *neighbours, exec, result);
+  // Given normals that do not describe the points' surface (tangent to it, random) are estimated like absent ones.
+  result.givenNormalsReplaced =
+      cloud.hasNormals() && !givenNormalsDescribeSurface(cloud.points, cloud.normals, *neighbours, exec.threads);
+  if (result.givenNormalsReplaced) cloud.normals.clear();
   // Normals the sheet rule estimates give way to the denoiser's fits on a clean input; given ones are kept.
   pp.denoise.keepGivenNormals = pp.denoise.keepGivenNormals && cloud.hasNormals();
   if (sheets) nearSheets = sheetRule(cloud, *neighbours, sp, exec, clock, result);

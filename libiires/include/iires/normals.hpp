@@ -25,14 +25,15 @@ struct NormalParams {
 std::vector<Eigen::Vector3d> estimateNormals(const std::vector<Eigen::Vector3d>& points,
                                              const NormalParams& params = {}, const Execution& exec = {});
 
-/// @brief How well given normals describe the points' surface: the share of the points whose normal lies within
-/// 60° of the normal of the plane through their 16 nearest (@p table's rows), among the points whose neighbours
-/// spread over a plane (not along a line: a scan line's or a crease's points leave the plane undetermined); −1
-/// when fewer than a tenth of the points do. A surface's normals, noisy or estimated elsewhere, agree on over 95 %
-/// of such points (CGAL's real point sets); normals tangent to the surface on none, random ones on half.
+/// @brief Whether given normals describe the points' surface: among the points whose 16 nearest (@p table's rows)
+/// spread over a plane (not along a line: a scan line's or a crease's points leave the plane undetermined), at
+/// least three in four have their normal within 60° of that plane's. A surface's own normals, noisy or estimated
+/// elsewhere, agree on over 95 % of such points (CGAL's real point sets), normals tangent to the surface on none,
+/// random ones on half. True when fewer than a tenth of the points spread over a plane (nothing to judge by).
 /// @note O(n k). Deterministic for any thread count.
-double givenNormalsAgreement(const std::vector<Eigen::Vector3d>& points, const std::vector<Eigen::Vector3d>& normals,
-                             const NeighbourTable& table, int threads = 0);
+bool givenNormalsDescribeSurface(const std::vector<Eigen::Vector3d>& points,
+                                 const std::vector<Eigen::Vector3d>& normals, const NeighbourTable& table,
+                                 int threads = 0);
 
 /// @brief Orient given (unoriented) normals consistently, as estimateNormals does.
 void orientNormals(const std::vector<Eigen::Vector3d>& points, std::vector<Eigen::Vector3d>& normals,

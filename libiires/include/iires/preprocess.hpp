@@ -43,6 +43,9 @@ struct PreprocessResult {
   double meanDisplacement = 0;  ///< mean move of the denoising sweeps, input units
   double outlierSeconds = 0, denoiseSeconds = 0, seconds = 0;  ///< wall times
   SheetReport sheets;           ///< what the sheet rule found (all zero when it did not run here)
+  /// without a table: the input's normals did not describe its surface and were estimated instead
+  /// (givenNormalsDescribeSurface())
+  bool givenNormalsReplaced = false;
 
   /// @brief The report as a one-line JSON object (keys as the fields, snake_case).
   std::string toJson() const;

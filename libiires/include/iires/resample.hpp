@@ -94,8 +94,8 @@ struct ResampleResult {
   std::size_t inputPoints = 0;       ///< points read
   std::size_t duplicatesMerged = 0;  ///< exact duplicates merged during validation
   std::size_t nearDuplicatesMerged = 0;  ///< points a hair from an earlier one merged (withoutNearDuplicates())
-  /// the input's normals were set aside and estimated: they disagreed with the points' surface on most points
-  /// (givenNormalsAgreement() under 0.75: tangent to it, or random)
+  /// the input's normals were set aside and estimated: they do not describe the points' surface
+  /// (givenNormalsDescribeSurface(): tangent to it, or random)
   bool givenNormalsReplaced = false;
   std::size_t requestedPoints = 0;   ///< N
   std::size_t outputPoints = 0;      ///< points output: cloud.size(), also once a caller has moved the cloud out
