@@ -356,6 +356,32 @@ TEST(Hardening, TightFoldIsResampledNotRejected) {
   for (const auto& q : r.cloud.points) EXPECT_LE(box.exteriorDistance(q), fold.spacing) << q.transpose();
 }
 
+// 50 points on a unit sphere upsampled 20× to 400×: they miss the sphere's extremes by its sag between them, and
+// the output, which follows the sphere there, lies past their bounding box by more than three output spacings once
+// N is large. The runs failed at 5,000 or 20,000 ("left the input's bounding box") and not at 1,000, where the
+// samples lay just as far out. Exact N at every count, and the larger counts as near the sphere as the smallest.
+TEST(Hardening, SparseSphereUpsampledAnyNumberOfTimesStaysOnIt) {
+  auto farthestOff = [](const PointCloud& c) {
+    double worst = 0;
+    for (const auto& q : c.points) worst = std::max(worst, std::abs(q.norm() - 1.0));
+    return worst;
+  };
+  for (std::uint64_t seed = 1; seed <= 3; ++seed) {
+    PointCloud sparse = sphereCloud(50, 1.0, seed);
+    sparse.normals.clear();  // positions only
+    double atFirst = 0;
+    for (const std::size_t n : {1000u, 5000u, 20000u}) {
+      iires::ResampleParams p;
+      p.targetCount = n;
+      const iires::ResampleResult r = iires::resample(sparse, p);
+      ASSERT_EQ(r.cloud.size(), n) << seed;
+      if (n == 1000) atFirst = farthestOff(r.cloud);
+      EXPECT_LE(farthestOff(r.cloud), atFirst + 0.03) << seed << " " << n;
+    }
+    EXPECT_LE(atFirst, 0.2) << seed;
+  }
+}
+
 TEST(Hardening, TinyCoordinatesAreNamedAsSuch) {
   const std::string dir = tempDir(), in = dir + "/in.xyz";
   PointCloud cloud = readPointCloud(dataPath("points_3/kitten.xyz"));

@@ -61,18 +61,29 @@ std::vector<PointAttribute> carryAttributes(const PointCloud& input, const std::
   return interpolateAttributes(input, output, normals, sameSheet, {}, exec);
 }
 
+/// The distance to which the input resolves its surface: the median MLS kernel width (an input point's distance
+/// to its 8th neighbour). Past its points the surface is known only to about that: at the rim of a plate or a
+/// fold a few spacings thick a sample may sit 0.6 input spacings out, and a sparse sampling of a sphere misses
+/// its extremes by the sphere's sag over the holes between its points, whatever N is asked for.
+double surfaceResolution(const MlsSurface& surface, std::size_t n) {
+  std::vector<double> h(n);
+  for (std::size_t i = 0; i < n; ++i) h[i] = surface.kernelWidth(i);
+  if (h.empty()) return 0.0;
+  std::nth_element(h.begin(), h.begin() + static_cast<std::ptrdiff_t>(n / 2), h.end());
+  return h[n / 2];
+}
+
 /// Exit 0 promises points on the input's surface: the box they must lie in. Each axis of the working cloud's
-/// bounding box is enlarged by a tenth of its own extent, or one input spacing (@p inputSpacing) where that is
-/// more (the MLS surface is resolved to about the input's spacing: at the rim of a plate or a fold a few spacings
-/// thick a sample may sit 0.6 of one out) but never more than half the extent, and in any case by at most three
-/// output spacings (@p spacing; a sample 20 units off a ribbon 2 wide is off the surface, however long the ribbon).
-Eigen::AlignedBox3d inputBox(const std::vector<Eigen::Vector3d>& input, double spacing, double inputSpacing) {
+/// bounding box is enlarged by a tenth of its own extent but by at most three output spacings (@p spacing; a
+/// sample 20 units off a ribbon 2 wide is off the surface, however long the ribbon), and in any case by the
+/// input's @p resolution (surfaceResolution()), never more than half the extent.
+Eigen::AlignedBox3d inputBox(const std::vector<Eigen::Vector3d>& input, double spacing, double resolution) {
   Eigen::AlignedBox3d box;
   for (const Eigen::Vector3d& p : input) box.extend(p);
   const Eigen::Vector3d extent = box.sizes();
-  const Eigen::Vector3d resolved = (0.5 * extent).cwiseMin(inputSpacing);
+  const Eigen::Vector3d resolved = (0.5 * extent).cwiseMin(resolution);
   const Eigen::Vector3d margin =
-      (0.1 * extent).cwiseMax(resolved).cwiseMin(3 * spacing).array() + 1e-9 * extent.norm();  // 1e-9: rounding
+      (0.1 * extent).cwiseMin(3 * spacing).cwiseMax(resolved).array() + 1e-9 * extent.norm();  // 1e-9: rounding
   box.min() -= margin;
   box.max() += margin;
   return box;
@@ -81,8 +92,8 @@ Eigen::AlignedBox3d inputBox(const std::vector<Eigen::Vector3d>& input, double s
 /// A sample outside inputBox() has left the surface (projection diverged on a degenerate cloud), and the run
 /// fails instead of writing it.
 void checkWithinInput(const std::vector<Eigen::Vector3d>& samples, const std::vector<Eigen::Vector3d>& input,
-                      double spacing, double inputSpacing) {
-  const Eigen::AlignedBox3d box = inputBox(input, spacing, inputSpacing);
+                      double spacing, double resolution) {
+  const Eigen::AlignedBox3d box = inputBox(input, spacing, resolution);
   std::size_t outside = 0;
   double worst = 0;
   for (const Eigen::Vector3d& p : samples) {
@@ -135,7 +146,7 @@ std::vector<Eigen::Vector3d> creaseSamples(const PointCloud& cloud, const MlsSur
                                            const ResampleParams& params, const Execution& exec,
                                            ResampleResult& result) {
   constexpr double kHeldBeyond = 0.25;  // kernel widths past the input neighbours' hull (MlsSurface::project)
-  const double area = surface.area(), inputSpacing = surface.meanSpacing();
+  const double area = surface.area();
   const FeatureParams& fp = params.features;
   const FeatureResult features = detectFeatures(cloud, fp, exec);
   const double l0 = std::sqrt(2.0 * area / (std::sqrt(3.0) * static_cast<double>(params.targetCount)));
@@ -146,7 +157,7 @@ std::vector<Eigen::Vector3d> creaseSamples(const PointCloud& cloud, const MlsSur
                                                        static_cast<double>(onEdges.size()) /
                                                        static_cast<double>(params.targetCount), &chainOf);
   onEdges = snapToCreases(cloud, onEdges, chainOf, features.spacing, fp, exec);  // exactly on the creases
-  const Eigen::AlignedBox3d box = inputBox(cloud.points, 0.8 * l0, inputSpacing);
+  const Eigen::AlignedBox3d box = inputBox(cloud.points, 0.8 * l0, surfaceResolution(surface, cloud.size()));
   const auto offTheSurface = [&](const Eigen::Vector3d& q) {
     if (!box.contains(q)) return true;
     double beyond = 0;
@@ -435,7 +446,8 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params, const Ex
   }
   t = clock.begin("report");
   result.spacing = spacingStats(result.cloud.points, exec.threads);
-  checkWithinInput(result.cloud.points, cloud.points, result.spacing.mean, surface->meanSpacing());
+  checkWithinInput(result.cloud.points, cloud.points, result.spacing.mean,
+                   surfaceResolution(*surface, cloud.size()));
   if (curvature) reportLevels(*curvature, surface->index(), result);
   clock.end("report", t);
   if (!attributeSource.attributes.empty()) {
