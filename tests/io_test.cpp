@@ -129,6 +129,7 @@ class IoTest : public ::testing::Test {
 TEST(ExtensionOf, LowerCaseWithDot) {
   EXPECT_EQ(extensionOf("a/b/Bunny.PLY"), ".ply");
   EXPECT_EQ(extensionOf("cloud.xyzn"), ".xyzn");
+  EXPECT_EQ(extensionOf("cube.Pwn"), ".xyzn");  // CGAL's name for the same format
   EXPECT_EQ(extensionOf("archive.tar.GZ"), ".gz");
   EXPECT_EQ(extensionOf("dir.d/noext"), "");
   EXPECT_EQ(extensionOf(""), "");
@@ -284,6 +285,18 @@ TEST_F(IoTest, ReadsXyzWithCommentsCrlfAndOptionalNormals) {
   EXPECT_EQ(readPointCloud(path("n.xyz")).normals, (std::vector<Vector3d>{{0, 0, 1}, {1, 0, 0}}));
   file("a.xyzn", "1 2 3 0 0 1\n");
   EXPECT_EQ(readPointCloud(path("a.xyzn")).normals, std::vector<Vector3d>{Vector3d(0, 0, 1)});
+}
+
+// CGAL's points with normals (.pwn, as in its data archive: x y z nx ny nz per line) read and write as .xyzn.
+TEST_F(IoTest, CgalPointsWithNormals) {
+  file("s.pwn", "2.78865 0.400948 -9.59493 0.27886 0.0400935 -0.959495\n4 0 1 1 0 0\n");
+  const PointCloud cloud = readPointCloud(path("s.pwn"));
+  EXPECT_EQ(cloud.points, (std::vector<Vector3d>{{2.78865, 0.400948, -9.59493}, {4, 0, 1}}));
+  EXPECT_EQ(cloud.normals, (std::vector<Vector3d>{{0.27886, 0.0400935, -0.959495}, {1, 0, 0}}));
+  writePointCloud(path("t.PWN"), cloud);
+  EXPECT_EQ(readPointCloud(path("t.PWN")).normals, cloud.normals);
+  file("bad.pwn", "1 2 3\n");  // no normals: an error, as in a .xyzn
+  expectCloudError("bad.pwn", "line 1");
 }
 
 // Text files as other tools write them: a header naming the columns ("x y z", CloudCompare's "//X Y Z"), a UTF-8

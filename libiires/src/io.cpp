@@ -263,7 +263,7 @@ std::string extensionOf(const std::string& path) {
   std::string extension = fs::path(path).extension().string();
   std::transform(extension.begin(), extension.end(), extension.begin(),
                  [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return extension;
+  return extension == ".pwn" ? ".xyzn" : extension;  // CGAL's points with normals: the same text format
 }
 
 }  // namespace iires

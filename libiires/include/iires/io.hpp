@@ -14,7 +14,7 @@
 namespace iires {
 
 /// @brief Read a point cloud. Formats by extension (case-insensitive): .ply (ascii/binary), .pcd, .xyz,
-/// .xyzn, .pts for clouds; the vertices of .obj, .off, .stl meshes (and of a .ply with faces), which get
+/// .xyzn (or CGAL's .pwn), .pts for clouds; the vertices of .obj, .off, .stl meshes (and of a .ply with faces), which get
 /// area-weighted face normals oriented by the faces' winding when the file has no normals of its own.
 /// @throws InputError naming the file when it is missing, a directory, unreadable, of unknown extension,
 /// truncated, has a corrupted header, or holds no points.
@@ -99,7 +99,8 @@ class OutputBatch {
 /// writes, then end the process as the signal would have (the tools call this first).
 void removeTemporariesOnSignal();
 
-/// @brief Lower-case extension of @p path including the dot (".ply"), or "" when it has none.
+/// @brief Lower-case extension of @p path including the dot (".ply"), or "" when it has none; the extension of
+/// its format where two name one: CGAL's ".pwn" (x y z nx ny nz per line) is ".xyzn".
 std::string extensionOf(const std::string& path);
 
 }  // namespace iires
