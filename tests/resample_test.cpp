@@ -416,6 +416,31 @@ TEST(Resample, ContextSamplesAreHeldButNeitherCountedNorOutput) {
   EXPECT_LT(left, p.targetCount / 50) << "the free samples stay out of the covered half";
 }
 
+// A tile of an upsampled sparse scan: a hemisphere of ~380 points (positions only) beside 2,400 context samples of
+// a finished neighbour, on a band below it that its points do not reach, upsampled to 2,000 and 6,000. The
+// elimination counted the context in the samples to place, so the sparse deficit it left for the passes took
+// every free candidate; with no free sample to split from, the count was met by adding input points over and
+// over (min spacing 0, cv 2.1 and 3.9). Now the N samples are evenly spaced and none lies on another.
+TEST(Resample, ContextBesideASparseInputLeavesItsSamplesToPlace) {
+  iires::PointCloud hemisphere;
+  for (const auto& q : iires::test::sphereCloud(800, 1.0, 7).points)
+    if (q.z() > 0) hemisphere.points.push_back(q);
+  iires::ResampleParams p;
+  constexpr int kFibonacci = 12000;  // an even sampling of the sphere; the band z in (−0.3, 0.1) is the context
+  for (int i = 0; i < kFibonacci; ++i) {
+    const double z = 1.0 - 2.0 * (i + 0.5) / kFibonacci, r = std::sqrt(1.0 - z * z);
+    const double a = M_PI * (1.0 + std::sqrt(5.0)) * (i + 0.5);
+    if (z > -0.3 && z < 0.1) p.contextSamples.emplace_back(r * std::cos(a), r * std::sin(a), z);
+  }
+  for (const std::size_t n : {2000u, 6000u}) {
+    p.targetCount = n;
+    const auto r = iires::resample(hemisphere, p);
+    ASSERT_EQ(r.cloud.size(), n);
+    EXPECT_GT(r.spacing.min, 0.1 * r.spacing.mean) << n;
+    EXPECT_LT(r.spacing.cv, 0.08) << n;
+  }
+}
+
 // Two faces meeting at 90° along the x axis, cut off at x = 0 and x = 2 (open ends of the crease): the crease's
 // samples end where the input does. Traced on along the planes fitted behind an end, they stood up to two local
 // spacings past it (0.45 output spacings at N = 4000).

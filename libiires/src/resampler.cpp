@@ -657,8 +657,11 @@ Samples Resampler::initialise(const std::vector<std::uint32_t>& chosen, Resample
   // Candidates are input points (on the cloud already): only the survivors of the elimination are projected.
   for (std::uint32_t c : chosen) s.add(pts_[c], normals_[c], 0);
   // Parts sparser than the output (another object sampled sparsely) hold fewer input points than samples: the
-  // rest is thinned to its own share, and the count passes split the sparse parts' edges up to N.
-  eliminate(s, n - std::min(n, sparseDeficit(n)));
+  // rest is thinned to its own share, and the count passes split the sparse parts' edges up to N. The deficit is
+  // that of the N samples to place: the context samples are there already (counted in, they would take the
+  // free candidates' places and leave the passes no free sample to split from).
+  const std::size_t toPlace = params_.targetCount;
+  eliminate(s, n - std::min(toPlace, sparseDeficit(toPlace)));
   parallelFor(s.size(), exec_.threads, [&](std::size_t i) {
     if (!s.fixed[i]) s.pos[i] = surface_.project(s.pos[i], &s.nrm[i], nullptr, &s.nrm[i], &s.cache[i]);
   });
