@@ -73,13 +73,16 @@ double surfaceResolution(const MlsSurface& surface, std::size_t n) {
   return h[n / 2];
 }
 
-/// Exit 0 promises points on the input's surface: the box they must lie in. Each axis of the working cloud's
-/// bounding box is enlarged by a tenth of its own extent but by at most three output spacings (@p spacing; a
+/// Exit 0 promises points on the input's surface: the box they must lie in. Each axis of the bounding box of the
+/// working cloud and of the samples the caller holds (@p held: on the surface too; a tile's context samples reach
+/// past its points) is enlarged by a tenth of its own extent but by at most three output spacings (@p spacing; a
 /// sample 20 units off a ribbon 2 wide is off the surface, however long the ribbon), and in any case by the
 /// input's @p resolution (surfaceResolution()), never more than half the extent.
-Eigen::AlignedBox3d inputBox(const std::vector<Eigen::Vector3d>& input, double spacing, double resolution) {
+Eigen::AlignedBox3d inputBox(const std::vector<Eigen::Vector3d>& input, double spacing, double resolution,
+                             const std::vector<Eigen::Vector3d>& held = {}) {
   Eigen::AlignedBox3d box;
   for (const Eigen::Vector3d& p : input) box.extend(p);
+  for (const Eigen::Vector3d& p : held) box.extend(p);
   const Eigen::Vector3d extent = box.sizes();
   const Eigen::Vector3d resolved = (0.5 * extent).cwiseMin(resolution);
   const Eigen::Vector3d margin =
@@ -92,8 +95,8 @@ Eigen::AlignedBox3d inputBox(const std::vector<Eigen::Vector3d>& input, double s
 /// A sample outside inputBox() has left the surface (projection diverged on a degenerate cloud), and the run
 /// fails instead of writing it.
 void checkWithinInput(const std::vector<Eigen::Vector3d>& samples, const std::vector<Eigen::Vector3d>& input,
-                      double spacing, double resolution) {
-  const Eigen::AlignedBox3d box = inputBox(input, spacing, resolution);
+                      const std::vector<Eigen::Vector3d>& held, double spacing, double resolution) {
+  const Eigen::AlignedBox3d box = inputBox(input, spacing, resolution, held);
   std::size_t outside = 0;
   double worst = 0;
   for (const Eigen::Vector3d& p : samples) {
@@ -446,7 +449,7 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params, const Ex
   }
   t = clock.begin("report");
   result.spacing = spacingStats(result.cloud.points, exec.threads);
-  checkWithinInput(result.cloud.points, cloud.points, result.spacing.mean,
+  checkWithinInput(result.cloud.points, cloud.points, params.contextSamples, result.spacing.mean,
                    surfaceResolution(*surface, cloud.size()));
   if (curvature) reportLevels(*curvature, surface->index(), result);
   clock.end("report", t);
