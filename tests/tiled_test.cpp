@@ -164,6 +164,24 @@ TEST(Tiled, SparseInputUpsampledInTilesKeepsItsSamplesApart) {
   EXPECT_LT(t.cv, 1.5 * memory.cv) << "in memory " << memory.cv << ", tiled " << t.cv;
 }
 
+// A sparse scan (oni: 1,435 points) upsampled in tiles an eighth of its extent wide, about ten points each. At
+// 10,000 the tiles overshot their quotas and passed the surplus on, until the last tile of a region held a
+// negative quota it could not meet ("a quota of −25"); a tile now keeps at most its quota, dropping its most
+// crowded samples. At 5,000 a tile fell short with every neighbour finished ("93 samples for a quota of 98"); the
+// shortfall now goes to the nearest tile still to run.
+TEST(Tiled, SmallTilesOfASparseScanMeetTheirQuotas) {
+  const std::string input = iires::test::dataPath("points_3/oni.ply");
+  Eigen::AlignedBox3d box;
+  for (const Vector3d& p : iires::readPointCloud(input).points) box.extend(p);
+  iires::TileParams tp = unitTiles(iires::test::tempDir());
+  tp.tileSize = box.sizes().maxCoeff() / 8;
+  for (const std::size_t n : {5000u, 10000u}) {
+    const iires::TiledResult r = iires::resampleTiled(input, paramsFor(n), tp, iires::Execution{2});
+    ASSERT_EQ(r.cloud.size(), n);
+    for (const iires::TileReport& t : r.tiles) EXPECT_GE(t.quota, 0) << "tile " << t.index << ", N = " << n;
+  }
+}
+
 // A real scan in tiles a quarter of its extent wide, upsampled: the free samples between a tile's points and the
 // context samples of its finished neighbours lie on the surface, past the box of the tile's own points, and the
 // run failed ("output points left the input's bounding box"). The box holds the context samples too.

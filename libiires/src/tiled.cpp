@@ -10,6 +10,7 @@
 #include <numeric>
 #include <optional>
 #include <stdexcept>
+#include <tuple>
 
 #include <Eigen/Geometry>
 
@@ -224,6 +225,35 @@ void together(TileExecutor& executor, F&& f) {
   executor.agree(failure);
 }
 
+/// @p own without its @p surplus most crowded samples: in passes, from the closest pairs (to a sample of @p own
+/// or of the held @p context) up, dropping one sample of a pair and sparing its partner for the pass.
+PointCloud dropMostCrowded(PointCloud own, const std::vector<Eigen::Vector3d>& context, std::size_t surplus) {
+  std::vector<std::uint32_t> idx;
+  std::vector<double> d2;
+  while (surplus > 0 && !own.points.empty()) {
+    std::vector<Eigen::Vector3d> all = own.points;
+    all.insert(all.end(), context.begin(), context.end());
+    const KnnIndex index(all);
+    std::vector<std::tuple<double, std::size_t, std::size_t>> crowded;  // (d², sample, its nearest)
+    for (std::size_t i = 0; i < own.size(); ++i)
+      if (index.knn(own.points[i], 2, idx, d2) == 2) crowded.emplace_back(d2[1], i, idx[idx[0] == i ? 1 : 0]);
+    std::sort(crowded.begin(), crowded.end());
+    std::vector<char> drop(own.size(), 0), spared(all.size(), 0);
+    for (const auto& [d, i, nearest] : crowded) {
+      if (surplus == 0) break;
+      if (spared[i]) continue;
+      drop[i] = 1;
+      spared[nearest] = 1;
+      --surplus;
+    }
+    PointCloud kept;
+    for (std::size_t i = 0; i < own.size(); ++i)
+      if (!drop[i]) kept.points.push_back(own.points[i]), kept.normals.push_back(own.normals[i]);
+    own = std::move(kept);
+  }
+  return own;
+}
+
 /// The state of a tiled run: which tiles are finished, their samples, and the quotas still to meet.
 struct TileRun {
   const ResampleParams& params;
@@ -248,9 +278,26 @@ struct TileRun {
 
  private:
   std::vector<Eigen::Vector3d> context(std::size_t t) const;
+  std::size_t nearestLaterTile(std::size_t t) const;
   std::size_t unfinishedMargin(std::size_t t) const;
   PointCloud keepOwn(std::size_t t, PointCloud out) const;
 };
+
+/// Where every neighbour of @p t is finished (or holds no surface), its shortfall goes to the nearest tile of a
+/// later colour that holds some (nearest by cell, then lowest index); grid.count() when there is none.
+std::size_t TileRun::nearestLaterTile(std::size_t t) const {
+  const std::array<int, 3> c = grid.cell(t);
+  std::size_t best = grid.count();
+  long long bestD2 = 0;
+  for (std::size_t u = 0; u < grid.count(); ++u) {
+    if (grid.colour(u) <= grid.colour(t) || reports[u].share == 0) continue;
+    const std::array<int, 3> cu = grid.cell(u);
+    long long d2 = 0;
+    for (int a = 0; a < 3; ++a) d2 += static_cast<long long>(cu[a] - c[a]) * (cu[a] - c[a]);
+    if (best == grid.count() || d2 < bestD2) best = u, bestD2 = d2;
+  }
+  return best;
+}
 
 std::vector<Eigen::Vector3d> TileRun::context(std::size_t t) const {
   TileGrid reach = grid;
@@ -306,6 +353,10 @@ TileOutcome TileRun::process(std::size_t t) const {
     report.loadedPoints = points.size();
     try {
       outcome.samples = keepOwn(t, resample(std::move(points), p, Execution{threads}).cloud);
+      // A tile places at most its quota: a surplus passed on would lower a neighbour's quota, and the last
+      // tiles of a region, their quotas gone negative, could not return it.
+      if (const auto q = static_cast<std::size_t>(quota); outcome.samples.size() > q)
+        outcome.samples = dropMostCrowded(std::move(outcome.samples), p.contextSamples, outcome.samples.size() - q);
     } catch (const InputError&) {
       outcome.samples = {};  // too few or degenerate points for a surface: the quota passes on
     }
@@ -321,6 +372,7 @@ TileOutcome TileRun::process(std::size_t t) const {
         (outcome.heir == grid.count() || reports[u].share > reports[outcome.heir].share))
       outcome.heir = u;
   });
+  if (outcome.heir == grid.count()) outcome.heir = nearestLaterTile(t);
   if (outcome.heir == grid.count())
     throw std::runtime_error("tiled resampling: tile " + std::to_string(t) + " produced " +
                              std::to_string(report.produced) + " samples for a quota of " + std::to_string(quota) +
