@@ -270,10 +270,10 @@ struct TileRun {
   std::vector<PointCloud> samples;
   std::vector<TileReport> reports;
 
-  /// Resamples tile @p t (reading only tiles of earlier colours) and picks the largest unfinished neighbour
-  /// to take its deviation from its quota.
+  /// Resamples tile @p t (reading only tiles of earlier colours), keeps at most its quota, and picks the largest
+  /// unfinished neighbour (else nearestLaterTile()) to take its shortfall.
   TileOutcome process(std::size_t t) const;
-  /// Records @p t's outcome: its samples, its report, and its deviation added to its heir's quota.
+  /// Records @p t's outcome: its samples, its report, and its shortfall added to its heir's quota.
   void finish(std::size_t t, TileOutcome outcome);
 
  private:

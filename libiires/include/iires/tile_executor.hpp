@@ -12,12 +12,12 @@
 
 namespace iires {
 
-/// @brief What resampling one tile gives: its samples, its report and the count deviation it hands on.
+/// @brief What resampling one tile gives: its samples, its report and the shortfall it hands on.
 struct TileOutcome {
   PointCloud samples;          ///< the samples the tile contributes to the output
   TileReport report;           ///< its report (quota at its start, produced, times)
-  std::size_t heir = 0;        ///< the unfinished neighbour taking the deviation (unused when rest is 0)
-  long long rest = 0;          ///< quota minus produced
+  std::size_t heir = 0;        ///< the unfinished tile taking the shortfall (unused when rest is 0)
+  long long rest = 0;          ///< quota minus produced (never negative: a tile keeps at most its quota)
 };
 
 /// @brief The processes of a tiled run and how they meet. resampleTiled() gives the k-th tile of each colour
