@@ -376,7 +376,7 @@ TileOutcome TileRun::process(std::size_t t) const {
   if (outcome.heir == grid.count())
     throw std::runtime_error("tiled resampling: tile " + std::to_string(t) + " produced " +
                              std::to_string(report.produced) + " samples for a quota of " + std::to_string(quota) +
-                             " and has no unfinished neighbour to take the difference");
+                             " and no tile is left to run that could take the difference");
   return outcome;
 }
 

@@ -14,8 +14,8 @@
 namespace iires {
 
 /// @brief Read a point cloud. Formats by extension (case-insensitive): .ply (ascii/binary), .pcd, .xyz,
-/// .xyzn (or CGAL's .pwn), .pts for clouds; the vertices of .obj, .off, .stl meshes (and of a .ply with faces), which get
-/// area-weighted face normals oriented by the faces' winding when the file has no normals of its own.
+/// .xyzn (or CGAL's .pwn), .pts for clouds; the vertices of .obj, .off, .stl meshes (and of a .ply with faces),
+/// which get area-weighted face normals oriented by the faces' winding when the file has no normals of its own.
 /// @throws InputError naming the file when it is missing, a directory, unreadable, of unknown extension,
 /// truncated, has a corrupted header, or holds no points.
 /// @note Non-finite coordinates are *not* rejected here (see validate.hpp); normals are kept when present
