@@ -429,8 +429,6 @@ TEST(Outliers, GrazingFaceIsNotPulledPastTheCrease) {
   EXPECT_LE(farthest, 2.5 * l);
 }
 
-}  // namespace
-
 // A sphere sampled as a scanner's far field: dense arcs (scan lines, 600 points each) and sparse points between
 // them, 1,500 over the sphere. Sparse points beside an arc lie off its plane by the sphere's sag — many arc
 // spacings — and the test flags some; the pull moved 25–39 of them onto that plane, up to 0.034 radii off the
@@ -457,3 +455,5 @@ TEST(Outliers, SparsePointsBesideScanLinesOfACurvedSurfaceStayOnIt) {
     EXPECT_LE(worst, 0.02) << seed;
   }
 }
+
+}  // namespace

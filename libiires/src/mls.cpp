@@ -74,6 +74,11 @@ MlsSurface::MlsSurface(const std::vector<Eigen::Vector3d>& points,
   if (cap <= 0) std::fill(h_.begin(), h_.end(), 1.0);
   area_ = area;
   meanSpacing_ = n ? spacing / static_cast<double>(n) : 0.0;
+  if (n > 0) {
+    sorted = h_;
+    std::nth_element(sorted.begin(), sorted.begin() + static_cast<long>(n / 2), sorted.end());
+    resolution_ = sorted[n / 2];
+  }
 }
 
 void MlsSurface::readScanLines(const NeighbourTable& table, int threads) {

@@ -61,23 +61,13 @@ std::vector<PointAttribute> carryAttributes(const PointCloud& input, const std::
   return interpolateAttributes(input, output, normals, sameSheet, {}, exec);
 }
 
-/// The distance to which the input resolves its surface: the median MLS kernel width (an input point's distance
-/// to its 8th neighbour). Past its points the surface is known only to about that: at the rim of a plate or a
-/// fold a few spacings thick a sample may sit 0.6 input spacings out, and a sparse sampling of a sphere misses
-/// its extremes by the sphere's sag over the holes between its points, whatever N is asked for.
-double surfaceResolution(const MlsSurface& surface, std::size_t n) {
-  std::vector<double> h(n);
-  for (std::size_t i = 0; i < n; ++i) h[i] = surface.kernelWidth(i);
-  if (h.empty()) return 0.0;
-  std::nth_element(h.begin(), h.begin() + static_cast<std::ptrdiff_t>(n / 2), h.end());
-  return h[n / 2];
-}
-
 /// Exit 0 promises points on the input's surface: the box they must lie in. Each axis of the bounding box of the
 /// working cloud and of the samples the caller holds (@p held: on the surface too; a tile's context samples reach
 /// past its points) is enlarged by a tenth of its own extent but by at most three output spacings (@p spacing; a
 /// sample 20 units off a ribbon 2 wide is off the surface, however long the ribbon), and in any case by the
-/// input's @p resolution (surfaceResolution()), never more than half the extent.
+/// input's @p resolution (MlsSurface::resolution(): at the rim of a plate or a fold a few spacings thick a sample
+/// may sit 0.6 input spacings out, and a sparse sampling of a sphere misses its extremes by the sphere's sag over
+/// the holes between its points, whatever N is asked for), never more than half the extent.
 Eigen::AlignedBox3d inputBox(const std::vector<Eigen::Vector3d>& input, double spacing, double resolution,
                              const std::vector<Eigen::Vector3d>& held = {}) {
   Eigen::AlignedBox3d box;
@@ -160,7 +150,7 @@ std::vector<Eigen::Vector3d> creaseSamples(const PointCloud& cloud, const MlsSur
                                                        static_cast<double>(onEdges.size()) /
                                                        static_cast<double>(params.targetCount), &chainOf);
   onEdges = snapToCreases(cloud, onEdges, chainOf, features.spacing, fp, exec);  // exactly on the creases
-  const Eigen::AlignedBox3d box = inputBox(cloud.points, 0.8 * l0, surfaceResolution(surface, cloud.size()));
+  const Eigen::AlignedBox3d box = inputBox(cloud.points, 0.8 * l0, surface.resolution());
   const auto offTheSurface = [&](const Eigen::Vector3d& q) {
     if (!box.contains(q)) return true;
     double beyond = 0;
@@ -450,7 +440,7 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params, const Ex
   t = clock.begin("report");
   result.spacing = spacingStats(result.cloud.points, exec.threads);
   checkWithinInput(result.cloud.points, cloud.points, params.contextSamples, result.spacing.mean,
-                   surfaceResolution(*surface, cloud.size()));
+                   surface->resolution());
   if (curvature) reportLevels(*curvature, surface->index(), result);
   clock.end("report", t);
   if (!attributeSource.attributes.empty()) {

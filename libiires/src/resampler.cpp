@@ -7,7 +7,6 @@
 #include <cstring>
 #include <limits>
 #include <numeric>
-#include <tuple>
 
 #include <Eigen/Geometry>
 
@@ -15,6 +14,7 @@
 #include "iires/detail/radix_sort.hpp"
 #include "iires/detail/tangent_cell.hpp"
 #include "iires/knn.hpp"
+#include "crowded.hpp"
 #include "voxel_thin.hpp"
 
 namespace iires::detail {
@@ -606,20 +606,11 @@ void Resampler::updateRule(const Samples& s) {
 /// free samples closest to another sample, or add the input points farthest from the samples, one at a time.
 void Resampler::forceCount(Samples& s, Relaxation& relaxation) {
   const std::size_t n = total();
-  std::vector<char> removed(s.size(), 0);
+  std::vector<char> held(s.size());
+  for (std::size_t i = 0; i < s.size(); ++i) held[i] = s.fixed[i] != 0;
+  const std::vector<char> removed = mostCrowded(s.pos, held, s.size() > n ? s.size() - n : 0);
   std::vector<std::uint32_t> idx;
   std::vector<double> d2;
-  if (s.size() > n) {  // the free samples nearest another sample go first, one of each close pair
-    const KnnIndex index(s.pos);
-    std::vector<std::tuple<double, std::uint32_t, std::uint32_t>> crowded;  // (d², sample, its nearest)
-    for (std::uint32_t i = 0; i < s.size(); ++i)
-      if (!s.fixed[i] && index.knn(s.pos[i], 2, idx, d2) == 2) crowded.emplace_back(d2[1], i, idx[1]);
-    std::sort(crowded.begin(), crowded.end());
-    std::size_t excess = s.size() - n;
-    for (const bool pairwise : {true, false})
-      for (const auto& [d, i, nearest] : crowded)
-        if (excess > 0 && !removed[i] && !(pairwise && removed[nearest])) removed[i] = 1, --excess;
-  }
   Samples kept;
   for (std::size_t i = 0; i < s.size(); ++i)
     if (!removed[i]) kept.add(s.pos[i], s.nrm[i], s.fixed[i], std::move(s.cache[i]));

@@ -10,7 +10,6 @@
 #include <numeric>
 #include <optional>
 #include <stdexcept>
-#include <tuple>
 
 #include <Eigen/Geometry>
 
@@ -23,6 +22,7 @@
 #include "iires/metrics.hpp"
 #include "iires/point_stream.hpp"
 #include "iires/tile_executor.hpp"
+#include "crowded.hpp"
 
 namespace iires {
 namespace {
@@ -225,33 +225,18 @@ void together(TileExecutor& executor, F&& f) {
   executor.agree(failure);
 }
 
-/// @p own without its @p surplus most crowded samples: in passes, from the closest pairs (to a sample of @p own
-/// or of the held @p context) up, dropping one sample of a pair and sparing its partner for the pass.
-PointCloud dropMostCrowded(PointCloud own, const std::vector<Eigen::Vector3d>& context, std::size_t surplus) {
-  std::vector<std::uint32_t> idx;
-  std::vector<double> d2;
-  while (surplus > 0 && !own.points.empty()) {
-    std::vector<Eigen::Vector3d> all = own.points;
-    all.insert(all.end(), context.begin(), context.end());
-    const KnnIndex index(all);
-    std::vector<std::tuple<double, std::size_t, std::size_t>> crowded;  // (d², sample, its nearest)
-    for (std::size_t i = 0; i < own.size(); ++i)
-      if (index.knn(own.points[i], 2, idx, d2) == 2) crowded.emplace_back(d2[1], i, idx[idx[0] == i ? 1 : 0]);
-    std::sort(crowded.begin(), crowded.end());
-    std::vector<char> drop(own.size(), 0), spared(all.size(), 0);
-    for (const auto& [d, i, nearest] : crowded) {
-      if (surplus == 0) break;
-      if (spared[i]) continue;
-      drop[i] = 1;
-      spared[nearest] = 1;
-      --surplus;
-    }
-    PointCloud kept;
-    for (std::size_t i = 0; i < own.size(); ++i)
-      if (!drop[i]) kept.points.push_back(own.points[i]), kept.normals.push_back(own.normals[i]);
-    own = std::move(kept);
-  }
-  return own;
+/// @p own without its @p surplus most crowded samples (detail::mostCrowded(), the held @p context among their
+/// neighbours).
+PointCloud dropMostCrowded(const PointCloud& own, const std::vector<Eigen::Vector3d>& context, std::size_t surplus) {
+  std::vector<Eigen::Vector3d> all = own.points;
+  all.insert(all.end(), context.begin(), context.end());
+  std::vector<char> held(all.size(), 1);
+  std::fill(held.begin(), held.begin() + static_cast<std::ptrdiff_t>(own.size()), 0);
+  const std::vector<char> drop = detail::mostCrowded(all, held, surplus);
+  PointCloud kept;
+  for (std::size_t i = 0; i < own.size(); ++i)
+    if (!drop[i]) kept.points.push_back(own.points[i]), kept.normals.push_back(own.normals[i]);
+  return kept;
 }
 
 /// The state of a tiled run: which tiles are finished, their samples, and the quotas still to meet.
@@ -356,7 +341,7 @@ TileOutcome TileRun::process(std::size_t t) const {
       // A tile places at most its quota: a surplus passed on would lower a neighbour's quota, and the last
       // tiles of a region, their quotas gone negative, could not return it.
       if (const auto q = static_cast<std::size_t>(quota); outcome.samples.size() > q)
-        outcome.samples = dropMostCrowded(std::move(outcome.samples), p.contextSamples, outcome.samples.size() - q);
+        outcome.samples = dropMostCrowded(outcome.samples, p.contextSamples, outcome.samples.size() - q);
     } catch (const InputError&) {
       outcome.samples = {};  // too few or degenerate points for a surface: the quota passes on
     }

@@ -84,6 +84,9 @@ class MlsSurface {
   const KnnIndex& index() const { return *index_; }
   /// @brief Mean distance from an input point to its nearest neighbour (the input spacing).
   double meanSpacing() const { return meanSpacing_; }
+  /// @brief The median kernel width: the distance to which the input resolves its surface (past its points the
+  /// surface is known only to about that).
+  double resolution() const { return resolution_; }
   /// @brief Estimated surface area: Σ over points of the area each represents (π r₈² / 8).
   double area() const { return area_; }
   /// @brief Kernel width h at input point i.
@@ -111,6 +114,7 @@ class MlsSurface {
   std::vector<std::uint32_t> acrossRows_;
   std::vector<double> within_;  // points within each kernel width (8 off scan lines); empty when no row was widened
   double meanSpacing_ = 0;
+  double resolution_ = 0;
   double area_ = 0;
 };
 
