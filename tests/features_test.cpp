@@ -827,6 +827,30 @@ TEST(Features, TraceStopsWhereTheInputEnds) {
   EXPECT_LE(last, 0.5 + 2 * h) << "a sample " << (last - 0.5) / h << " spacings past the input's end";
 }
 
+// The snap fit past the end of a crease (the roof above, cut at x = 0.5): centred 3 input spacings past the cut,
+// its ball (2.5 local spacings, read there: about 3) still holds the two faces' points behind, their planes fit,
+// and their line runs on through the centre, off the input. The fit holds only where the crease's point lies
+// within 1.5 local spacings of an input point: it does 0.5 spacings before the cut, and not 3 spacings past it.
+TEST(Features, SnapFitPastTheInputsEndIsRefused) {
+  iires::TriangleMesh roof;
+  roof.vertices = {{0, 0, 0}, {0.5, 0, 0}, {0.5, 0.3, -0.3}, {0, 0.3, -0.3}, {0.5, -0.3, -0.3}, {0, -0.3, -0.3}};
+  roof.triangles = {{0, 1, 2}, {0, 2, 3}, {0, 4, 1}, {0, 5, 4}};
+  const auto cloud = sampledWithEstimatedNormals(roof, 20000);
+  const double h = iires::estimateSpacing(cloud.points);
+  const iires::KnnIndex index(cloud.points);
+  const FeatureParams p;
+  std::vector<std::uint32_t> idx;
+  std::vector<double> d2;
+  iires::detail::Crease c;
+  const Eigen::Vector3d before(0.5 - 0.5 * h, 0, 0), past(0.5 + 3 * h, 0, 0);
+  ASSERT_TRUE(iires::detail::snapFit(cloud, index, before, iires::detail::localSpacing(index, before, h), p, p, c,
+                                     idx, d2));
+  EXPECT_LE((c.point - before).norm(), 0.5 * h);
+  EXPECT_FALSE(iires::detail::snapFit(cloud, index, past, iires::detail::localSpacing(index, past, h), p, p, c,
+                                      idx, d2))
+      << "a crease at " << c.point.transpose() << ", " << (c.point.x() - 0.5) / h << " spacings past the cut";
+}
+
 /// A lens extruded along y over [0, @p length], open at both ends: the arcs of two circles of radius @p r
 /// centred at z = ∓@p d (the upper and the lower face) meet at the creases x = ±√(r² − d²), z = 0. Both
 /// faces curve across the creases, with a radius of a few fit widths at the test's sampling.

@@ -133,12 +133,26 @@ bool twoPlaneTest(const std::vector<Eigen::Vector3d>& points, const std::vector<
 }
 
 
+namespace {
+
+/// Whether the crease @p c lies on the input: a crease is where two of its sheets meet, so its point is within
+/// 1.5·maxOffCrease local spacings of an input point (of the points of a randomly sampled surface, 1 in 1,000 is
+/// farther than 1.5 spacings from every sample). Off the surface a fit's ball, a few local spacings read where
+/// it is centred, widens with the distance, and the planes fitted there (past a face's end, or blending a narrow
+/// face into a sheet) meet off it.
+bool onInput(const PointCloud& cloud, const KnnIndex& index, const Crease& c, const FeatureParams& params) {
+  return offInput(cloud, index, c.point, 0.0) <= 1.5 * params.maxOffCrease;
+}
+
+}  // namespace
+
 bool snapFit(const PointCloud& cloud, const KnnIndex& index, const Eigen::Vector3d& y, double hl,
              const FeatureParams& params, const FeatureParams& prm, Crease& c, std::vector<std::uint32_t>& idx,
              std::vector<double>& d2) {
   index.radius(y, params.radius * hl, idx, d2);
   if (idx.size() > kMaxFitPoints) idx.resize(kMaxFitPoints);
-  return twoPlaneTest(cloud.points, cloud.normals, y, idx, hl, prm, c, params.snapSigma * hl);
+  return twoPlaneTest(cloud.points, cloud.normals, y, idx, hl, prm, c, params.snapSigma * hl) &&
+         onInput(cloud, index, c, params);
 }
 
 FeatureParams looseParams(const FeatureParams& params) {
@@ -161,7 +175,7 @@ bool creaseAlong(const PointCloud& cloud, const KnnIndex& index, const Eigen::Ve
   for (std::uint32_t j : idx)
     if ((cloud.points[j] - y).dot(dir) <= 0) behind.push_back(j);
   oneSided = twoPlaneTest(cloud.points, cloud.normals, y, behind, hl, params, c, params.snapSigma * hl) &&
-             std::abs(c.direction.dot(dir)) >= cosTurn;
+             onInput(cloud, index, c, params) && std::abs(c.direction.dot(dir)) >= cosTurn;
   return oneSided;
 }
 

@@ -55,7 +55,8 @@ bool twoPlaneTest(const std::vector<Eigen::Vector3d>& points, const std::vector<
                   Crease& crease, double sigma = 0);
 
 /// The snap fit at @p y: twoPlaneTest() with thresholds @p prm on the input points within params.radius local
-/// spacings @p hl of y (the kMaxFitPoints nearest), weighted at params.snapSigma·hl. @p idx keeps that
+/// spacings @p hl of y (the kMaxFitPoints nearest), weighted at params.snapSigma·hl; false as well where the
+/// crease's point lies over 1.5·maxOffCrease local spacings off the input (offInput). @p idx keeps that
 /// neighbourhood for a caller that refits part of it; @p d2 is scratch.
 bool snapFit(const PointCloud& cloud, const KnnIndex& index, const Eigen::Vector3d& y, double hl,
              const FeatureParams& params, const FeatureParams& prm, Crease& c, std::vector<std::uint32_t>& idx,
@@ -66,8 +67,8 @@ bool snapFit(const PointCloud& cloud, const KnnIndex& index, const Eigen::Vector
 FeatureParams looseParams(const FeatureParams& params);
 
 /// The crease at @p y running along ±@p dir (within params.maxChainTurn): the snap fit, else two planes fitted
-/// on the points behind y only (an end where the crease stops ahead, or another crease crowds the ball ahead);
-/// @p oneSided says the second held. @p idx keeps the ball, @p d2 and @p behind are scratch.
+/// on the points behind y only (an end where the crease stops ahead, or another crease crowds the ball ahead),
+/// its point on the input as snapFit()'s; @p oneSided says the second held. @p idx keeps the ball, @p d2 and @p behind are scratch.
 bool creaseAlong(const PointCloud& cloud, const KnnIndex& index, const Eigen::Vector3d& y,
                  const Eigen::Vector3d& dir, double hl, const FeatureParams& params, Crease& c,
                  std::vector<std::uint32_t>& idx, std::vector<double>& d2, std::vector<std::uint32_t>& behind,

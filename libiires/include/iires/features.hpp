@@ -55,8 +55,8 @@ struct FeatureParams {
   double minChainLength = 6.0;  ///< spacings: shorter chains and spurs are dropped
   double sampleSpacing = 0.0;   ///< absolute units: spacing of the chain samples; 0 = do not sample
   double snapSigma = 1.5;       ///< spacings: Gaussian width of the local plane fits of snapToCreases()
-  /// local spacings: snapToCreases() keeps a bend (1×), a corner or a gap's sample (1.5×), a traced sample (2×)
-  /// this close to the input
+  /// local spacings: snapToCreases() keeps a bend (1×), a crease fit's point, a corner or a gap's sample (1.5×),
+  /// a traced sample (2×) this close to the input
   double maxOffCrease = 1.0;
 
   /// @throws std::invalid_argument with a readable message when a field is out of range.
