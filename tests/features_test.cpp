@@ -541,6 +541,33 @@ TEST(Features, CreasesConvergingAtATipGetTheTip) {
   }
 }
 
+// The same converging creases with a hole in the scan across the foot between the chain ends and the tip (no
+// input point within 4 h of (0.06, 0, 0)): the ends' straight lines to the tip would cross it. The tip step adds
+// its samples only where each lies within maxOffCrease local spacings of the input, as the tip itself must; no
+// held sample lies in the hole, over 2 h from every input point (before, the foot's line went through it).
+TEST(Features, TipStepDoesNotCrossAHoleInTheScan) {
+  const auto mesh = fadingStep(18.0);
+  const auto full = sampledWithEstimatedNormals(mesh, 60000);
+  const double h = iires::estimateSpacing(full.points);
+  const Eigen::Vector3d hole(0.06, 0, 0);
+  iires::PointCloud cloud;
+  for (std::size_t i = 0; i < full.size(); ++i)
+    if ((full.points[i] - hole).norm() > 4.0 * h)
+      cloud.points.push_back(full.points[i]), cloud.normals.push_back(full.normals[i]);
+  const double k = std::tan(18.0 * M_PI / 180.0);
+  std::vector<Eigen::Vector3d> samples;
+  std::vector<std::uint32_t> chain;
+  for (double x = 0.2; x >= 0.12; x -= 1.5 * h) samples.emplace_back(x, 0, 0), chain.push_back(0);  // the foot
+  for (double x = 0.2; x >= 0.12; x -= 1.5 * h) samples.emplace_back(x, 0, x * k), chain.push_back(1);  // the top
+  const auto out = iires::snapToCreases(cloud, samples, chain, h, FeatureParams{});
+  const iires::KnnIndex input(cloud.points);
+  for (const auto& q : out) {
+    double d2 = 0;
+    input.nearest(q, &d2);
+    EXPECT_LE(std::sqrt(d2), 2.0 * h) << q.transpose();
+  }
+}
+
 // A scan 5× denser at one end than at the other: the fits take the local spacing where the sampling is sparser
 // than the median, so the sparse end's creases are found (and sampled) as well as the dense end's.
 TEST(Features, NonUniformCubeEdgesFoundInTheSparsePart) {

@@ -301,7 +301,8 @@ Eigen::Vector3d refineTip(const PointCloud& cloud, const KnnIndex& index, const 
 /// the points around it, up to 4 times while a refit moves it by 0.1–1 spacing. Both ends are continued to
 /// the tip on the straight line at their step (the second one's samples within half a step of the first's
 /// left out, close to the tip) unless a placed sample lies on the way (within half a step: another crease
-/// between them) or the tip is farther than maxOffCrease from the input. The samples are inserted after their
+/// between them) or the tip or a sample on the way is farther than maxOffCrease local spacings from the input (a
+/// line cutting across a bend of a curved crease, or a hole in the scan). The samples are inserted after their
 /// ends, so the runs end at the tip and step 4 adds no corner there. Ends are paired greedily in order:
 /// deterministic.
 void placeCreaseTips(const PointCloud& cloud, const KnnIndex& index, double h, const FeatureParams& params,
@@ -355,7 +356,8 @@ void placeCreaseTips(const PointCloud& cloud, const KnnIndex& index, double h, c
         const int pieces = std::max(1, static_cast<int>(std::ceil(gap / ek.step - 0.25)));
         for (int t = 1; t <= pieces && clear; ++t) {
           const Eigen::Vector3d q = ek.point + (tip - ek.point) * (static_cast<double>(t) / pieces);
-          clear = !nearPlaced(q, 0.5 * ek.step);
+          index.nearest(q, &nearest);
+          clear = !nearPlaced(q, 0.5 * ek.step) && std::sqrt(nearest) <= params.maxOffCrease * hl;
           fill[side].push_back(q);
         }
       }
