@@ -830,6 +830,18 @@ TEST(Features, BareCornerIsPlacedFromTheEndLines) {
   for (const auto& q : out) EXPECT_LE(iires::distanceToSegments(q, sampledCube().edges), 0.5 * h) << q.transpose();
 }
 
+namespace {
+
+/// A roof: two faces at 90° meeting along the x axis over [0, 0.5], open at x = 0 and x = 0.5.
+iires::TriangleMesh roofMesh() {
+  iires::TriangleMesh roof;
+  roof.vertices = {{0, 0, 0}, {0.5, 0, 0}, {0.5, 0.3, -0.3}, {0, 0.3, -0.3}, {0.5, -0.3, -0.3}, {0, -0.3, -0.3}};
+  roof.triangles = {{0, 1, 2}, {0, 2, 3}, {0, 4, 1}, {0, 5, 4}};
+  return roof;
+}
+
+}  // namespace
+
 // A crease that runs off the ends of the input (a roof, two faces at 90° meeting along the x axis, the scan cut
 // at x = 0 and x = 0.5, open boundaries): chain samples along it from x = 0.1 to 0.3. The tracing follows the
 // crease to both cuts and stops there. Its fits' ball (a few local spacings, read where the next sample would
@@ -837,10 +849,7 @@ TEST(Features, BareCornerIsPlacedFromTheEndLines) {
 // stopped only at its budget (as many samples as input points; 54 s here), samples lying up to hundreds of
 // spacings past the cut (a real scan then failed: "output points left the input's bounding box").
 TEST(Features, TraceStopsWhereTheInputEnds) {
-  iires::TriangleMesh roof;
-  roof.vertices = {{0, 0, 0}, {0.5, 0, 0}, {0.5, 0.3, -0.3}, {0, 0.3, -0.3}, {0.5, -0.3, -0.3}, {0, -0.3, -0.3}};
-  roof.triangles = {{0, 1, 2}, {0, 2, 3}, {0, 4, 1}, {0, 5, 4}};
-  const auto cloud = sampledWithEstimatedNormals(roof, 20000);
+  const auto cloud = sampledWithEstimatedNormals(roofMesh(), 20000);
   const double h = iires::estimateSpacing(cloud.points);
   std::vector<Eigen::Vector3d> samples;
   for (double x = 0.1; x <= 0.3; x += 3 * h) samples.emplace_back(x, 0, 0);
@@ -855,14 +864,12 @@ TEST(Features, TraceStopsWhereTheInputEnds) {
 }
 
 // The snap fit past the end of a crease (the roof above, cut at x = 0.5): centred 3 input spacings past the cut,
-// its ball (2.5 local spacings, read there: about 3) still holds the two faces' points behind, their planes fit,
-// and their line runs on through the centre, off the input. The fit holds only where the crease's point lies
-// within 1.5 local spacings of an input point: it does 0.5 spacings before the cut, and not 3 spacings past it.
+// its ball (2.5 local spacings, read there, where they have grown with the distance) still holds the two faces'
+// points behind, their planes fit, and their line runs on through the centre, off the input. The fit holds only
+// where the crease's point lies within 1.5 local spacings of an input point: it does 0.5 spacings before the
+// cut, and not 3 spacings past it.
 TEST(Features, SnapFitPastTheInputsEndIsRefused) {
-  iires::TriangleMesh roof;
-  roof.vertices = {{0, 0, 0}, {0.5, 0, 0}, {0.5, 0.3, -0.3}, {0, 0.3, -0.3}, {0.5, -0.3, -0.3}, {0, -0.3, -0.3}};
-  roof.triangles = {{0, 1, 2}, {0, 2, 3}, {0, 4, 1}, {0, 5, 4}};
-  const auto cloud = sampledWithEstimatedNormals(roof, 20000);
+  const auto cloud = sampledWithEstimatedNormals(roofMesh(), 20000);
   const double h = iires::estimateSpacing(cloud.points);
   const iires::KnnIndex index(cloud.points);
   const FeatureParams p;

@@ -68,7 +68,8 @@ FeatureParams looseParams(const FeatureParams& params);
 
 /// The crease at @p y running along ±@p dir (within params.maxChainTurn): the snap fit, else two planes fitted
 /// on the points behind y only (an end where the crease stops ahead, or another crease crowds the ball ahead),
-/// its point on the input as snapFit()'s; @p oneSided says the second held. @p idx keeps the ball, @p d2 and @p behind are scratch.
+/// its point on the input as snapFit()'s; @p oneSided says the second held. @p idx keeps the ball, @p d2 and
+/// @p behind are scratch.
 bool creaseAlong(const PointCloud& cloud, const KnnIndex& index, const Eigen::Vector3d& y,
                  const Eigen::Vector3d& dir, double hl, const FeatureParams& params, Crease& c,
                  std::vector<std::uint32_t>& idx, std::vector<double>& d2, std::vector<std::uint32_t>& behind,
