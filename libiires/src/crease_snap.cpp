@@ -345,9 +345,12 @@ void placeCreaseTips(const PointCloud& cloud, const KnnIndex& index, double h, c
       if ((pa - pb).norm() > 0.5 * hl) continue;  // the two lines must (nearly) meet
       Eigen::Vector3d tip = 0.5 * (pa + pb);
       tip = refineTip(cloud, index, params, ea, eb, sharedA, sharedB, hl, tip);
-      double nearest = 0;
-      index.nearest(tip, &nearest);
-      if (std::sqrt(nearest) > params.maxOffCrease * hl) continue;  // off the surface
+      const auto onSurface = [&](const Eigen::Vector3d& q) {
+        double d2 = 0;
+        index.nearest(q, &d2);
+        return std::sqrt(d2) <= params.maxOffCrease * hl;
+      };
+      if (!onSurface(tip)) continue;
       std::vector<Eigen::Vector3d> fill[2];
       bool clear = true;
       for (int side = 0; side < 2 && clear; ++side) {
@@ -356,8 +359,7 @@ void placeCreaseTips(const PointCloud& cloud, const KnnIndex& index, double h, c
         const int pieces = std::max(1, static_cast<int>(std::ceil(gap / ek.step - 0.25)));
         for (int t = 1; t <= pieces && clear; ++t) {
           const Eigen::Vector3d q = ek.point + (tip - ek.point) * (static_cast<double>(t) / pieces);
-          index.nearest(q, &nearest);
-          clear = !nearPlaced(q, 0.5 * ek.step) && std::sqrt(nearest) <= params.maxOffCrease * hl;
+          clear = !nearPlaced(q, 0.5 * ek.step) && onSurface(q);
           fill[side].push_back(q);
         }
       }

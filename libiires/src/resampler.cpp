@@ -606,11 +606,7 @@ void Resampler::updateRule(const Samples& s) {
 /// free samples closest to another sample, or add the input points farthest from the samples, one at a time.
 void Resampler::forceCount(Samples& s, Relaxation& relaxation) {
   const std::size_t n = total();
-  std::vector<char> held(s.size());
-  for (std::size_t i = 0; i < s.size(); ++i) held[i] = s.fixed[i] != 0;
-  const std::vector<char> removed = mostCrowded(s.pos, held, s.size() > n ? s.size() - n : 0);
-  std::vector<std::uint32_t> idx;
-  std::vector<double> d2;
+  const std::vector<char> removed = mostCrowded(s.pos, s.fixed, s.size() > n ? s.size() - n : 0);
   Samples kept;
   for (std::size_t i = 0; i < s.size(); ++i)
     if (!removed[i]) kept.add(s.pos[i], s.nrm[i], s.fixed[i], std::move(s.cache[i]));
@@ -618,6 +614,8 @@ void Resampler::forceCount(Samples& s, Relaxation& relaxation) {
     std::vector<double> toSamples(pts_.size(), std::numeric_limits<double>::max());
     if (!kept.pos.empty()) {
       const KnnIndex index(kept.pos);
+      std::vector<std::uint32_t> idx;
+      std::vector<double> d2;
       for (std::size_t q = 0; q < pts_.size(); ++q)
         if (index.knn(pts_[q], 1, idx, d2) == 1) toSamples[q] = d2[0];
     }
