@@ -242,6 +242,9 @@ TEST(Denoise, DegenerateInputs) {
   bad = {};
   bad.sharpnessAngle = 120;
   EXPECT_THROW(iires::denoise(iires::test::planeCloud(100), bad), std::invalid_argument);
+  bad = {};
+  bad.laterSharpnessAngle = -1;
+  EXPECT_THROW(bad.validate(), std::invalid_argument);
   // iterations = 0: a no-op on positions that still returns fitted normals.
   DenoiseParams none;
   none.iterations = 0;

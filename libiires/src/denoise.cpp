@@ -390,6 +390,8 @@ void DenoiseParams::validate() const {
   if (degree != 1 && degree != 2) fail("degree must be 1 (plane) or 2 (quadric)");
   if (neighbours > static_cast<int>(kMaxNeighbours)) fail("neighbours must be at most 128");
   if (!(sharpnessAngle >= 0.0 && sharpnessAngle <= 90.0)) fail("sharpnessAngle must lie in [0, 90] degrees");
+  if (!(laterSharpnessAngle >= 0.0 && laterSharpnessAngle <= 90.0))
+    fail("laterSharpnessAngle must lie in [0, 90] degrees");
   if (!(cleanDisplacement >= 0) || !std::isfinite(cleanDisplacement))
     fail("cleanDisplacement must be a finite value >= 0");
   if (orientNeighbours < 1 || orientNeighbours > 128) fail("orientNeighbours must lie in [1, 128]");
@@ -445,12 +447,15 @@ DenoiseResult denoise(const PointCloud& input, const DenoiseParams& params, cons
   std::vector<Eigen::Vector3d> cur = in, normals = inNormals, next(n), nextNormals(n);
   const double sharp = params.sharpnessAngle > 0 ? 1.0 - std::cos(params.sharpnessAngle * M_PI / 180.0) : 0.0;
   const double invSharp2 = sharp > 0 ? 1.0 / (sharp * sharp) : 0.0;
+  const double later =
+      params.laterSharpnessAngle > 0 ? 1.0 - std::cos(params.laterSharpnessAngle * M_PI / 180.0) : sharp;
+  const double laterInvSharp2 = later > 0 ? 1.0 / (later * later) : 0.0;
   const int sweeps = std::max(1, params.iterations);  // at least one fit, for the normals
   bool probing = given && !params.keepGivenNormals;  // estimated normals: a first sweep without them decides
   NoiseLevel firstNoise;  // measured by every first sweep, the last one's kept (the sweeps may start again)
   for (int it = 0; it < sweeps; ++it) {
-    const bool useBilateral = sharp > 0 && ((given && !probing) || it > 0);
-    const SweepKernel kernel{rows, cur, normals, useBilateral, given, invSharp2};
+    const bool useBilateral = (it > 0 ? later : sharp) > 0 && ((given && !probing) || it > 0);
+    const SweepKernel kernel{rows, cur, normals, useBilateral, given, it > 0 ? laterInvSharp2 : invSharp2};
     const double cleanBelow = it == 0 && params.iterations > 0 ? params.cleanDisplacement * rows.spacing : 0.0;
     const double meanMove = projectSweep(kernel, params.degree, it, sweeps - 1 - it, firstNoise,
                                          params.iterations > 0, cleanBelow, exec.threads, next, nextNormals);

@@ -323,6 +323,9 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params, const Ex
 
   const bool preprocessing = params.preprocess && cloud.size() >= kPreprocessMinPoints;
   PreprocessParams pp = params.preprocessing;
+  // On a noisy input the denoiser keeps apart the faces of every crease the feature stage is to hold.
+  if (params.sharpEdges && pp.denoise.sharpnessAngle > 0 && pp.denoise.laterSharpnessAngle == 0)
+    pp.denoise.laterSharpnessAngle = std::min(pp.denoise.sharpnessAngle, params.features.angle);
   const GeodesicParams& gp = params.geodesic;
   // One k-NN search for every stage that reads the working cloud's neighbours (pre-processing, the geodesic
   // graph, the MLS kernel widths) while pre-processing keeps the positions; one k-d tree for it and the MLS.

@@ -71,6 +71,12 @@ struct DenoiseParams {
   /// In degrees, in (0, 90]; 0 switches the term off. 45: fandisk (100k points, noise 0.33·l) error within 2·l of the sharp edges 3.95 → 2.75
   /// ×10⁻⁴ diagonal (CGAL bilateral 3.08), mean error 2.00 → 1.85; bunny00 1.70 → 1.71.
   double sharpnessAngle = 45.0;
+  /// The bilateral term's angle in the sweeps after the first (0 = sharpnessAngle's), which run only on an input the
+  /// first found noisy; the first sweep, which probes the noise and gives a clean input its normals, keeps
+  /// sharpnessAngle. resample() with sharp edges sets the feature angle here (FeatureParams::angle): the normals
+  /// estimated across a crease blend its faces', and at 45° the faces of a 30° crease keep 43 % of their weight in
+  /// each other's fits, so the sweeps round off the creases the feature stage is to hold.
+  double laterSharpnessAngle = 0.0;
   /// Noise probe: when the first sweep's fits (the quadric's in full, before its shrinkage) lie less than this many
   /// input spacings (mean distance to the nearest neighbour) from the points on average, the input is already
   /// clean; its positions are kept (the fitted normals are still returned) and no further sweep runs, since

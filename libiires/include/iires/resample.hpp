@@ -35,7 +35,9 @@ struct ResampleParams {
   ResampleMode mode = ResampleMode::kIsotropic;  ///< `--mode isotropic|curvature`
   CurvatureParams curvature;        ///< curvature mode: eq. 8–10 (levels, ratios flat → curved)
   /// detect sharp features and keep samples on them (`--sharp-edges`); the MLS fits then weight the input points
-  /// by their normals (mls.normalSigma 0.5 unless set), so the free samples beside a crease keep to their face
+  /// by their normals (mls.normalSigma 0.5 unless set), so the free samples beside a crease keep to their face,
+  /// and on a noisy input the denoiser keeps apart faces meeting at features.angle or more
+  /// (preprocessing.denoise.laterSharpnessAngle, unless set)
   bool sharpEdges = false;
   FeatureParams features;           ///< the feature detector and its chains
   double edgeRatio = 0.5;           ///< spacing of the samples on feature lines, in units of l, [0.1, 4] (`--edge-ratio`)
