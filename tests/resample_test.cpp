@@ -467,17 +467,29 @@ TEST(Resample, SharpEdgeSamplesEndWithTheInput) {
 // With sharp edges the free samples beside a crease are fitted to their own face (the MLS fits weight the input
 // points by their normals): on a prism sampled 5× denser at one end, positions only, their mean distance to the
 // true surface is a fraction of what the plain fits leave, which round the 60° creases between the side faces.
-TEST(Resample, SharpEdgesFitFreeSamplesToTheirOwnFace) {
-  const iires::TriangleMesh prism = iires::test::prismMesh(6, 1.0, 1.5);  // creases 60° apart
+/// @p mesh sampled with 60k points (5× denser at one end with @p densityRatio 5), moved along its normals by Gaussian
+/// noise of @p noise input spacings, positions only (a scan), resampled to 4000 points with sharp edges.
+iires::ResampleResult sharpScanResampled(const iires::TriangleMesh& mesh, double densityRatio, double noise) {
   iires::MeshSamplingParams sp;
   sp.count = 60000;
-  sp.densityRatio = 5;
-  iires::PointCloud cloud = iires::sampleMesh(prism, sp);
+  sp.densityRatio = densityRatio;
+  iires::PointCloud cloud = iires::sampleMesh(mesh, sp);
+  if (noise > 0) {
+    const double l = iires::meanNeighbourSpacing(cloud.points);
+    std::mt19937_64 rng(7);
+    std::normal_distribution<double> g(0.0, noise * l);
+    for (std::size_t i = 0; i < cloud.size(); ++i) cloud.points[i] += g(rng) * cloud.normals[i];
+  }
   cloud.normals.clear();
   iires::ResampleParams p;
   p.targetCount = 4000;
   p.sharpEdges = true;
-  const auto r = iires::resample(cloud, p);
+  return iires::resample(cloud, p);
+}
+
+TEST(Resample, SharpEdgesFitFreeSamplesToTheirOwnFace) {
+  const iires::TriangleMesh prism = iires::test::prismMesh(6, 1.0, 1.5);  // creases 60° apart
+  const auto r = sharpScanResampled(prism, 5, 0);
   ASSERT_EQ(r.cloud.size(), 4000u);
   std::vector<char> held(r.cloud.size(), 0);
   for (std::uint32_t i : r.fixedIndices) held[i] = 1;
@@ -498,18 +510,7 @@ TEST(Resample, SharpEdgesFitFreeSamplesToTheirOwnFace) {
 // sweep, 0.0198 with 30° after the first.
 TEST(Resample, SharpEdgesOnANoisyScanAreNotRoundedByTheDenoiser) {
   const iires::TriangleMesh cube = iires::test::cubeMesh();
-  iires::MeshSamplingParams sp;
-  sp.count = 60000;
-  iires::PointCloud cloud = iires::sampleMesh(cube, sp);
-  const double l = iires::meanNeighbourSpacing(cloud.points);
-  std::mt19937_64 rng(7);
-  std::normal_distribution<double> g(0.0, 0.2 * l);
-  for (std::size_t i = 0; i < cloud.size(); ++i) cloud.points[i] += g(rng) * cloud.normals[i];
-  cloud.normals.clear();
-  iires::ResampleParams p;
-  p.targetCount = 4000;
-  p.sharpEdges = true;
-  const auto r = iires::resample(cloud, p);
+  const auto r = sharpScanResampled(cube, 1, 0.2);
   ASSERT_EQ(r.cloud.size(), 4000u);
   std::vector<Eigen::Vector3d> nearCrease;  // within one output spacing of two faces of [0, 1]³
   for (const auto& q : r.cloud.points) {

@@ -259,6 +259,16 @@ std::vector<std::uint8_t> refilter(const PointCloud& cloud, std::optional<KnnInd
   return near;
 }
 
+/// The pre-processing's parameters within resample(): the sheet rule with the intrinsic neighbourhoods, and with sharp
+/// edges a noisy input's sweeps keeping apart the faces of every crease the feature stage is to hold.
+PreprocessParams preprocessParams(const ResampleParams& params) {
+  PreprocessParams pp = params.preprocessing;
+  pp.sheets = params.intrinsic;
+  if (params.sharpEdges && pp.denoise.sharpnessAngle > 0 && pp.denoise.laterSharpnessAngle == 0)
+    pp.denoise.laterSharpnessAngle = std::min(pp.denoise.sharpnessAngle, params.features.angle);
+  return pp;
+}
+
 }  // namespace
 
 void ResampleParams::validate() const {
@@ -322,10 +332,7 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params, const Ex
   result.thinnedPoints = cloud.size();
 
   const bool preprocessing = params.preprocess && cloud.size() >= kPreprocessMinPoints;
-  PreprocessParams pp = params.preprocessing;
-  // On a noisy input the denoiser keeps apart the faces of every crease the feature stage is to hold.
-  if (params.sharpEdges && pp.denoise.sharpnessAngle > 0 && pp.denoise.laterSharpnessAngle == 0)
-    pp.denoise.laterSharpnessAngle = std::min(pp.denoise.sharpnessAngle, params.features.angle);
+  PreprocessParams pp = preprocessParams(params);
   const GeodesicParams& gp = params.geodesic;
   // One k-NN search for every stage that reads the working cloud's neighbours (pre-processing, the geodesic
   // graph, the MLS kernel widths) while pre-processing keeps the positions; one k-d tree for it and the MLS.
@@ -339,7 +346,6 @@ ResampleResult resample(PointCloud cloud, const ResampleParams& params, const Ex
   mergeTwins(cloud, index, neighbours, tableK, exec, result);
   clock.end("neighbours", t);
   const SheetParams& sp = params.preprocessing.sheet;
-  pp.sheets = params.intrinsic;
   const bool sheets = params.intrinsic && cloud.size() > static_cast<std::size_t>(sp.pcaNeighbours);
   std::vector<std::uint8_t> nearSheets;  // per point of the final working cloud (the MLS surface's gate)
   // Given normals that do not describe the points' surface (tangent to it, random) are estimated like absent ones.
