@@ -464,11 +464,8 @@ TEST(Resample, SharpEdgeSamplesEndWithTheInput) {
   }
 }
 
-// With sharp edges the free samples beside a crease are fitted to their own face (the MLS fits weight the input
-// points by their normals): on a prism sampled 5× denser at one end, positions only, their mean distance to the
-// true surface is a fraction of what the plain fits leave, which round the 60° creases between the side faces.
-/// @p mesh sampled with 60k points (5× denser at one end with @p densityRatio 5), moved along its normals by Gaussian
-/// noise of @p noise input spacings, positions only (a scan), resampled to 4000 points with sharp edges.
+/// @p mesh sampled with 60k points (@p densityRatio: see MeshSamplingParams), moved along its normals by Gaussian noise
+/// of @p noise input spacings (seed 7), positions only (a scan), resampled to 4000 points with sharp edges.
 iires::ResampleResult sharpScanResampled(const iires::TriangleMesh& mesh, double densityRatio, double noise) {
   iires::MeshSamplingParams sp;
   sp.count = 60000;
@@ -487,6 +484,9 @@ iires::ResampleResult sharpScanResampled(const iires::TriangleMesh& mesh, double
   return iires::resample(cloud, p);
 }
 
+// With sharp edges the free samples beside a crease are fitted to their own face (the MLS fits weight the input
+// points by their normals): on a prism sampled 5× denser at one end, positions only, their mean distance to the
+// true surface is a fraction of what the plain fits leave, which round the 60° creases between the side faces.
 TEST(Resample, SharpEdgesFitFreeSamplesToTheirOwnFace) {
   const iires::TriangleMesh prism = iires::test::prismMesh(6, 1.0, 1.5);  // creases 60° apart
   const auto r = sharpScanResampled(prism, 5, 0);
