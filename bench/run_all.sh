@@ -294,12 +294,13 @@ EOF
 
 \`$bin/sharp_edge_bench MESH 100000 10000 20000 --density-ratio R\` on $cad, and \`MESH 100000 10000 --noise 0.2
 --methods iires,iires_sharp\` (Gaussian noise of 0.2 input spacings along the normal): edge_max / edge_mean = distance
-from the mesh's sharp edges (dihedral > 30°) to the nearest output point, in output spacings; free_cv = spacing cv of
-the samples not held on a feature line.
+from the mesh's sharp edges (dihedral > 30°) to the nearest output point, in output spacings; cv_sheet = spacing cv
+along the surface (a neighbour on a facing sheet of the true mesh, as across a plate thinner than the spacing, passed
+over); free_cv = cv_sheet of the samples not held on a feature line.
 
 EOF
   ratio "$out/sharp_edges.txt" "model density_ratio noise N" > "$tmp/sharp_ratio.txt"
-  table "model density_ratio noise N method time_s time_vs_iires cv free_cv err_mean_pct err_max_pct edge_max_per_spacing:edge_max edge_mean_per_spacing:edge_mean" \
+  table "model density_ratio noise N method time_s time_vs_iires cv cv_sheet free_cv err_mean_pct err_max_pct edge_max_per_spacing:edge_max edge_mean_per_spacing:edge_mean" \
     "$tmp/sharp_ratio.txt"
   cat <<EOF
 

@@ -6,7 +6,9 @@
 //     --dihedral, default 30°, sampled every 0.01 mean spacings) to the nearest output point, over the output's
 //     mean NN spacing;
 //   err_mean_pct / err_max_pct: distance of the output to the mesh, % of the bounding-box diagonal;
-//   free_cv (iires_sharp): NN-spacing cv of the free samples (the held feature samples excluded).
+//   cv: NN-spacing cv; cv_sheet: the same along the surface (a neighbour on a facing sheet of the true mesh, as
+//     across a plate thinner than the spacing, passed over: iires::sheetNeighbourDistances);
+//   free_cv (iires_sharp): cv_sheet of the free samples (the held feature samples excluded).
 // --noise S moves the input points along the mesh normal by Gaussian noise of σ = S mean input spacings.
 // Usage: sharp_edge_bench MESH INPUT_COUNT N [N ...] [--density-ratio R] [--threads T] [--dihedral DEG]
 //        [--noise S] [--methods iires,iires_sharp,cgal_wlop,cgal_ear]   (default: all four) [--dump K]
@@ -85,41 +87,40 @@ std::vector<double> edgeAngles(const iires::TriangleMesh& mesh, const std::vecto
   return out;
 }
 
+/// Each of @p pts's distance to its nearest neighbour on its own sheet of the true mesh.
+std::vector<double> sheetSpacing(const std::vector<Eigen::Vector3d>& pts, const Reference& ref) {
+  std::vector<Eigen::Vector3d> normals(pts.size());
+  for (std::size_t i = 0; i < pts.size(); ++i) normals[i] = ref.mesh->normal(pts[i]);
+  return iires::sheetNeighbourDistances(pts, normals);
+}
+
 void report(const std::string& prefix, const std::string& method, const std::vector<Eigen::Vector3d>& pts,
             double seconds, const Reference& ref, const std::string& extra = "") {
   const auto spacing = iires::spacingStats(pts);
   const auto err = ref.mesh->distances(pts);
   const auto edge = iires::coverage(iires::sampleSegments(ref.edges, 0.01 * spacing.mean), pts);
   std::printf(
-      "%s method=%s points=%zu time_s=%.2f cv=%.4f err_mean_pct=%.4f err_max_pct=%.4f edge_max_per_spacing=%.3f "
-      "edge_mean_per_spacing=%.3f%s\n",
-      prefix.c_str(), method.c_str(), pts.size(), seconds, spacing.cv, 100 * err.mean / ref.mesh->diagonal(),
+      "%s method=%s points=%zu time_s=%.2f cv=%.4f cv_sheet=%.4f err_mean_pct=%.4f err_max_pct=%.4f "
+      "edge_max_per_spacing=%.3f edge_mean_per_spacing=%.3f%s\n",
+      prefix.c_str(), method.c_str(), pts.size(), seconds, spacing.cv,
+      iires::summariseSpacing(sheetSpacing(pts, ref)).cv, 100 * err.mean / ref.mesh->diagonal(),
       100 * err.max / ref.mesh->diagonal(), edge.max / spacing.mean, edge.mean / spacing.mean, extra.c_str());
   std::fflush(stdout);
 }
 
-/// " feature_samples=K free_cv=C": the held samples' count and the NN-spacing cv of the others (their nearest
-/// neighbour among all output points).
-std::string freeSpacing(const std::vector<Eigen::Vector3d>& pts, const std::vector<std::uint32_t>& fixedIndices) {
+/// " feature_samples=K free_cv=C": the held samples' count and the along-the-surface NN-spacing cv of the
+/// others (their nearest neighbour on their own sheet among all output points).
+std::string freeSpacing(const std::vector<Eigen::Vector3d>& pts, const std::vector<std::uint32_t>& fixedIndices,
+                        const Reference& ref) {
   std::vector<char> held(pts.size(), 0);
   for (std::uint32_t i : fixedIndices) held[i] = 1;
-  const iires::KnnIndex index(pts);
-  std::vector<std::uint32_t> idx;
-  std::vector<double> d2;
-  double sum = 0, sum2 = 0;
-  std::size_t n = 0;
-  for (std::size_t i = 0; i < pts.size(); ++i) {
-    if (held[i]) continue;
-    index.knn(pts[i], 2, idx, d2);
-    const double d = std::sqrt(d2.back());
-    sum += d;
-    sum2 += d * d;
-    ++n;
-  }
-  const double mean = n ? sum / n : 0, var = n ? std::max(0.0, sum2 / n - mean * mean) : 0;
+  const std::vector<double> nearest = sheetSpacing(pts, ref);
+  std::vector<double> free;
+  for (std::size_t i = 0; i < pts.size(); ++i)
+    if (!held[i]) free.push_back(nearest[i]);
   char buf[96];
   std::snprintf(buf, sizeof buf, " feature_samples=%zu free_cv=%.4f", fixedIndices.size(),
-                mean > 0 ? std::sqrt(var) / mean : 0.0);
+                iires::summariseSpacing(free).cv);
   return buf;
 }
 
@@ -273,7 +274,7 @@ int main(int argc, char** argv) {
       const auto r = iires::resample(cloud, p, iires::Execution{threads});
       const double seconds = now() - t;
       report(prefix, sharp ? "iires_sharp" : "iires", r.cloud.points, seconds, ref,
-             sharp ? freeSpacing(r.cloud.points, r.fixedIndices) : "");
+             sharp ? freeSpacing(r.cloud.points, r.fixedIndices, ref) : "");
       if (dump > 0) dumpWorst(r.cloud.points, r.fixedIndices, ref, dump);
     }
     double t = now();

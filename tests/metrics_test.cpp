@@ -101,6 +101,41 @@ TEST(SpacingStats, EmptySingleAndDuplicatePoints) {
   EXPECT_EQ(spacingStats(points).min, 0);
 }
 
+// A plate thinner than its points' spacing: two grids of spacing 1, 0.3 apart (staggered by 0.1). Along the
+// surface every point is one spacing from its nearest; in a straight line the plate's points are 0.33 apart.
+TEST(SpacingStats, SheetNeighboursPassOverAFacingSheet) {
+  std::vector<Eigen::Vector3d> pts, nrm;
+  for (int i = 0; i < 12; ++i)
+    for (int j = 0; j < 12; ++j) {
+      pts.emplace_back(i, j, 0.3), nrm.emplace_back(0, 0, 1);
+      pts.emplace_back(i + 0.1, j + 0.1, 0.0), nrm.emplace_back(0, 0, -1);  // the other side, facing away
+    }
+  EXPECT_NEAR(spacingStats(pts).max, std::sqrt(0.11), 1e-12);
+  const std::vector<double> d = sheetNeighbourDistances(pts, nrm);
+  ASSERT_EQ(d.size(), pts.size());
+  for (std::size_t i = 0; i < pts.size(); ++i) EXPECT_NEAR(d[i], 1.0, 1e-12) << "point " << i;
+  const SpacingStats s = summariseSpacing(d);
+  EXPECT_NEAR(s.mean, 1.0, 1e-12);
+  EXPECT_NEAR(s.cv, 0.0, 1e-12);
+  // Unsigned: the same with both sides' normals pointing one way (a mesh whose winding is not consistent).
+  for (auto& n : nrm) n = Eigen::Vector3d(0, 0, 1);
+  EXPECT_EQ(sheetNeighbourDistances(pts, nrm), d);
+  EXPECT_THROW(sheetNeighbourDistances(pts, {}), std::invalid_argument);
+  EXPECT_TRUE(sheetNeighbourDistances({}, {}).empty());
+}
+
+// Across a crease the normals differ: the nearest point on the other face is a neighbour. Two points 0.2 from a
+// right-angled crease on either side (0.28 apart), two more 1 and 1.5 along each face.
+TEST(SpacingStats, SheetNeighboursCountAcrossACrease) {
+  const std::vector<Eigen::Vector3d> pts = {{0, 0.2, 0}, {0, 0, 0.2}, {0, 1.2, 0}, {0, 0, 1.7}},
+                                     nrm = {{0, 0, 1}, {0, 1, 0}, {0, 0, 1}, {0, 1, 0}};
+  const std::vector<double> d = sheetNeighbourDistances(pts, nrm);
+  EXPECT_NEAR(d[0], std::sqrt(0.08), 1e-12);
+  EXPECT_NEAR(d[1], std::sqrt(0.08), 1e-12);
+  EXPECT_NEAR(d[2], 1.0, 1e-12);
+  EXPECT_NEAR(d[3], 1.5, 1e-12);
+}
+
 TEST(MeshDistance, UnitTriangle) {
   TriangleMesh tri;
   tri.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
@@ -132,6 +167,10 @@ TEST(MeshDistance, UnitCubeAndSummary) {
   EXPECT_NEAR(s.p99, 198.0, 1e-12);
   EXPECT_EQ(cube.distances({}).max, 0);
   EXPECT_THROW(MeshDistance(TriangleMesh{}), InputError);
+  // The nearest face's normal, signed by its winding (outwards on this cube).
+  EXPECT_LT((cube.normal({0.5, 0.4, 1.2}) - Eigen::Vector3d(0, 0, 1)).norm(), 1e-12);
+  EXPECT_LT((cube.normal({-0.1, 0.3, 0.6}) - Eigen::Vector3d(-1, 0, 0)).norm(), 1e-12);
+  EXPECT_LT((cube.normal({0.5, 0.05, 0.5}) - Eigen::Vector3d(0, -1, 0)).norm(), 1e-12);
 }
 
 TEST(Coverage, KnownConfiguration) {

@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <stdexcept>
 
 #include "iires/knn.hpp"
 #include "iires/detail/parallel.hpp"
@@ -44,9 +45,8 @@ DistanceStats summarise(std::vector<double> d) {
 }  // namespace
 
 SpacingStats spacingStats(const std::vector<Eigen::Vector3d>& points, int threads) {
-  SpacingStats s;
   const std::size_t n = points.size();
-  if (n < 2) return s;
+  if (n < 2) return {};
   std::vector<double> nn(n, std::numeric_limits<double>::infinity());
   if (n < 64) {
     for (std::size_t i = 0; i < n; ++i)
@@ -62,18 +62,54 @@ SpacingStats spacingStats(const std::vector<Eigen::Vector3d>& points, int thread
       nn[i] = std::sqrt(sq[1]);
     });
   }
+  return summariseSpacing(nn);
+}
+
+SpacingStats summariseSpacing(const std::vector<double>& nearest) {
+  SpacingStats s;
+  if (nearest.empty()) return s;
+  const double n = static_cast<double>(nearest.size());
   double sum = 0;
-  s.min = nn[0];
-  for (double d : nn) {
+  s.min = nearest[0];
+  for (double d : nearest) {
     sum += d;
     s.min = std::min(s.min, d);
     s.max = std::max(s.max, d);
   }
-  s.mean = sum / static_cast<double>(n);
+  s.mean = sum / n;
   double squares = 0;
-  for (double d : nn) squares += (d - s.mean) * (d - s.mean);
-  s.cv = s.mean > 0 ? std::sqrt(squares / static_cast<double>(n)) / s.mean : 0.0;  // population std / mean
+  for (double d : nearest) squares += (d - s.mean) * (d - s.mean);
+  s.cv = s.mean > 0 ? std::sqrt(squares / n) / s.mean : 0.0;  // population std / mean
   return s;
+}
+
+std::vector<double> sheetNeighbourDistances(const std::vector<Eigen::Vector3d>& points,
+                                            const std::vector<Eigen::Vector3d>& normals, int threads) {
+  if (normals.size() != points.size())
+    throw std::invalid_argument("sheetNeighbourDistances: one normal per point is needed");
+  if (points.size() < 2) return std::vector<double>(points.size(), 0.0);
+  // On one smooth sheet two points whose normals turn by under 25° have an offset within about 12.5° of the
+  // tangent plane (half the turn, on an arc): more than 15° out of it, the neighbour lies on a facing sheet.
+  const double parallelCos = std::cos(25.0 * M_PI / 180.0), outSin = std::sin(15.0 * M_PI / 180.0);
+  const KnnIndex index(points);
+  std::vector<double> out(points.size());
+  parallelFor(points.size(), threads, [&](std::size_t i) {
+    std::vector<std::uint32_t> ids;
+    std::vector<double> sq;
+    const std::size_t found = index.knn(points[i], 16, ids, sq);  // itself (or a duplicate) first
+    out[i] = std::sqrt(sq[std::min<std::size_t>(1, found - 1)]);
+    const Eigen::Vector3d& n = normals[i];
+    for (std::size_t t = 1; t < found; ++t) {
+      const double d = std::sqrt(sq[t]);
+      const bool facing = std::abs(n.dot(normals[ids[t]])) > parallelCos &&
+                          std::abs(n.dot(points[ids[t]] - points[i])) > outSin * d;
+      if (!facing) {
+        out[i] = d;
+        break;
+      }
+    }
+  });
+  return out;
 }
 
 struct MeshDistance::Impl {
@@ -108,6 +144,13 @@ DistanceStats MeshDistance::distances(const std::vector<Eigen::Vector3d>& points
   std::vector<double> d(points.size());
   parallelFor(points.size(), threads, [&](std::size_t i) { d[i] = distance(points[i]); });
   return summarise(std::move(d));
+}
+
+Eigen::Vector3d MeshDistance::normal(const Eigen::Vector3d& p) const {
+  const Triangle& t = *impl_->tree.closest_point_and_primitive(toCgal(p)).second;
+  const Kernel::Vector_3 n = CGAL::cross_product(t[1] - t[0], t[2] - t[0]);
+  const Eigen::Vector3d e(n.x(), n.y(), n.z());
+  return e.norm() > 0 ? Eigen::Vector3d(e.normalized()) : Eigen::Vector3d::UnitZ();
 }
 
 double MeshDistance::diagonal() const { return impl_->diagonal; }
