@@ -108,6 +108,26 @@ std::vector<FeatureChain> buildChains(const std::vector<Eigen::Vector3d>& x0,
 void traceChainEnds(const PointCloud& cloud, const KnnIndex& index, double h, const FeatureParams& params,
                     std::vector<Eigen::Vector3d>& out, std::vector<std::uint32_t>& owner);
 
+/// Step 3b of snapToCreases(): tips. Two creases that share a sheet and run into one point at a small angle
+/// (8°–maxChainTurn; a step in a surface fading out, as fandisk's wedge at (0.072 0.035 −0.046), 18°) end
+/// there without a third crease. Within a few spacings of the tip both creases lie in every fit's
+/// neighbourhood, so the traces stop about a neighbourhood apart, and step 4's end lines (through the last
+/// two samples, bent by the other crease) meet short of the tip. Here each open end's crease is the last fit
+/// that holds at the end sample or up to 3 samples back (the full ball, else the half-ball behind), its
+/// planes refitted without the points off both (refitPlanesRobust: the other crease's far sheet). Two ends
+/// whose lines converge, share a plane (each end within maxLineDistance of one of the other's planes) and
+/// meet (within half a spacing) ahead of both (within 6·radius local spacings) have their tip there, refined
+/// as the common point of the shared plane and the two other sheets' planes refitted (Gaussian-weighted) on
+/// the points around it, up to 4 times while a refit moves it by 0.1–1 spacing. Both ends are continued to
+/// the tip on the straight line at their step (the second one's samples within half a step of the first's
+/// left out, close to the tip) unless a placed sample lies on the way (within half a step: another crease
+/// between them) or the tip or a sample on the way is farther than maxOffCrease local spacings from the input (a
+/// line cutting across a bend of a curved crease, or a hole in the scan). The samples are inserted after their
+/// ends, so the runs end at the tip and step 4 adds no corner there. Ends are paired greedily in order:
+/// deterministic.
+void placeCreaseTips(const PointCloud& cloud, const KnnIndex& index, double h, const FeatureParams& params,
+                     std::vector<Eigen::Vector3d>& out, std::vector<std::uint32_t>& owner);
+
 /// Step 5 of snapToCreases(): fill the gaps the tracing and the corners leave between neighbouring samples.
 /// Two samples a, b more than 1.5 × the chains' median spacing (`step`) and at most @p maxGap steps apart, with
 /// no other sample within 0.45 × their distance of their midpoint and half a step of the line a–b (nothing lies
