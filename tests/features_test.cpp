@@ -742,6 +742,32 @@ TEST(Features, GapOnABendIsNotBridgedByAnotherChainInLine) {
   }
 }
 
+// Step 5 (fillCreaseGaps) fills its gaps in sample order, each seeing the samples filled before it: on the cube's
+// edge x = z = 1, a chain at a step of 0.02 with gaps of 3, 4 and 5 steps, and before the first gap two samples a
+// hair apart (y = 0.300 and, last in order, 0.302). The gap from 0.300 is filled first; the one from 0.302 then
+// lies over those samples and is not filled again. The fills are found on several threads: 1 and 2 give one result.
+TEST(Features, GapsFilledInSampleOrderWhateverTheThreads) {
+  const auto& [mesh, cloud, edges, h] = sampledCube();
+  std::vector<Eigen::Vector3d> given;
+  std::vector<std::uint32_t> givenOwner;
+  for (int t = 0; t <= 40; ++t) {
+    if ((t > 10 && t < 13) || (t > 20 && t < 24) || (t > 30 && t < 35)) continue;  // gaps of 3, 4, 5 steps
+    given.emplace_back(1.0, 0.1 + 0.02 * t, 1.0), givenOwner.push_back(0);
+  }
+  given.emplace_back(1.0, 0.302, 1.0), givenOwner.push_back(1);  // beside y = 0.300, before the gap to 0.360
+  const iires::KnnIndex index(cloud.points);
+  std::vector<Eigen::Vector3d> out[2] = {given, given};
+  std::vector<std::uint32_t> owner[2] = {givenOwner, givenOwner};
+  for (int t : {0, 1}) iires::detail::fillCreaseGaps(cloud, index, h, FeatureParams{}, out[t], owner[t], 6.0, t + 1);
+  EXPECT_EQ(out[0], out[1]);
+  EXPECT_EQ(owner[0], owner[1]);
+  ASSERT_EQ(out[0].size(), given.size() + 2 + 3 + 4);
+  for (std::size_t i = given.size(); i < out[0].size(); ++i) {
+    EXPECT_LE(iires::distanceToSegments(out[0][i], edges), 0.25 * h) << out[0][i].transpose();
+    for (std::size_t j = 0; j < i; ++j) EXPECT_GT((out[0][i] - out[0][j]).norm(), 0.01) << out[0][i].transpose();
+  }
+}
+
 namespace {
 
 /// The L-shaped prism: the L (0,0) (1,0) (1,0.5) (0.5,0.5) (0.5,1) (0,1) extruded over z ∈ [0, 0.5], outward;

@@ -246,7 +246,7 @@ void refillGaps(const PointCloud& cloud, const KnnIndex& index, double h, const 
                 std::vector<Eigen::Vector3d>& out, std::vector<std::uint32_t>& owner, int threads) {
   constexpr double kOpenedGap = 2.5;  // steps: the longest gap a new, moved or dropped sample leaves
   const std::size_t settled = out.size();
-  fillCreaseGaps(cloud, index, h, params, out, owner, kOpenedGap);
+  fillCreaseGaps(cloud, index, h, params, out, owner, kOpenedGap, threads);
   if (out.size() == settled) return;
   std::vector<Eigen::Vector3d> added(out.begin() + static_cast<long>(settled), out.end());
   refineOnCurvedSheets(cloud, index, h, params, added, threads);
@@ -441,7 +441,7 @@ std::vector<Eigen::Vector3d> snapToCreases(const PointCloud& cloud, const std::v
   addCorners(cloud, index, h, params, out, owner);  // 4.
   addSheetCorners(cloud, index, h, params, out, owner, exec.threads);  // 4a.
   separateSamples(h, out, owner);
-  fillCreaseGaps(cloud, index, h, params, out, owner);
+  fillCreaseGaps(cloud, index, h, params, out, owner, 6.0, exec.threads);
   refineOnCurvedSheets(cloud, index, h, params, out, exec.threads);
   ontoSheets(cloud, index, h, params, out, exec.threads);  // 6b.
   separateSamples(h, out, owner);

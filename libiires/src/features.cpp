@@ -132,26 +132,43 @@ void FeatureParams::validate() const {
   if (!(maxOffCrease >= 0.0)) fail("maxOffCrease must be >= 0");
 }
 
-double estimateSpacing(const std::vector<Eigen::Vector3d>& points, int threads) {
-  if (points.size() < 2) return 0.0;
-  KnnIndex index(points);
-  std::vector<double> local(points.size());
+namespace {
+
+/// From each point's 7 nearest in @p index: @p estimate, its mean distance to the others (estimateSpacing()'s
+/// reading, a duplicate counted at 0), and @p local, the mean over those at a distance above 0 (localSpacing()'s,
+/// before its floor), in one search per point.
+void pointSpacings(const KnnIndex& index, const std::vector<Eigen::Vector3d>& points, int threads,
+                   std::vector<double>& estimate, std::vector<double>& local) {
+  estimate.assign(points.size(), 0.0);
+  local.assign(points.size(), 0.0);
   parallelFor(points.size(), threads, [&](std::size_t i) {
     std::vector<std::uint32_t> idx;
     std::vector<double> d2;
     index.knn(points[i], 7, idx, d2);
-    double sum = 0;
-    int m = 0;
-    for (std::size_t t = 0; t < idx.size(); ++t)
-      if (idx[t] != i) {
-        sum += std::sqrt(d2[t]);
-        ++m;
-      }
-    local[i] = m > 0 ? sum / m : 0.0;
+    double sum = 0, positive = 0;
+    int m = 0, mp = 0;
+    for (std::size_t t = 0; t < idx.size(); ++t) {
+      if (idx[t] != i) sum += std::sqrt(d2[t]), ++m;
+      if (mp < 6 && d2[t] > 0) positive += std::sqrt(d2[t]), ++mp;
+    }
+    estimate[i] = m > 0 ? sum / m : 0.0;
+    local[i] = mp > 0 ? positive / mp : 0.0;
   });
-  auto mid = local.begin() + static_cast<std::ptrdiff_t>(local.size() / 2);
-  std::nth_element(local.begin(), mid, local.end());
+}
+
+double median(std::vector<double> v) {
+  auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
+  std::nth_element(v.begin(), mid, v.end());
   return *mid;
+}
+
+}  // namespace
+
+double estimateSpacing(const std::vector<Eigen::Vector3d>& points, int threads) {
+  if (points.size() < 2) return 0.0;
+  std::vector<double> estimate, local;
+  pointSpacings(KnnIndex(points), points, threads, estimate, local);
+  return median(std::move(estimate));
 }
 
 FeatureResult detectFeatures(const PointCloud& cloud, const FeatureParams& params, const Execution& exec) {
@@ -164,11 +181,13 @@ FeatureResult detectFeatures(const PointCloud& cloud, const FeatureParams& param
   const std::size_t n = pts.size();
   FeatureResult r;
   auto t0 = Clock::now();
-  r.spacing = params.spacing > 0 ? params.spacing : estimateSpacing(pts, exec.threads);
+  KnnIndex index(pts);
+  std::vector<double> estimate, local;  // each point's spacing: the median's reading and localSpacing()'s
+  pointSpacings(index, pts, exec.threads, estimate, local);
+  r.spacing = params.spacing > 0 ? params.spacing : median(std::move(estimate));
   const double h = r.spacing;
   if (!(h > 0)) throw InputError("feature detection: the points have zero spacing (all duplicates?)");
 
-  KnnIndex index(pts);
   std::vector<char> flag(n, 0);
   std::vector<Crease> creases(n);
   auto neighbourhood = [&](std::size_t i, std::vector<std::uint32_t>& idx, double hi) {
@@ -179,7 +198,7 @@ FeatureResult detectFeatures(const PointCloud& cloud, const FeatureParams& param
   if (params.detector == FeatureDetector::NormalVariation) {
     parallelFor(n, exec.threads, [&](std::size_t i) {
       std::vector<std::uint32_t> idx;
-      const double hi = localSpacing(index, pts[i], h);
+      const double hi = std::max(h, local[i]);  // localSpacing(index, pts[i], h)
       neighbourhood(i, idx, hi);
       flag[i] = twoPlaneTest(pts, nrm, pts[i], idx, hi, params, creases[i]) ? 1 : 0;
     });

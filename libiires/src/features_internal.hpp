@@ -146,10 +146,12 @@ void placeCreaseTips(const PointCloud& cloud, const KnnIndex& index, double h, c
 ///    neighbourhood), which the tracing cannot step through.
 /// A gap where one new sample has none of these is left open (two creases meeting, not one). Each new sample
 /// lies within 1.5·maxOffCrease (local) spacings of an input point (an edge point of a random sampling may have
-/// none within one spacing). Sequential in sample order, each gap seeing the samples added before it:
-/// deterministic. The new samples are appended, owned by a's chain.
+/// none within one spacing). In sample order, each gap seeing the samples added before it (the fills are found
+/// on @p threads threads, the gaps then taken in order): deterministic for any thread count. The new samples are
+/// appended, owned by a's chain.
 void fillCreaseGaps(const PointCloud& cloud, const KnnIndex& index, double h, const FeatureParams& params,
-                    std::vector<Eigen::Vector3d>& out, std::vector<std::uint32_t>& owner, double maxGap = 6.0);
+                    std::vector<Eigen::Vector3d>& out, std::vector<std::uint32_t>& owner, double maxGap = 6.0,
+                    int threads = 1);
 
 /// Step 6b of snapToCreases(): each held sample in @p out that lies off the surface moves onto it. The input
 /// points within params.radius local spacings of the sample (at least the 40 nearest) are modelled as one, two
