@@ -636,6 +636,45 @@ TEST(Features, GapsOpenedByTheLastMovesAreFilled) {
   EXPECT_LE(worst, 0.75 * p.sampleSpacing);
 }
 
+// The detector passes over the points whose neighbourhoods' normals it can bound under the crease angle (a cheap
+// bound from cubes of points: twice the widest turn from the mean of the cube around the point). A roof of two
+// planes meeting at 34°, just over the 30° angle, keeps the input points beside its crease detected (a bound of
+// once the turn passes over those whose own cube straddles the crease: 15 of 89) and held samples along its whole
+// length; at 26° no crease is found.
+TEST(Features, ACreaseJustOverTheAngleIsFoundAlongItsLength) {
+  auto roof = [](double degrees) {
+    const double c = std::cos(0.5 * degrees * M_PI / 180), s = std::sin(0.5 * degrees * M_PI / 180);
+    iires::TriangleMesh m;
+    m.vertices = {{0, 0, 0}, {1, 0, 0}, {0, c, -s}, {1, c, -s}, {0, -c, -s}, {1, -c, -s}};
+    m.triangles = {{0, 2, 1}, {1, 2, 3}, {0, 1, 4}, {1, 5, 4}};
+    return m;
+  };
+  FeatureParams p;
+  p.sampleSpacing = 0.02;
+  const auto cloud = sampledWithEstimatedNormals(roof(34), 20000);
+  const auto steep = iires::detectFeatures(cloud, p);
+  ASSERT_FALSE(steep.samples.empty());
+  // The detector's own finds: the input points within half a spacing of the crease.
+  std::vector<char> detected(cloud.size(), 0);
+  for (std::uint32_t i : steep.detectedIndices) detected[i] = 1;
+  std::size_t near = 0, found = 0;
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    const Eigen::Vector3d& q = cloud.points[i];
+    if (q.x() < 0.1 || q.x() > 0.9 || std::hypot(q.y(), q.z()) > 0.5 * steep.spacing) continue;
+    ++near;
+    found += detected[i];
+  }
+  ASSERT_GT(near, 50u);
+  EXPECT_GE(static_cast<double>(found), 0.95 * static_cast<double>(near)) << found << " of " << near;
+  const iires::KnnIndex held(steep.samples);
+  for (double x = 0.1; x <= 0.9; x += 0.005) {
+    double d2 = 0;
+    held.nearest(Eigen::Vector3d(x, 0, 0), &d2);
+    EXPECT_LE(std::sqrt(d2), 0.02) << "crease point x = " << x;
+  }
+  EXPECT_TRUE(iires::detectFeatures(sampledWithEstimatedNormals(roof(26), 20000), p).chains.empty());
+}
+
 TEST(Features, SphereHasNoFeatures) {
   iires::PointCloud c;
   c.points = iires::test::fibonacciSphere(20000);
