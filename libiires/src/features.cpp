@@ -184,6 +184,7 @@ class NormalCones {
     const Eigen::Vector3d& axis = own->second.mean;
     const Eigen::Array3i lo = cellOf(p - Eigen::Vector3d::Constant(radius)),
                          hi = cellOf(p + Eigen::Vector3d::Constant(radius));
+    if ((hi - lo).maxCoeff() > 4) return M_PI;  // a point far sparser than the rest: not worth the cubes
     double widest = 0;
     for (int x = lo.x(); x <= hi.x(); ++x)
       for (int y = lo.y(); y <= hi.y(); ++y)
