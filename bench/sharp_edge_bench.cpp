@@ -94,29 +94,33 @@ std::vector<double> sheetSpacing(const std::vector<Eigen::Vector3d>& pts, const 
   return iires::sheetNeighbourDistances(pts, normals);
 }
 
+/// One key=value line of a method's output @p pts; @p nearest: sheetSpacing() of pts.
 void report(const std::string& prefix, const std::string& method, const std::vector<Eigen::Vector3d>& pts,
-            double seconds, const Reference& ref, const std::string& extra = "") {
+            double seconds, const Reference& ref, const std::vector<double>& nearest, const std::string& extra = "") {
   const auto spacing = iires::spacingStats(pts);
   const auto err = ref.mesh->distances(pts);
   const auto edge = iires::coverage(iires::sampleSegments(ref.edges, 0.01 * spacing.mean), pts);
   std::printf(
       "%s method=%s points=%zu time_s=%.2f cv=%.4f cv_sheet=%.4f err_mean_pct=%.4f err_max_pct=%.4f "
       "edge_max_per_spacing=%.3f edge_mean_per_spacing=%.3f%s\n",
-      prefix.c_str(), method.c_str(), pts.size(), seconds, spacing.cv,
-      iires::summariseSpacing(sheetSpacing(pts, ref)).cv, 100 * err.mean / ref.mesh->diagonal(),
-      100 * err.max / ref.mesh->diagonal(), edge.max / spacing.mean, edge.mean / spacing.mean, extra.c_str());
+      prefix.c_str(), method.c_str(), pts.size(), seconds, spacing.cv, iires::summariseSpacing(nearest).cv,
+      100 * err.mean / ref.mesh->diagonal(), 100 * err.max / ref.mesh->diagonal(), edge.max / spacing.mean,
+      edge.mean / spacing.mean, extra.c_str());
   std::fflush(stdout);
 }
 
+void report(const std::string& prefix, const std::string& method, const std::vector<Eigen::Vector3d>& pts,
+            double seconds, const Reference& ref) {
+  report(prefix, method, pts, seconds, ref, sheetSpacing(pts, ref));
+}
+
 /// " feature_samples=K free_cv=C": the held samples' count and the along-the-surface NN-spacing cv of the
-/// others (their nearest neighbour on their own sheet among all output points).
-std::string freeSpacing(const std::vector<Eigen::Vector3d>& pts, const std::vector<std::uint32_t>& fixedIndices,
-                        const Reference& ref) {
-  std::vector<char> held(pts.size(), 0);
+/// others (@p nearest: every output point's sheetSpacing(), its nearest neighbour on its own sheet).
+std::string freeSpacing(const std::vector<double>& nearest, const std::vector<std::uint32_t>& fixedIndices) {
+  std::vector<char> held(nearest.size(), 0);
   for (std::uint32_t i : fixedIndices) held[i] = 1;
-  const std::vector<double> nearest = sheetSpacing(pts, ref);
   std::vector<double> free;
-  for (std::size_t i = 0; i < pts.size(); ++i)
+  for (std::size_t i = 0; i < nearest.size(); ++i)
     if (!held[i]) free.push_back(nearest[i]);
   char buf[96];
   std::snprintf(buf, sizeof buf, " feature_samples=%zu free_cv=%.4f", fixedIndices.size(),
@@ -273,8 +277,9 @@ int main(int argc, char** argv) {
       const double t = now();
       const auto r = iires::resample(cloud, p, iires::Execution{threads});
       const double seconds = now() - t;
-      report(prefix, sharp ? "iires_sharp" : "iires", r.cloud.points, seconds, ref,
-             sharp ? freeSpacing(r.cloud.points, r.fixedIndices, ref) : "");
+      const std::vector<double> nearest = sheetSpacing(r.cloud.points, ref);  // once for both summaries
+      report(prefix, sharp ? "iires_sharp" : "iires", r.cloud.points, seconds, ref, nearest,
+             sharp ? freeSpacing(nearest, r.fixedIndices) : "");
       if (dump > 0) dumpWorst(r.cloud.points, r.fixedIndices, ref, dump);
     }
     double t = now();

@@ -43,8 +43,8 @@ void fillCreaseGaps(const PointCloud& cloud, const KnnIndex& index, double h, co
   const KnnIndex placed(out);  // the samples before filling
   // The snap fit at y (re-centred once on the crease), as in tracing; false where it fails the thresholds.
   auto fit = [&](const Eigen::Vector3d& y0, Crease& c) {
-    std::vector<std::uint32_t> idx;
-    std::vector<double> d2;
+    thread_local std::vector<std::uint32_t> idx;  // scratch of the neighbour searches, kept across fits
+    thread_local std::vector<double> d2;
     Eigen::Vector3d y = y0;
     const double hl = localSpacing(index, y, h);
     for (int it = 0; it < 2; ++it) {
