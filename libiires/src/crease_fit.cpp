@@ -194,6 +194,14 @@ void partitionByPlanes(const std::vector<Eigen::Vector3d>& points, const std::ve
   }
 }
 
+void dropSamples(const std::vector<char>& drop, std::vector<Eigen::Vector3d>& out, std::vector<std::uint32_t>& owner) {
+  std::size_t kept = 0;
+  for (std::size_t i = 0; i < out.size(); ++i)
+    if (!drop[i]) out[kept] = out[i], owner[kept] = owner[i], ++kept;
+  out.resize(kept);
+  owner.resize(kept);
+}
+
 std::vector<std::pair<std::size_t, std::size_t>> ownerRuns(const std::vector<std::uint32_t>& owner) {
   std::vector<std::pair<std::size_t, std::size_t>> runs;
   for (std::size_t a = 0; a < owner.size();) {

@@ -249,9 +249,13 @@ void refillGaps(const PointCloud& cloud, const KnnIndex& index, double h, const 
   fillCreaseGaps(cloud, index, h, params, out, owner, kOpenedGap, threads);
   if (out.size() == settled) return;
   std::vector<Eigen::Vector3d> added(out.begin() + static_cast<long>(settled), out.end());
+  std::vector<std::uint32_t> addedOwner(owner.begin() + static_cast<long>(settled), owner.end());
   refineOnCurvedSheets(cloud, index, h, params, added, threads);
-  ontoSheets(cloud, index, h, params, added, threads);
-  std::copy(added.begin(), added.end(), out.begin() + static_cast<long>(settled));
+  dropSamples(ontoSheets(cloud, index, h, params, added, threads), added, addedOwner);
+  out.resize(settled);
+  owner.resize(settled);
+  out.insert(out.end(), added.begin(), added.end());
+  owner.insert(owner.end(), addedOwner.begin(), addedOwner.end());
 }
 
 /// Steps 4b and 7 of snapToCreases(): the held samples closer than half the chains' median step to an earlier one are
@@ -344,7 +348,8 @@ void separateSamples(double h, std::vector<Eigen::Vector3d>& out, std::vector<st
 //  6b. Off the surface: a sample that the steps above left off it (a chord across a bend, a line followed past
 //     the end of a sheet, a biased fit next to a corner) moves onto the input's sheets around it, modelled as
 //     planes (a face, a crease, a band, a corner of up to five faces), each bounded by the lines where it meets the
-//     others (ontoSheets).
+//     others (ontoSheets). A sample where no such model fits and two planes fitted there meet under the crease
+//     angle is off every crease (its chain ran on along a curved or finely faceted surface) and is dropped.
 //  7. Separation once more (steps 6 and 6b moved samples).
 //  8. Gaps once more, as in 5, up to 2.5 steps long: step 5's own samples, the moves of 6 and 6b (a corner
 //     sample placed off its corner and moved onto it) and the separation of 7 may leave a gap of about two
@@ -443,7 +448,7 @@ std::vector<Eigen::Vector3d> snapToCreases(const PointCloud& cloud, const std::v
   separateSamples(h, out, owner);
   fillCreaseGaps(cloud, index, h, params, out, owner, 6.0, exec.threads);
   refineOnCurvedSheets(cloud, index, h, params, out, exec.threads);
-  ontoSheets(cloud, index, h, params, out, exec.threads);  // 6b.
+  dropSamples(ontoSheets(cloud, index, h, params, out, exec.threads), out, owner);  // 6b.
   separateSamples(h, out, owner);
   refillGaps(cloud, index, h, params, out, owner, exec.threads);  // 8.
   if (chainOut) *chainOut = std::move(owner);

@@ -293,16 +293,28 @@ bool sheetsAround(const PointCloud& cloud, const KnnIndex& index, const Eigen::V
 
 }  // namespace
 
-void ontoSheets(const PointCloud& cloud, const KnnIndex& index, double h, const FeatureParams& params,
-                std::vector<Eigen::Vector3d>& out, int threads) {
+std::vector<char> ontoSheets(const PointCloud& cloud, const KnnIndex& index, double h, const FeatureParams& params,
+                             std::vector<Eigen::Vector3d>& out, int threads) {
   constexpr double kOff = 0.3;   // local spacings: a sample farther than this from the sheets moves
   constexpr double kMove = 2.0;  // local spacings: and by at most this much (farther: not its own model)
+  std::vector<char> offCrease(out.size(), 0);
   parallelFor(out.size(), threads, [&](std::size_t i) {
     std::vector<Sheet> sheets;
     const Eigen::Vector3d q = out[i];
     const double hl = localSpacing(index, q, h);
     bool band = false;
-    if (!sheetsAround(cloud, index, q, hl, params, false, sheets, band)) return;
+    const bool fitted = sheetsAround(cloud, index, q, hl, params, false, sheets, band);
+    if (!fitted || sheets.size() == 1) {
+      // No crease in the model: one sheet, or none that fits (a curved surface, a corner of many faces, a crease
+      // between curved sheets). Two planes fitted there that meet under the crease angle say there is none:
+      // the sample's chain ran off its crease (a trace carried on down a faceted cylinder's facet edge).
+      Crease c;
+      std::vector<std::uint32_t> idx;
+      std::vector<double> d2;
+      offCrease[i] = snapFit(cloud, index, q, hl, params, looseParams(params), c, idx, d2) &&
+                     c.normalA.dot(c.normalB) > std::cos(params.angle * kDeg);
+      if (!fitted || offCrease[i]) return;
+    }
     Eigen::Vector3d best = q;
     double bd = std::numeric_limits<double>::infinity();
     for (const Sheet& sh : sheets) {
@@ -318,6 +330,7 @@ void ontoSheets(const PointCloud& cloud, const KnnIndex& index, double h, const 
         localSpacing(index, best, 0) < localSpacing(index, q, 0))
       out[i] = best;
   });
+  return offCrease;
 }
 
 void addSheetCorners(const PointCloud& cloud, const KnnIndex& index, double h, const FeatureParams& params,

@@ -168,9 +168,14 @@ void fillCreaseGaps(const PointCloud& cloud, const KnnIndex& index, double h, co
 /// farther than 0.3 local spacings from every sheet, or any distance where the model has a band (the two faces'
 /// line, where the crease fits put samples, is then off the surface), moves to the nearest point of them (a
 /// crease line or corner where that is nearest) if that is at most 2 local spacings away and nearer the input
-/// (the mean distance to the 6 nearest input points drops). Deterministic, in parallel over the samples.
-void ontoSheets(const PointCloud& cloud, const KnnIndex& index, double h, const FeatureParams& params,
-                std::vector<Eigen::Vector3d>& out, int threads);
+/// (the mean distance to the 6 nearest input points drops). Returns which samples are off every crease: where
+/// no model fits and two planes fitted there (the snap fit, loose thresholds) meet under the crease angle.
+/// Deterministic, in parallel over the samples.
+std::vector<char> ontoSheets(const PointCloud& cloud, const KnnIndex& index, double h, const FeatureParams& params,
+                             std::vector<Eigen::Vector3d>& out, int threads);
+
+/// The samples of @p out (and their entries of @p owner) that @p drop flags removed, the others kept in order.
+void dropSamples(const std::vector<char>& drop, std::vector<Eigen::Vector3d>& out, std::vector<std::uint32_t>& owner);
 
 /// Step 4a of snapToCreases(): corners of up to five faces. At each end of a run of chain samples in @p out
 /// (consecutive samples of one chain in @p owner), and on ahead of it a local spacing at a time (up to 8 times),
