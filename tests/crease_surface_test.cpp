@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: GPL-3.0-or-later
 // Step 6b of snapToCreases() (ontoSheets, crease_surface.cpp): held samples off the surface onto the input's
 // sheets, here where a crease is blunted by a band narrower than the fits (a chamfer or a small fillet) and
-// beside a corner where four faces meet.
+// beside a corner where four faces meet, and where a chain ran on along a faceted cylinder, off every crease.
 #include <gtest/gtest.h>
 
 #include <algorithm>
