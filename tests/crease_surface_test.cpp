@@ -221,9 +221,8 @@ TEST(Features, CornerOfFourFacesGetsItsSampleAndTheGapsToIt) {
 // Samples a chain left on a finely faceted cylinder (72 facets, each turning 5°, its radius about seven input
 // spacings), as a trace carried on from the cylinder's rim down one facet edge leaves them. Where no planar
 // model, or only one sheet, fits the input around a sample, the two planes fitted there meet at well under the
-// crease angle and the sample is reported off every crease: 89 of these 94 (at the other five, models of two
-// or three planes, 30° apart, fit the cylinder over the 80 nearest input points). No sample on the rim, where
-// the side meets the cap at 90°, is reported.
+// crease angle and the sample is reported off every crease: 89 of these 94 (at the other five a model of
+// several sheets fits). No sample on the rim, where the side meets the cap at 90°, is reported.
 TEST(Features, SamplesAlongAFacetedCylinderAreOffEveryCrease) {
   constexpr int kFacets = 72;
   constexpr double kRadius = 0.03;
