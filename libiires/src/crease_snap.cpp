@@ -348,9 +348,9 @@ void separateSamples(double h, std::vector<Eigen::Vector3d>& out, std::vector<st
 //  6b. Off the surface: a sample that the steps above left off it (a chord across a bend, a line followed past
 //     the end of a sheet, a biased fit next to a corner) moves onto the input's sheets around it, modelled as
 //     planes (a face, a crease, a band, a corner of up to five faces), each bounded by the lines where it meets the
-//     others (ontoSheets). A sample where no such model, or only one sheet, fits and two planes fitted there
-//     meet under the crease angle is off every crease (its chain ran on along a curved or finely faceted
-//     surface) and is dropped.
+//     others (ontoSheets). Dropped: a sample where no such model, or only one sheet, fits and two planes
+//     fitted there meet under the crease angle (off every crease: its chain ran on along a curved or finely
+//     faceted surface), and one the model puts off the surface whose move onto it the input does not confirm.
 //  7. Separation once more (steps 6 and 6b moved samples).
 //  8. Gaps once more, as in 5, up to 2.5 steps long: step 5's own samples, the moves of 6 and 6b (a corner
 //     sample placed off its corner and moved onto it) and the separation of 7 may leave a gap of about two

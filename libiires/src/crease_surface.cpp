@@ -297,7 +297,7 @@ std::vector<char> ontoSheets(const PointCloud& cloud, const KnnIndex& index, dou
                              std::vector<Eigen::Vector3d>& out, int threads) {
   constexpr double kOff = 0.3;   // local spacings: a sample farther than this from the sheets moves
   constexpr double kMove = 2.0;  // local spacings: and by at most this much (farther: not its own model)
-  std::vector<char> offCrease(out.size(), 0);
+  std::vector<char> drop(out.size(), 0);
   parallelFor(out.size(), threads, [&](std::size_t i) {
     std::vector<Sheet> sheets;
     const Eigen::Vector3d q = out[i];
@@ -311,9 +311,9 @@ std::vector<char> ontoSheets(const PointCloud& cloud, const KnnIndex& index, dou
       Crease c;
       std::vector<std::uint32_t> idx;
       std::vector<double> d2;
-      offCrease[i] = snapFit(cloud, index, q, hl, params, looseParams(params), c, idx, d2) &&
-                     c.normalA.dot(c.normalB) > std::cos(params.angle * kDeg);
-      if (!fitted || offCrease[i]) return;
+      drop[i] = snapFit(cloud, index, q, hl, params, looseParams(params), c, idx, d2) &&
+                c.normalA.dot(c.normalB) > std::cos(params.angle * kDeg);
+      if (!fitted || drop[i]) return;
     }
     Eigen::Vector3d best = q;
     double bd = std::numeric_limits<double>::infinity();
@@ -322,15 +322,21 @@ std::vector<char> ontoSheets(const PointCloud& cloud, const KnnIndex& index, dou
       if ((x - q).norm() < bd) bd = (x - q).norm(), best = x;
     }
     // A move onto the surface brings the sample nearer the input; one away from it (a model biased by a sheet
-    // it leaves out, as next to a corner) does not.
+    // it leaves out, as next to a corner) does not. A sample the model puts off the surface, with no move the
+    // input confirms, is where neither the crease fits nor the model describe the input (a corner of more faces
+    // than the model saw: tripod's, four faces, three in the model, the sample 0.6 local spacings inside all
+    // four): it is dropped, and the free samples cover its place.
     // (localSpacing with no floor: the mean distance to the 6 nearest input points.)
     // Near a band (a chamfer narrower than the fits) the two faces' line, where the crease fits put the
     // sample, is off the surface by construction: the sample moves onto the band however near.
-    if ((bd > kOff * hl || band) && bd <= kMove * hl &&
-        localSpacing(index, best, 0) < localSpacing(index, q, 0))
-      out[i] = best;
+    if ((bd > kOff * hl || band) && bd <= kMove * hl) {
+      if (localSpacing(index, best, 0) < localSpacing(index, q, 0))
+        out[i] = best;
+      else
+        drop[i] = bd > kOff * hl;
+    }
   });
-  return offCrease;
+  return drop;
 }
 
 void addSheetCorners(const PointCloud& cloud, const KnnIndex& index, double h, const FeatureParams& params,

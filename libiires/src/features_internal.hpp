@@ -168,9 +168,10 @@ void fillCreaseGaps(const PointCloud& cloud, const KnnIndex& index, double h, co
 /// farther than 0.3 local spacings from every sheet, or any distance where the model has a band (the two faces'
 /// line, where the crease fits put samples, is then off the surface), moves to the nearest point of them (a
 /// crease line or corner where that is nearest) if that is at most 2 local spacings away and nearer the input
-/// (the mean distance to the 6 nearest input points drops). Returns which samples are off every crease: where
-/// no model, or only one sheet, fits and two planes fitted there (the snap fit, loose thresholds) meet under the
-/// crease angle.
+/// (the mean distance to the 6 nearest input points drops). Returns which samples to drop: those off every
+/// crease (where no model, or only one sheet, fits and two planes fitted there, the snap fit with loose
+/// thresholds, meet under the crease angle) and those over 0.3 local spacings off the model whose move the input
+/// does not confirm.
 /// Deterministic, in parallel over the samples.
 std::vector<char> ontoSheets(const PointCloud& cloud, const KnnIndex& index, double h, const FeatureParams& params,
                              std::vector<Eigen::Vector3d>& out, int threads);
