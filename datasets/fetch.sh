@@ -14,7 +14,7 @@ readonly PACKAGE=libcgal-demo
 readonly MEMBER=usr/share/doc/libcgal-dev/data.tar.gz
 readonly DEFAULTS=(
   meshes/bunny00.off meshes/armadillo.off meshes/fandisk.off meshes/hand.off
-  meshes/knot1.off meshes/joint.off meshes/anchor.off meshes/fold.off meshes/3torus.off
+  meshes/knot1.off meshes/joint.off meshes/anchor.off meshes/fold.off meshes/3torus.off meshes/tripod.off
   points_3/kitten.xyz points_3/kitten.off points_3/hippo1.ply points_3/hippo2.ply points_3/sphere_20k.xyz
   points_3/oni.ply points_3/radar.xyz
 )
