@@ -24,15 +24,19 @@
 
 namespace iires::detail {
 
+double meanNearestDistance(const std::vector<double>& d2) {
+  double sum = 0;
+  int m = 0;
+  for (std::size_t t = 0; t < d2.size() && m < 6; ++t)
+    if (d2[t] > 0) sum += std::sqrt(d2[t]), ++m;
+  return m > 0 ? sum / m : 0.0;
+}
+
 double localSpacing(const KnnIndex& index, const Eigen::Vector3d& y, double h) {
   std::vector<std::uint32_t> idx;
   std::vector<double> d2;
   index.knn(y, 7, idx, d2);
-  double sum = 0;
-  int m = 0;
-  for (std::size_t t = 0; t < idx.size() && m < 6; ++t)
-    if (d2[t] > 0) sum += std::sqrt(d2[t]), ++m;
-  return m > 0 ? std::max(h, sum / m) : h;
+  return std::max(h, meanNearestDistance(d2));
 }
 
 double offInput(const PointCloud& cloud, const KnnIndex& index, const Eigen::Vector3d& y, double h) {

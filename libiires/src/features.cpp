@@ -145,14 +145,12 @@ void pointSpacings(const KnnIndex& index, const std::vector<Eigen::Vector3d>& po
     std::vector<std::uint32_t> idx;
     std::vector<double> d2;
     index.knn(points[i], 7, idx, d2);
-    double sum = 0, positive = 0;
-    int m = 0, mp = 0;
-    for (std::size_t t = 0; t < idx.size(); ++t) {
+    double sum = 0;
+    int m = 0;
+    for (std::size_t t = 0; t < idx.size(); ++t)
       if (idx[t] != i) sum += std::sqrt(d2[t]), ++m;
-      if (mp < 6 && d2[t] > 0) positive += std::sqrt(d2[t]), ++mp;
-    }
     estimate[i] = m > 0 ? sum / m : 0.0;
-    local[i] = mp > 0 ? positive / mp : 0.0;
+    local[i] = meanNearestDistance(d2);
   });
 }
 

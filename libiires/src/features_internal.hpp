@@ -32,6 +32,10 @@ struct Crease {
 /// the same number of points (non-uniform scans: a fixed radius leaves the sparse parts with too few).
 double localSpacing(const KnnIndex& index, const Eigen::Vector3d& y, double h);
 
+/// localSpacing()'s reading before its floor: the mean of the first 6 distances above 0 of a k-NN search's
+/// squared distances @p d2 (nearest first); 0 if there are none.
+double meanNearestDistance(const std::vector<double>& d2);
+
 /// How far @p y lies off the input (@p cloud, indexed by @p index): its distance to the nearest input point over
 /// the local spacing there, read at that input point (floor @p h). Read at y itself, the spacing grows with y's
 /// distance from the input, and a point far off would still count as near.
