@@ -150,11 +150,21 @@ bool onInput(const PointCloud& cloud, const KnnIndex& index, const Crease& c, co
 
 }  // namespace
 
+void keepSheetsThrough(const PointCloud& cloud, const Eigen::Vector3d& y, double hl,
+                       std::vector<std::uint32_t>& idx) {
+  constexpr double kSheetGap = 1.25;  // local spacings: the sheet rule's gap (SheetParams::gapSpacings)
+  std::size_t kept = 0;
+  for (std::uint32_t j : idx)
+    if (std::abs(cloud.normals[j].dot(y - cloud.points[j])) <= kSheetGap * hl) idx[kept++] = j;
+  idx.resize(kept);
+}
+
 bool snapFit(const PointCloud& cloud, const KnnIndex& index, const Eigen::Vector3d& y, double hl,
              const FeatureParams& params, const FeatureParams& prm, Crease& c, std::vector<std::uint32_t>& idx,
              std::vector<double>& d2) {
   index.radius(y, params.radius * hl, idx, d2);
   if (idx.size() > kMaxFitPoints) idx.resize(kMaxFitPoints);
+  keepSheetsThrough(cloud, y, hl, idx);
   return twoPlaneTest(cloud.points, cloud.normals, y, idx, hl, prm, c, params.snapSigma * hl) &&
          onInput(cloud, index, c, params);
 }
