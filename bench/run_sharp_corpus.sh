@@ -12,15 +12,33 @@
 # about: noise; err_mean and err_max not above the isotropic mode's, free_cv ≤ 0.08, t_vs_iso ≤ 1.5). Each model also
 # about: runs with Gaussian noise of σ = 0.2 input spacings along the normal (noise = 0.2: R = 1, N = 10000).
 # about: quick: fandisk, cube, tripod; full: the 13 CAD parts; held-out: 7 parts of CGAL's archive outside the corpus.
+# about: peers: the 13 CAD parts at R = 1, N = 10000, with CGAL's WLOP and edge-aware upsampling (EAR) beside both iires
+# about: modes, one row per method (t_vs_iso: time over the isotropic iires run's).
 # columns: model density_ratio noise N edge err_mean err_mean_iso err_max err_max_iso free_cv t_vs_iso misses
 cd "$(dirname "$0")/.." || exit 1
 B=${BUILD:-build-bench}/bin/sharp_edge_bench
+corpus="fandisk joint anchor couplingdown part dragknob spool cross tripod cube beam boeing mech-holes-shark"
+if [ "${1:-quick}" = peers ]; then
+  for m in $corpus; do
+    "$B" "datasets/cache/meshes/$m.off" 100000 10000 --methods iires,iires_sharp,cgal_wlop,cgal_ear --threads 2
+  done | awk '
+    /^model=/ {
+      delete kv
+      for (i = 1; i <= NF; i++) { p = index($i, "="); if (p) kv[substr($i, 1, p - 1)] = substr($i, p + 1) }
+      if (kv["method"] == "iires") iso = kv["time_s"]
+      name = kv["model"]; sub(/\.off$/, "", name)
+      printf "model=%s N=%s method=%s edge=%s err_mean=%s err_max=%s cv=%s time_s=%s t_vs_iso=%.2f\n", name, kv["N"],
+        kv["method"], kv["edge_max_per_spacing"], kv["err_mean_pct"], kv["err_max_pct"], kv["cv"], kv["time_s"],
+        iso > 0 ? kv["time_s"] / iso : 0
+    }'
+  exit
+fi
 if [ "${1:-quick}" = held-out ]; then  # CAD parts outside the corpus (see run_held_out.sh), fetched here
   models="pinion rotor turbine blade cheese star torus_quad"
   # shellcheck disable=SC2046,SC2086 # one name per word
   bash datasets/fetch.sh $(printf 'meshes/%s.off ' $models) >/dev/null || exit 1
 elif [ "${1:-quick}" = full ]; then
-  models="fandisk joint anchor couplingdown part dragknob spool cross tripod cube beam boeing mech-holes-shark"
+  models=$corpus
 else
   models="fandisk cube tripod"
 fi

@@ -58,13 +58,6 @@ bool twoPlaneTest(const std::vector<Eigen::Vector3d>& points, const std::vector<
                   const Eigen::Vector3d& p, const std::vector<std::uint32_t>& nbr, double h, const FeatureParams& prm,
                   Crease& crease, double sigma = 0);
 
-/// The points of @p idx (input points near @p y) on a sheet through y: those whose tangent plane (the point and
-/// its normal) passes within the sheet rule's gap, 1.25 local spacings @p hl, of y. Where another surface comes
-/// within a fit's radius (the far side of a thin wall, a part nearly touching: the sheets that SheetParams'
-/// gap keeps apart), its points' planes lie that far off, and a fit that took them in would blend it into the
-/// crease's sheets.
-void keepSheetsThrough(const PointCloud& cloud, const Eigen::Vector3d& y, double hl, std::vector<std::uint32_t>& idx);
-
 /// The snap fit at @p y: twoPlaneTest() with thresholds @p prm on the input points within params.radius local
 /// spacings @p hl of y (the kMaxFitPoints nearest) on a sheet through y (keepSheetsThrough), weighted at
 /// params.snapSigma·hl; false as well where the crease's point lies over 1.5·maxOffCrease local spacings off the
