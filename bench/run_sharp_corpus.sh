@@ -29,7 +29,7 @@ if [ "${1:-quick}" = peers ]; then
       name = kv["model"]; sub(/\.off$/, "", name)
       printf "model=%s N=%s method=%s edge=%s err_mean=%s err_max=%s cv=%s time_s=%s t_vs_iso=%.2f\n", name, kv["N"],
         kv["method"], kv["edge_max_per_spacing"], kv["err_mean_pct"], kv["err_max_pct"], kv["cv"], kv["time_s"],
-        iso > 0 ? kv["time_s"] / iso : 0
+        (iso > 0 ? kv["time_s"] / iso : 0)
     }'
   exit
 fi
