@@ -19,6 +19,7 @@
 #include <unordered_map>
 
 #include "iires/knn.hpp"
+#include "iires/sheets.hpp"
 #include "iires/detail/parallel.hpp"
 
 
@@ -149,16 +150,16 @@ bool onInput(const PointCloud& cloud, const KnnIndex& index, const Crease& c, co
 }
 
 /// Keeps the points of @p idx (input points near @p y) on a sheet through y: those whose tangent plane (the
-/// point and its normal) passes within the sheet rule's gap (SheetParams::gapSpacings), 1.25 local spacings
-/// @p hl, of y. Where another surface comes within a fit's radius (the far side of a thin wall, a part nearly
+/// point and its normal) passes within the sheet rule's gap (SheetParams::gapSpacings, 1.25 local spacings
+/// @p hl) of y. Where another surface comes within a fit's radius (the far side of a thin wall, a part nearly
 /// touching), its points' planes lie that far off, and a fit that took them in would blend it into the
 /// crease's sheets.
 void keepSheetsThrough(const PointCloud& cloud, const Eigen::Vector3d& y, double hl,
                        std::vector<std::uint32_t>& idx) {
-  constexpr double kSheetGap = 1.25;
+  const double gap = SheetParams{}.gapSpacings * hl;
   std::size_t kept = 0;
   for (std::uint32_t j : idx)
-    if (std::abs(cloud.normals[j].dot(y - cloud.points[j])) <= kSheetGap * hl) idx[kept++] = j;
+    if (std::abs(cloud.normals[j].dot(y - cloud.points[j])) <= gap) idx[kept++] = j;
   idx.resize(kept);
 }
 
