@@ -16,7 +16,8 @@
 //   farthest from the output, at least 2 spacings apart), each with its distance to the nearest sharp-edge
 //   corner (a vertex of the sharp-edge graph with degree ≠ 2) and the nearest output points (F = a held
 //   feature sample), their distance to the edges and to the mesh — to see where and why the edge max is set;
-//   and the output point farthest from the mesh (held or free, its distance to the edges and to a corner).
+//   and the output point farthest from the mesh (held or free, its distance to the edges and to a corner); with
+//   the isotropic method run too, every held sample farther from the mesh than the isotropic run's err_max.
 #define CGAL_EIGEN3_ENABLED 1
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/bilateral_smooth_point_set.h>
@@ -129,9 +130,10 @@ std::string freeSpacing(const std::vector<double>& nearest, const std::vector<st
 }
 
 /// The --dump report (see the header): the @p k worst spots of the edge coverage of @p pts;
-/// @p fixedIndices are the held samples.
+/// @p fixedIndices are the held samples; @p isoMax (≥ 0: the isotropic run's err_max, absolute) lists the held
+/// samples farther than it from the mesh.
 void dumpWorst(const std::vector<Eigen::Vector3d>& pts, const std::vector<std::uint32_t>& fixedIndices,
-               const Reference& ref, int k) {
+               const Reference& ref, int k, double isoMax) {
   std::vector<char> held(pts.size(), 0);
   for (std::uint32_t i : fixedIndices) held[i] = 1;
   const double sp = iires::spacingStats(pts).mean;
@@ -165,6 +167,22 @@ void dumpWorst(const std::vector<Eigen::Vector3d>& pts, const std::vector<std::u
     std::fprintf(stderr, "  err max %.4f %% of the diagonal (%.3f sp) at (%.5f %.5f %.5f): %s, %.2f sp from the edges, %.2f sp from a corner\n",
                  100 * worstD / ref.mesh->diagonal(), worstD / sp, p.x(), p.y(), p.z(), held[worst] ? "held" : "free",
                  iires::distanceToSegments(p, ref.edges) / sp, corner / sp);
+  }
+  if (isoMax >= 0) {  // the held samples that set err_max above the isotropic run's
+    std::size_t above = 0;
+    for (std::uint32_t i : fixedIndices) {
+      const Eigen::Vector3d& p = pts[i];
+      const double d = ref.mesh->distances({p}).max;
+      if (d <= isoMax) continue;
+      ++above;
+      double corner = std::numeric_limits<double>::infinity();
+      for (const auto& c : corners) corner = std::min(corner, (c - p).norm());
+      std::fprintf(stderr, "  held above the isotropic err_max: %.4f %% at (%.5f %.5f %.5f), %.2f sp from the edges, %.2f sp from a corner\n",
+                   100 * d / ref.mesh->diagonal(), p.x(), p.y(), p.z(), iires::distanceToSegments(p, ref.edges) / sp,
+                   corner / sp);
+    }
+    std::fprintf(stderr, "  %zu held samples above the isotropic err_max (%.4f %%)\n", above,
+                 100 * isoMax / ref.mesh->diagonal());
   }
   std::vector<Eigen::Vector3d> shown;
   for (const auto& [d, i] : dist) {
@@ -269,6 +287,7 @@ int main(int argc, char** argv) {
     std::snprintf(buf, sizeof buf, "model=%s input=%zu density_ratio=%g noise=%g dihedral=%g N=%zu", name.c_str(),
                   inputCount, ratio, noise, dihedral, n);
     const std::string prefix = buf;
+    double isoMax = -1;  // the isotropic run's err_max (absolute), for --dump
     for (const bool sharp : {false, true}) {
       if (!run(sharp ? "iires_sharp" : "iires")) continue;
       iires::ResampleParams p;
@@ -280,7 +299,8 @@ int main(int argc, char** argv) {
       const std::vector<double> nearest = sheetSpacing(r.cloud.points, ref);  // once for both summaries
       report(prefix, sharp ? "iires_sharp" : "iires", r.cloud.points, seconds, ref, nearest,
              sharp ? freeSpacing(nearest, r.fixedIndices) : "");
-      if (dump > 0) dumpWorst(r.cloud.points, r.fixedIndices, ref, dump);
+      if (dump > 0 && !sharp) isoMax = ref.mesh->distances(r.cloud.points, threads).max;
+      if (dump > 0) dumpWorst(r.cloud.points, r.fixedIndices, ref, dump, sharp ? isoMax : -1);
     }
     double t = now();
     if (run("cgal_wlop")) {
