@@ -251,7 +251,7 @@ void refillGaps(const PointCloud& cloud, const KnnIndex& index, double h, const 
   std::vector<Eigen::Vector3d> added(out.begin() + static_cast<long>(settled), out.end());
   std::vector<std::uint32_t> addedOwner(owner.begin() + static_cast<long>(settled), owner.end());
   refineOnCurvedSheets(cloud, index, h, params, added, threads);
-  dropSamples(ontoSheets(cloud, index, h, params, added, threads, 0), added, addedOwner);
+  dropSamples(ontoSheets(cloud, index, h, params, added, threads), added, addedOwner);
   out.resize(settled);
   owner.resize(settled);
   out.insert(out.end(), added.begin(), added.end());
@@ -351,7 +351,6 @@ void separateSamples(double h, std::vector<Eigen::Vector3d>& out, std::vector<st
 //     others (ontoSheets). Dropped: a sample where no such model, or only one sheet, fits and two planes
 //     fitted there meet under the crease angle (off every crease: its chain ran on along a curved or finely
 //     faceted surface), and one the model puts off the surface whose move onto it the input does not confirm.
-//     A gap fill (5, 8) where no model fits goes onto its nearest input point (no model confirms the guess).
 //  7. Separation once more (steps 6 and 6b moved samples).
 //  8. Gaps once more, as in 5, up to 2.5 steps long: step 5's own samples, the moves of 6 and 6b (a corner
 //     sample placed off its corner and moved onto it) and the separation of 7 may leave a gap of about two
@@ -448,10 +447,9 @@ std::vector<Eigen::Vector3d> snapToCreases(const PointCloud& cloud, const std::v
   addCorners(cloud, index, h, params, out, owner);  // 4.
   addSheetCorners(cloud, index, h, params, out, owner, exec.threads);  // 4a.
   separateSamples(h, out, owner);
-  const std::size_t filled = out.size();
   fillCreaseGaps(cloud, index, h, params, out, owner, 6.0, exec.threads);
   refineOnCurvedSheets(cloud, index, h, params, out, exec.threads);
-  dropSamples(ontoSheets(cloud, index, h, params, out, exec.threads, filled), out, owner);  // 6b.
+  dropSamples(ontoSheets(cloud, index, h, params, out, exec.threads), out, owner);  // 6b.
   separateSamples(h, out, owner);
   refillGaps(cloud, index, h, params, out, owner, exec.threads);  // 8.
   if (chainOut) *chainOut = std::move(owner);

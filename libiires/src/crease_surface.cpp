@@ -294,7 +294,7 @@ bool sheetsAround(const PointCloud& cloud, const KnnIndex& index, const Eigen::V
 }  // namespace
 
 std::vector<char> ontoSheets(const PointCloud& cloud, const KnnIndex& index, double h, const FeatureParams& params,
-                             std::vector<Eigen::Vector3d>& out, int threads, std::size_t interpolatedFrom) {
+                             std::vector<Eigen::Vector3d>& out, int threads) {
   constexpr double kOff = 0.3;   // local spacings: a sample farther than this from the sheets moves
   constexpr double kMove = 2.0;  // local spacings: and by at most this much (farther: not its own model)
   std::vector<char> drop(out.size(), 0);
@@ -313,12 +313,6 @@ std::vector<char> ontoSheets(const PointCloud& cloud, const KnnIndex& index, dou
       std::vector<double> d2;
       drop[i] = snapFit(cloud, index, q, hl, params, looseParams(params), c, idx, d2) &&
                 c.normalA.dot(c.normalB) > std::cos(params.angle * kDeg);
-      // A gap fill (a guess between two samples) that no model confirms: the input is the only evidence of
-      // the surface there (a fill in the air beside a corner of more faces than the models take).
-      if (!fitted && !drop[i] && i >= interpolatedFrom) {
-        const std::int64_t j = index.nearest(q);
-        if (j >= 0) out[i] = cloud.points[static_cast<std::size_t>(j)];
-      }
       if (!fitted || drop[i]) return;
     }
     Eigen::Vector3d best = q;

@@ -175,13 +175,10 @@ void fillCreaseGaps(const PointCloud& cloud, const KnnIndex& index, double h, co
 /// (the mean distance to the 6 nearest input points drops). Returns which samples to drop: those off every
 /// crease (where no model, or only one sheet, fits and two planes fitted there, the snap fit with loose
 /// thresholds, meet under the crease angle) and those over 0.3 local spacings off the model whose move the input
-/// does not confirm. The samples from @p interpolatedFrom on are gap fills (steps 5 and 8: on a fitted line or
-/// the chord between two samples); where no model fits one and the loose fit does not put it off every crease, it
-/// moves onto the input point nearest it.
+/// does not confirm.
 /// Deterministic, in parallel over the samples.
 std::vector<char> ontoSheets(const PointCloud& cloud, const KnnIndex& index, double h, const FeatureParams& params,
-                             std::vector<Eigen::Vector3d>& out, int threads,
-                             std::size_t interpolatedFrom = static_cast<std::size_t>(-1));
+                             std::vector<Eigen::Vector3d>& out, int threads);
 
 /// The samples of @p out (and their entries of @p owner) that @p drop flags removed, the others kept in order.
 void dropSamples(const std::vector<char>& drop, std::vector<Eigen::Vector3d>& out, std::vector<std::uint32_t>& owner);
