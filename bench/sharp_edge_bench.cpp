@@ -154,6 +154,11 @@ void dumpWorst(const std::vector<Eigen::Vector3d>& pts, const std::vector<std::u
   for (const auto& [v, dirs] : out)
     if (dirs.size() != 2 || -dirs[0].dot(dirs[1]) < std::cos(30.0 * M_PI / 180))
       corners.emplace_back(std::get<0>(v), std::get<1>(v), std::get<2>(v));
+  auto toCorner = [&](const Eigen::Vector3d& p) {  // "inf": a closed edge without corners
+    double d = std::numeric_limits<double>::infinity();
+    for (const auto& c : corners) d = std::min(d, (c - p).norm());
+    return d;
+  };
   {  // the output point farthest from the mesh (it sets err_max)
     std::size_t worst = 0;
     double worstD = -1;
@@ -162,24 +167,20 @@ void dumpWorst(const std::vector<Eigen::Vector3d>& pts, const std::vector<std::u
       if (d > worstD) worstD = d, worst = i;
     }
     const Eigen::Vector3d& p = pts[worst];
-    double corner = std::numeric_limits<double>::infinity();  // "inf": a closed edge without corners
-    for (const auto& c : corners) corner = std::min(corner, (c - p).norm());
     std::fprintf(stderr, "  err max %.4f %% of the diagonal (%.3f sp) at (%.5f %.5f %.5f): %s, %.2f sp from the edges, %.2f sp from a corner\n",
                  100 * worstD / ref.mesh->diagonal(), worstD / sp, p.x(), p.y(), p.z(), held[worst] ? "held" : "free",
-                 iires::distanceToSegments(p, ref.edges) / sp, corner / sp);
+                 iires::distanceToSegments(p, ref.edges) / sp, toCorner(p) / sp);
   }
   if (isoMax >= 0) {  // the held samples that set err_max above the isotropic run's
     std::size_t above = 0;
     for (std::uint32_t i : fixedIndices) {
       const Eigen::Vector3d& p = pts[i];
-      const double d = ref.mesh->distances({p}).max;
+      const double d = ref.mesh->distance(p);
       if (d <= isoMax) continue;
       ++above;
-      double corner = std::numeric_limits<double>::infinity();
-      for (const auto& c : corners) corner = std::min(corner, (c - p).norm());
       std::fprintf(stderr, "  held above the isotropic err_max: %.4f %% at (%.5f %.5f %.5f), %.2f sp from the edges, %.2f sp from a corner\n",
                    100 * d / ref.mesh->diagonal(), p.x(), p.y(), p.z(), iires::distanceToSegments(p, ref.edges) / sp,
-                   corner / sp);
+                   toCorner(p) / sp);
     }
     std::fprintf(stderr, "  %zu held samples above the isotropic err_max (%.4f %%)\n", above,
                  100 * isoMax / ref.mesh->diagonal());
